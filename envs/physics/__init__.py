@@ -1,0 +1,56 @@
+"""The physics of the driven roller: no Gymnasium here.
+
+=====================  ================================================================
+module                 what it holds
+=====================  ================================================================
+``scene``              :class:`Scene` (parameters, validation, shapes) and the presets
+``equations``          each equation of ``PHYSICS.md`` written once (floats, arrays, numba)
+``forms``              the paper's forms of the theorem (Eqs. 15, 18, 24, 30), as references
+``analysis``           kinematics, contact forces, energy, equilibria, linearization
+``integrators``        one control step at constant torque: RK4, semi-implicit Euler,
+                       implicit midpoint, DOP853; automatic substeps
+=====================  ================================================================
+"""
+
+from envs.physics.analysis import (
+    Contact,
+    Equilibrium,
+    Kinematics,
+    acceleration,
+    contact,
+    energy,
+    equilibria,
+    holding_torque,
+    kinematics,
+    linearize,
+    moment_of_inertia,
+    power,
+    small_oscillation_frequency,
+)
+from envs.physics.forms import FORMS
+from envs.physics.integrators import METHODS, StepResult, predicted_substeps, step
+from envs.physics.scene import PRESETS, Scene, preset
+
+__all__ = [
+    "FORMS",
+    "METHODS",
+    "PRESETS",
+    "Contact",
+    "Equilibrium",
+    "Kinematics",
+    "Scene",
+    "StepResult",
+    "acceleration",
+    "contact",
+    "energy",
+    "equilibria",
+    "holding_torque",
+    "kinematics",
+    "linearize",
+    "moment_of_inertia",
+    "power",
+    "predicted_substeps",
+    "preset",
+    "small_oscillation_frequency",
+    "step",
+]

@@ -1,0 +1,204 @@
+"""What else the physics answers: kinematics, contact, energy, equilibria, linearization.
+
+Every function takes a :class:`~envs.physics.scene.Scene` and states as floats or arrays
+(broadcast together, per-element scene parameters included), except :func:`equilibria`,
+which searches one scene at one torque.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import brentq
+
+from envs.physics import equations as eq
+from envs.physics.scene import Scene
+
+__all__ = [
+    "Contact",
+    "Equilibrium",
+    "Kinematics",
+    "acceleration",
+    "contact",
+    "energy",
+    "equilibria",
+    "holding_torque",
+    "kinematics",
+    "linearize",
+    "moment_of_inertia",
+    "power",
+    "small_oscillation_frequency",
+]
+
+Array = float | np.ndarray
+
+
+def acceleration(scene: Scene, phi: Array, phi_dot: Array, tau: Array) -> Array:
+    """φ'' [rad/s²] at the state (φ [rad], φ' [rad/s]) under the drive τ [N·m]."""
+    return eq.accel(phi, phi_dot, tau, *scene.params)
+
+
+def moment_of_inertia(scene: Scene, phi: Array) -> Array:
+    """J_I [kg·m²], the moment of inertia about the instant center."""
+    return eq.inertia(phi, scene.m, scene.r, scene.kappa, scene.e, scene.k)
+
+
+@dataclass(frozen=True)
+class Kinematics:
+    """Angles [rad] and positions [m] (origin at the rest contact point, O at (0, R))."""
+
+    psi: Array
+    theta: Array
+    o1: tuple[Array, Array]
+    c: tuple[Array, Array]
+    i: tuple[Array, Array]
+
+
+def kinematics(scene: Scene, phi: Array) -> Kinematics:
+    """ψ, θ and the positions of O1, C and I at φ [rad]."""
+    _, psi, theta = eq.shape_factors(phi, scene.r, scene.kappa)
+    o1x, o1y, cx, cy, ix, iy = eq.positions(phi, scene.r, scene.kappa, scene.e)
+    return Kinematics(psi, theta, (o1x, o1y), (cx, cy), (ix, iy))
+
+
+def energy(scene: Scene, phi: Array, phi_dot: Array) -> Array:
+    """E = ½ J_I φ'² + V [J], zero at rest at φ = 0."""
+    m, r, kappa, e, k, g, _ = scene.params
+    return eq.energy(phi, phi_dot, m, r, kappa, e, k, g)
+
+
+def power(scene: Scene, phi_dot: Array, tau: Array) -> Array:
+    """dE/dt = τφ' − c φ'² [W]."""
+    return eq.denergy_dt(phi_dot, tau, scene.damping)
+
+
+@dataclass(frozen=True)
+class Contact:
+    """The contact force on the roller and its margins.
+
+    Attributes:
+        normal: N [N], along the normal from I toward O1; rolling needs N > 0.
+        friction: F [N], along the direction O1 moves for increasing φ.
+        liftoff_margin: N/(m g) [-]; <= 0 means the roller leaves the surface.
+        slip_margin: (μN − |F|)/(m g) [-]; < 0 means the friction needed exceeds μN.
+        lifting: liftoff_margin <= 0.
+        slipping: slip_margin < 0.
+    """
+
+    normal: Array
+    friction: Array
+    liftoff_margin: Array
+    slip_margin: Array
+    lifting: Array
+    slipping: Array
+
+
+def contact(scene: Scene, phi: Array, phi_dot: Array, tau: Array) -> Contact:
+    """The contact forces at the state under the drive τ [N·m] (φ'' from the dynamics)."""
+    m, r, kappa, e, _, g, _ = scene.params
+    phi_ddot = acceleration(scene, phi, phi_dot, tau)
+    normal, friction = eq.contact_forces(phi, phi_dot, phi_ddot, m, r, kappa, e, g)
+    weight = m * g
+    liftoff = normal / weight
+    slip = (scene.mu * normal - np.abs(friction)) / weight
+    return Contact(normal, friction, liftoff, slip, liftoff <= 0, slip < 0)
+
+
+def holding_torque(scene: Scene, phi: Array) -> Array:
+    """The torque [N·m] that holds the roller at rest at φ: dV/dφ = m g (r sin ψ + e sin φ)."""
+    m, r, kappa, e, _, g, _ = scene.params
+    return eq.dpotential(phi, m, r, kappa, e, g)
+
+
+def linearize(
+    scene: Scene, phi: Array, phi_dot: Array = 0.0, tau: Array = 0.0
+) -> tuple[np.ndarray, np.ndarray]:
+    """(A, B) of d/dt (δφ, δφ') = A (δφ, δφ') + B δτ about the state (exact derivatives).
+
+    With φ'' = (τ − cφ' − ½ J_I' φ'² − V')/J_I (primes: d/dφ):
+    ∂φ''/∂φ = (−½ J_I'' φ'² − V'' − φ'' J_I')/J_I, ∂φ''/∂φ' = −(c + J_I' φ')/J_I,
+    ∂φ''/∂τ = 1/J_I. Shapes (..., 2, 2) and (..., 2, 1).
+    """
+    m, r, kappa, e, k, g, c = scene.params
+    j = eq.inertia(phi, m, r, kappa, e, k)
+    jp = eq.dinertia(phi, m, r, kappa, e)
+    jpp = eq.d2inertia(phi, m, r, kappa, e)
+    a = eq.accel(phi, phi_dot, tau, m, r, kappa, e, k, g, c)
+    d_phi = (-0.5 * jpp * phi_dot**2 - eq.d2potential(phi, m, r, kappa, e, g) - a * jp) / j
+    d_w = -(c + jp * phi_dot) / j
+    shape = np.shape(d_phi + d_w)
+    A = np.zeros((*shape, 2, 2))
+    A[..., 0, 1] = 1.0
+    A[..., 1, 0] = d_phi
+    A[..., 1, 1] = d_w
+    B = np.zeros((*shape, 2, 1))
+    B[..., 1, 0] = 1.0 / j
+    return A, B
+
+
+def small_oscillation_frequency(scene: Scene, phi: Array = 0.0) -> Array:
+    """ω0 [rad/s] of small oscillations about the rest position φ (at its holding torque).
+
+    About φ = 0: ω0² = g (r²κ/s + e)/(k² + (r − e)²), which inside a cylinder is the
+    paper's g (r²/(R − r) + e)/(k² + (r − e)²).
+
+    Raises:
+        ValueError: φ is not a stable rest position (no oscillation).
+    """
+    A, _ = linearize(scene, phi, 0.0, holding_torque(scene, phi))
+    stiffness = -A[..., 1, 0]
+    if np.any(stiffness <= 0):
+        raise ValueError(
+            f"phi={phi!r} is not a stable rest position of {scene!r}: d²V/dφ² <= 0 there"
+        )
+    out = np.sqrt(stiffness)
+    return float(out) if out.ndim == 0 else out
+
+
+@dataclass(frozen=True)
+class Equilibrium:
+    """A rest position under a constant torque: φ [rad], ψ [rad], and whether it is stable."""
+
+    phi: float
+    psi: float
+    stable: bool
+
+
+def equilibria(scene: Scene, tau: float = 0.0, resolution: int = 4000) -> list[Equilibrium]:
+    """The rest positions under the constant torque τ [N·m] within one turn of ψ.
+
+    Solves m g (r sin ψ + e sin φ) = τ for φ with ψ in [−π, π) (φ in [−π, π) on the floor,
+    where ψ stays 0), by bracketing sign changes on a grid of ``resolution`` points per
+    turn of the faster of φ and ψ and refining each with Brent's method. A rest position
+    is stable where d²V/dφ² > 0 (a minimum of V − τφ).
+    """
+    if scene.batch_size is not None:
+        raise ValueError("equilibria() takes a scalar scene; call it per element of a batch")
+    if not math.isfinite(tau):
+        raise ValueError(f"tau={tau!r} [N·m] must be finite")
+    m, r, kappa, e, _, g, _ = scene.params
+    s = 1.0 - r * kappa
+    half = math.pi if kappa == 0 else math.pi * s / (r * abs(kappa))
+    turns = max(1.0, half / math.pi, half * r * abs(kappa) / (s * math.pi))
+    count = int(resolution * turns)
+    pad = 2.0 * half / count
+    grid = np.linspace(-half - pad, half + pad, count + 3)
+
+    def f(phi):
+        return eq.dpotential(phi, m, r, kappa, e, g) - tau
+
+    values = f(grid)
+    roots = list(grid[:-1][values[:-1] == 0.0])
+    for a, b, fa, fb in zip(grid[:-1], grid[1:], values[:-1], values[1:], strict=True):
+        if fa * fb < 0:
+            roots.append(brentq(f, a, b, xtol=1e-15, rtol=1e-15))
+    out = []
+    for phi in sorted(roots):
+        if not -half <= phi < half:
+            continue
+        stiffness = eq.d2potential(phi, m, r, kappa, e, g)
+        psi = r * kappa * phi / s
+        out.append(Equilibrium(float(phi), float(psi), bool(stiffness > 0)))
+    return out

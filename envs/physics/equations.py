@@ -1,0 +1,198 @@
+"""The equations of the model, each written once.
+
+Every function here is plain arithmetic on NumPy ufuncs, so the same source serves a
+Python float, a NumPy array (a batch of states, torques and per-element scene
+parameters, broadcast together) and, compiled by numba (``register_jitable``), the
+integrators' inner loops.
+
+Conventions (``../shared/PHYSICS.md``): φ is the roller's rotation, positive clockwise,
+0 when C is straight below O1 and O1 straight below O. With the signed curvature
+κ = 1/R of the fixed surface and s = 1 − rκ,
+
+* ψ = rκφ/s, the angle of O→O1 from the downward vertical (counter-clockwise positive);
+* θ = φ/s, the angle at O1 between O1→I and O1→C.
+
+Nothing divides by R − r, so the inside of a cylinder (κ > 0), the floor (κ = 0) and
+the top of a drum (κ < 0) are one formula, continuous in κ.
+
+The scene enters as ``m, r, kappa, e, k, g, c`` (``Scene.params``: kg, m, 1/m, m, m,
+m/s², N·m·s/rad); φ in rad, φ' in rad/s, τ in N·m.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba.extending import register_jitable
+
+__all__ = [
+    "accel",
+    "accel_concentric",
+    "contact_forces",
+    "d2potential",
+    "denergy_dt",
+    "dinertia",
+    "d2inertia",
+    "dpotential",
+    "energy",
+    "ic_squared",
+    "inertia",
+    "instant_center_velocity",
+    "positions",
+    "potential",
+    "shape_factors",
+    "sinc",
+]
+
+
+@register_jitable
+def sinc(x):
+    """sin(x)/x, with its limit 1 at x = 0."""
+    return np.sinc(x / np.pi)
+
+
+@register_jitable
+def shape_factors(phi, r, kappa):
+    """(s, ψ, θ): s = 1 − rκ, ψ = rκφ/s [rad], θ = φ/s [rad]."""
+    s = 1.0 - r * kappa
+    return s, r * kappa * phi / s, phi / s
+
+
+@register_jitable
+def ic_squared(phi, r, kappa, e):
+    """|IC|² = r² + e² − 2re cos θ [m²], written (r − e)² + 4re sin²(θ/2) (no cancellation)."""
+    h = np.sin(0.5 * phi / (1.0 - r * kappa))
+    return (r - e) ** 2 + 4.0 * r * e * h * h
+
+
+@register_jitable
+def inertia(phi, m, r, kappa, e, k):
+    """J_I = m (k² + |IC|²), the moment of inertia about the instant center I [kg·m²]."""
+    return m * (k * k + ic_squared(phi, r, kappa, e))
+
+
+@register_jitable
+def dinertia(phi, m, r, kappa, e):
+    """dJ_I/dφ = 2 m r e sin θ / s [kg·m²/rad]."""
+    s = 1.0 - r * kappa
+    return 2.0 * m * r * e * np.sin(phi / s) / s
+
+
+@register_jitable
+def d2inertia(phi, m, r, kappa, e):
+    """d²J_I/dφ² = 2 m r e cos θ / s² [kg·m²/rad²]."""
+    s = 1.0 - r * kappa
+    return 2.0 * m * r * e * np.cos(phi / s) / (s * s)
+
+
+@register_jitable
+def potential(phi, m, r, kappa, e, g):
+    """V = m g [(R − r)(1 − cos ψ) + e (1 − cos φ)] [J], zero at φ = 0.
+
+    (R − r)(1 − cos ψ) is written r φ sin(ψ/2) sinc(ψ/2), exact and finite at κ = 0.
+    """
+    s, psi, _ = shape_factors(phi, r, kappa)
+    h = np.sin(0.5 * phi)
+    return m * g * (r * phi * np.sin(0.5 * psi) * sinc(0.5 * psi) + 2.0 * e * h * h)
+
+
+@register_jitable
+def dpotential(phi, m, r, kappa, e, g):
+    """dV/dφ = m g (r sin ψ + e sin φ) [N·m]: minus the moment of gravity about I."""
+    psi = r * kappa * phi / (1.0 - r * kappa)
+    return m * g * (r * np.sin(psi) + e * np.sin(phi))
+
+
+@register_jitable
+def d2potential(phi, m, r, kappa, e, g):
+    """d²V/dφ² = m g (r²κ/s cos ψ + e cos φ) [N·m/rad]."""
+    s, psi, _ = shape_factors(phi, r, kappa)
+    return m * g * (r * r * kappa / s * np.cos(psi) + e * np.cos(phi))
+
+
+@register_jitable
+def accel(phi, phi_dot, tau, m, r, kappa, e, k, g, c):
+    """φ'' [rad/s²] from the closed-form equation of motion (PHYSICS.md, the paper's example):
+
+    (k² + e² + r² − 2er cos θ) φ'' + (e r / s) φ'² sin θ + g (r sin ψ + e sin φ) = (τ − c φ')/m
+
+    (e r R/(R − r) of the paper is e r / s.) This is the form that drives the simulation.
+    """
+    s = 1.0 - r * kappa
+    theta = phi / s
+    h = np.sin(0.5 * theta)
+    lhs = (
+        (tau - c * phi_dot) / m
+        - e * r / s * phi_dot * phi_dot * np.sin(theta)
+        - g * (r * np.sin(r * kappa * theta) + e * np.sin(phi))
+    )
+    return lhs / (k * k + (r - e) ** 2 + 4.0 * r * e * h * h)
+
+
+@register_jitable
+def accel_concentric(phi, phi_dot, tau, m, r, kappa, k, g, c):
+    """φ'' [rad/s²] of :func:`accel` with e = 0, the terms that vanish left out:
+
+    (k² + r²) φ'' + g r sin ψ = (τ − c φ')/m.
+    """
+    return ((tau - c * phi_dot) / m - g * r * np.sin(r * kappa * phi / (1.0 - r * kappa))) / (
+        k * k + r * r
+    )
+
+
+@register_jitable
+def energy(phi, phi_dot, m, r, kappa, e, k, g):
+    """E = ½ J_I φ'² + V [J]."""
+    return 0.5 * inertia(phi, m, r, kappa, e, k) * phi_dot * phi_dot + potential(
+        phi, m, r, kappa, e, g
+    )
+
+
+@register_jitable
+def denergy_dt(phi_dot, tau, c):
+    """dE/dt = τφ' − c φ'² [W]: the power balance (the drive in, the axle's damping out)."""
+    return (tau - c * phi_dot) * phi_dot
+
+
+@register_jitable
+def positions(phi, r, kappa, e):
+    """Positions [m] of O1, C and I: ``(o1x, o1y, cx, cy, ix, iy)``.
+
+    The origin is the surface point the roller touches at φ = 0 (the bottom of the cylinder,
+    the top of the drum), so that the floor is finite; the axis O is at (0, R). In that frame
+    O1 = ((R − r) sin ψ, r + (R − r)(1 − cos ψ)), written with sinc so that κ = 0 is exact,
+    C = O1 + e (−sin φ, −cos φ) and I = O1 + r (sin ψ, −cos ψ).
+    """
+    s, psi, _ = shape_factors(phi, r, kappa)
+    o1x = r * phi * sinc(psi)
+    o1y = r + r * phi * np.sin(0.5 * psi) * sinc(0.5 * psi)
+    cx = o1x - e * np.sin(phi)
+    cy = o1y - e * np.cos(phi)
+    ix = o1x + r * np.sin(psi)
+    iy = o1y - r * np.cos(psi)
+    return o1x, o1y, cx, cy, ix, iy
+
+
+@register_jitable
+def instant_center_velocity(phi, phi_dot, r, kappa):
+    """u [m/s], the velocity with which I runs along the space centrode: (rφ'/s)(cos ψ, sin ψ)."""
+    s, psi, _ = shape_factors(phi, r, kappa)
+    speed = r * phi_dot / s
+    return speed * np.cos(psi), speed * np.sin(psi)
+
+
+@register_jitable
+def contact_forces(phi, phi_dot, phi_ddot, m, r, kappa, e, g):
+    """(N, F) [N], the contact force on the roller at I, from m a_C = N + F + m g.
+
+    N is along the normal from I toward the roller's center O1 (positive: pushing);
+    F along (cos ψ, sin ψ), the direction O1 moves for increasing φ:
+
+    N/m = g cos ψ + (r²κ/s) φ'² + e (φ'' sin θ + φ'² cos θ)
+    F/m = g sin ψ + (r − e cos θ) φ'' + e φ'² sin θ
+    """
+    s, psi, theta = shape_factors(phi, r, kappa)
+    w2 = phi_dot * phi_dot
+    sin_t, cos_t = np.sin(theta), np.cos(theta)
+    normal = m * (g * np.cos(psi) + r * r * kappa / s * w2 + e * (phi_ddot * sin_t + w2 * cos_t))
+    friction = m * (g * np.sin(psi) + (r - e * cos_t) * phi_ddot + e * w2 * sin_t)
+    return normal, friction

@@ -1,0 +1,208 @@
+"""Scenes: the roller and the fixed surface it rolls on, as one immutable value.
+
+A :class:`Scene` holds the parameters of the model in ``../shared/PHYSICS.md`` (SI units):
+
+========  ==========================================================  ============
+field     meaning                                                     unit
+========  ==========================================================  ============
+m         mass of the roller                                          kg
+r         radius of the roller (its rim is the body centrode)         m
+R         radius of the fixed surface, signed (see below)             m
+e         distance from the geometric center O1 to the mass center C  m
+k         central radius of gyration (J_C = m k²)                     m
+g         gravitational acceleration (pointing down, −y)              m/s²
+mu        friction coefficient at the contact                         1
+damping   viscous damping at the roller's axle: torque −damping·φ'    N·m·s/rad
+========  ==========================================================  ============
+
+Shapes, through the signed curvature κ = 1/R of the fixed surface:
+
+* inside a cylinder (the paper's case): ``r < R < inf`` (κ > 0);
+* a flat floor: ``R = math.inf`` (κ = 0);
+* the outside of a drum of radius −R, the roller on top of it: ``R < 0`` (κ < 0).
+
+Every field may also be a NumPy array (a batch of differently built rollers, for domain
+randomization); all functions of :mod:`envs.physics` broadcast over them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields, replace
+from typing import Any
+
+import numpy as np
+
+Number = float | np.ndarray
+
+__all__ = ["PRESETS", "Scene", "preset"]
+
+
+def _describe(value: np.ndarray) -> str:
+    return repr(value.item()) if value.ndim == 0 else f"array {value!r}"
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """A roller of mass ``m`` and radius ``r`` rolling without slipping on a surface of radius ``R``.
+
+    Args:
+        m: mass of the roller [kg], > 0.
+        r: radius of the roller [m], > 0.
+        R: signed radius of the fixed surface [m]: ``R > r`` inside a cylinder, ``math.inf``
+            for a flat floor, ``R < 0`` on top of a drum of radius ``-R``.
+        e: eccentricity, distance from the geometric center to the mass center [m], >= 0.
+        k: central radius of gyration [m], > 0.
+        g: gravitational acceleration [m/s²], > 0.
+        mu: friction coefficient [-], >= 0 (used to report slip, not to model it).
+        damping: viscous damping coefficient at the roller's axle [N·m·s/rad], >= 0.
+
+    Raises:
+        ValueError: a field is NaN or outside its allowed range; the message names the field,
+            the value and the range.
+    """
+
+    m: Number = 1.0
+    r: Number = 0.1
+    R: Number = 0.5
+    e: Number = 0.04
+    k: Number = 0.06
+    g: Number = 9.81
+    mu: Number = 0.8
+    damping: Number = 0.0
+
+    def __post_init__(self) -> None:
+        rules = {
+            "m": (lambda v: v > 0, "> 0"),
+            "r": (lambda v: v > 0, "> 0"),
+            "e": (lambda v: v >= 0, ">= 0"),
+            "k": (lambda v: v > 0, "> 0"),
+            "g": (lambda v: v > 0, "> 0"),
+            "mu": (lambda v: v >= 0, ">= 0"),
+            "damping": (lambda v: v >= 0, ">= 0"),
+        }
+        for f in fields(self):
+            raw = getattr(self, f.name)
+            try:
+                value = np.asarray(raw, dtype=float)
+            except (TypeError, ValueError):
+                raise ValueError(f"Scene.{f.name}={raw!r} is not a real number") from None
+            if np.isnan(value).any():
+                raise ValueError(f"Scene.{f.name}={_describe(value)} is NaN; it must be a number")
+            if f.name == "R":
+                r = np.asarray(self.r, dtype=float)
+                ok = (value > r) | (value < 0)
+                if not ok.all() or np.isneginf(value).any():
+                    raise ValueError(
+                        f"Scene.R={_describe(value)} is not allowed with r={_describe(r)}: R must "
+                        "be > r (inside a cylinder), math.inf (a flat floor) or a finite negative "
+                        "number (on top of a drum of radius -R)"
+                    )
+                continue
+            check, allowed = rules[f.name]
+            if not np.all(check(value)) or np.isinf(value).any():
+                raise ValueError(
+                    f"Scene.{f.name}={_describe(value)} is out of range: it must be finite and "
+                    f"{allowed}"
+                )
+            if value.ndim > 0:
+                object.__setattr__(self, f.name, value)
+        if np.asarray(self.R).ndim > 0:
+            object.__setattr__(self, "R", np.asarray(self.R, dtype=float))
+
+    # -- derived quantities -------------------------------------------------------------
+    @property
+    def kappa(self) -> Number:
+        """Signed curvature κ = 1/R of the fixed surface [1/m] (0 for the floor)."""
+        return 1.0 / self.R if np.ndim(self.R) == 0 else 1.0 / np.asarray(self.R)
+
+    @property
+    def shape(self) -> str | np.ndarray:
+        """``"cylinder"``, ``"floor"`` or ``"drum"`` (an array of them for a batch)."""
+        kappa = np.asarray(self.kappa)
+        names = np.where(kappa > 0, "cylinder", np.where(kappa < 0, "drum", "floor"))
+        return str(names) if names.ndim == 0 else names
+
+    @property
+    def params(self) -> tuple[Number, ...]:
+        """The tuple ``(m, r, kappa, e, k, g, damping)`` every equation of the physics takes."""
+        return (self.m, self.r, self.kappa, self.e, self.k, self.g, self.damping)
+
+    @property
+    def batch_size(self) -> int | None:
+        """Number of rollers when fields are arrays, else ``None``."""
+        shapes = [np.shape(getattr(self, f.name)) for f in fields(self)]
+        shape = np.broadcast_shapes(*shapes)
+        return int(np.prod(shape)) if shape else None
+
+    def replace(self, **changes: Any) -> Scene:
+        """A copy with some fields changed (validated again)."""
+        return replace(self, **changes)
+
+    def item(self, i: int) -> Scene:
+        """The ``i``-th roller of a batch scene, as a scalar scene."""
+        n = self.batch_size or 1
+        return Scene(
+            **{
+                f.name: float(np.broadcast_to(getattr(self, f.name), (n,))[i])
+                for f in fields(self)
+            }
+        )
+
+    @staticmethod
+    def stack(scenes: list[Scene]) -> Scene:
+        """One batch scene whose ``i``-th roller is ``scenes[i]``."""
+        return Scene(
+            **{
+                f.name: np.array([float(getattr(s, f.name)) for s in scenes])
+                for f in fields(Scene)
+            }
+        )
+
+    def as_dict(self) -> dict[str, float]:
+        """The fields as plain floats (scalar scenes only), e.g. for logging."""
+        return {f.name: float(getattr(self, f.name)) for f in fields(self)}
+
+    def __repr__(self) -> str:
+        inner = ", ".join(f"{f.name}={getattr(self, f.name)!r}" for f in fields(self))
+        return f"Scene({inner})"
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Scene):
+            return NotImplemented
+        return all(
+            np.array_equal(getattr(self, f.name), getattr(other, f.name)) for f in fields(self)
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+
+_R = 0.1  # radius of the presets' roller [m]
+
+#: The named scenes. "paper" is the default; the others are the hard cases and other shapes.
+PRESETS: dict[str, Scene] = {
+    # The paper's example: an eccentric roller inside a cylinder (numbers of our choice).
+    "paper": Scene(),
+    # A uniform solid disc: e = 0, k² = r²/2.
+    "solid_disc": Scene(e=0.0, k=_R / math.sqrt(2.0)),
+    # A nearly tight fit: R = 1.01 r; ψ and θ turn ~100 times faster than φ.
+    "tight_fit": Scene(R=1.01 * _R),
+    # Mass at the rim: e = 0.99 r, k = 0.05 r; J_I nearly vanishes at θ = 0.
+    "rim_mass": Scene(e=0.99 * _R, k=0.05 * _R),
+    # A flat floor.
+    "floor": Scene(R=math.inf),
+    # On top of a drum of radius 0.5 m; bottom-heavy enough (e > r²/(|R| + r)) to rest on top.
+    "drum": Scene(R=-0.5, e=0.05),
+    # RollerBalance's scene: R = 10 r, e = 0.8 r: an unstable equilibrium at ψ ≈ 23°.
+    "balance": Scene(R=10 * _R, e=0.8 * _R, k=0.05),
+}
+
+
+def preset(name: str) -> Scene:
+    """The preset scene called ``name`` (one of :data:`PRESETS`)."""
+    try:
+        return PRESETS[name]
+    except KeyError:
+        raise ValueError(
+            f"unknown scene preset {name!r}; allowed: {', '.join(sorted(PRESETS))}"
+        ) from None
