@@ -118,20 +118,34 @@ def _midpoint(phi, w, tau, m, r, kappa, e, k, g, c, h):
 
 
 @_jit
-def _advance(phi0, w0, tau, m, r, kappa, e, k, g, c, dt, method, tol, fixed):
-    """Advance one roller over dt at constant τ: (φ, φ', substeps, finite).
+def _measure(phi, w, a, m, r, kappa, e, g, mu):
+    """(N/(m g), (μN − |F|)/(m g)): the lift-off and slip margins at a state."""
+    normal, friction = eq.contact_forces(phi, w, a, m, r, kappa, e, g)
+    return normal / (m * g), (mu * normal - abs(friction)) / (m * g)
 
-    With ``fixed`` = 0 the substeps follow from the speed at the start; if the step reaches
-    a speed that asks for more, it is taken again with as many as that speed asks for.
+
+@_jit
+def _advance(phi0, w0, tau, m, r, kappa, e, k, g, c, mu, dt, method, tol, fixed):
+    """Advance one roller over dt at constant τ.
+
+    Returns ``(φ, φ', φ'', substeps, finite, N, F, E, liftoff, slip)`` at the end of the
+    step, where ``liftoff`` and ``slip`` are the smallest margins met at the start of any
+    substep and at the end (see :func:`_measure`). With ``fixed`` = 0 the substeps follow
+    from the speed at the start; if the step reaches a speed that asks for more, it is
+    taken again with as many as that speed asks for.
     """
     order = _ORDER[method]
     n = fixed if fixed > 0 else _substeps(abs(w0), m, r, kappa, e, k, g, c, dt, tol, order)
+    lift, slip = np.inf, np.inf
     for _attempt in range(4):
         h = dt / n
         phi, w, top = phi0, w0, abs(w0)
+        lift, slip = np.inf, np.inf
         for _ in range(n):
+            a1 = _rhs(phi, w, tau, m, r, kappa, e, k, g, c)
+            lift_i, slip_i = _measure(phi, w, a1, m, r, kappa, e, g, mu)
+            lift, slip = min(lift, lift_i), min(slip, slip_i)
             if method == 0:
-                a1 = _rhs(phi, w, tau, m, r, kappa, e, k, g, c)
                 w1 = w + 0.5 * h * a1
                 a2 = _rhs(phi + 0.5 * h * w, w1, tau, m, r, kappa, e, k, g, c)
                 w2 = w + 0.5 * h * a2
@@ -141,12 +155,12 @@ def _advance(phi0, w0, tau, m, r, kappa, e, k, g, c, dt, method, tol, fixed):
                 phi = phi + h * (w + h * (a1 + a2 + a3) / 6.0)
                 w = w + h * (a1 + 2.0 * a2 + 2.0 * a3 + a4) / 6.0
             elif method == 1:
-                w = w + h * _rhs(phi, w, tau, m, r, kappa, e, k, g, c)
+                w = w + h * a1
                 phi = phi + h * w
             else:
                 phi, w = _midpoint(phi, w, tau, m, r, kappa, e, k, g, c, h)
             if not (math.isfinite(phi) and math.isfinite(w)):
-                return phi0, w0, n, False
+                return phi0, w0, 0.0, n, False, 0.0, 0.0, 0.0, 0.0, 0.0
             top = max(top, abs(w))
         if fixed > 0:
             break
@@ -154,25 +168,39 @@ def _advance(phi0, w0, tau, m, r, kappa, e, k, g, c, dt, method, tol, fixed):
         if needed <= n:
             break
         n = needed
-    return phi, w, n, True
+    a = _rhs(phi, w, tau, m, r, kappa, e, k, g, c)
+    normal, friction = eq.contact_forces(phi, w, a, m, r, kappa, e, g)
+    energy = eq.energy(phi, w, m, r, kappa, e, k, g)
+    ok = math.isfinite(a) and math.isfinite(energy)
+    lift = min(lift, normal / (m * g))
+    slip = min(slip, (mu * normal - abs(friction)) / (m * g))
+    if not ok:
+        return phi0, w0, 0.0, n, False, 0.0, 0.0, 0.0, 0.0, 0.0
+    return phi, w, a, n, True, normal, friction, energy, lift, slip
+
+
+#: The fields of a step's outcome, in the order the kernels return them.
+_FIELDS = ("phi", "phi_dot", "phi_ddot", "substeps", "finite", "normal_force",
+           "friction_force", "energy", "liftoff_margin", "slip_margin")
+_DTYPES = (float, float, float, np.int64, bool, float, float, float, float, float)
 
 
 @_jit
-def _advance_batch(phi, w, tau, P, dt, method, tol, fixed, out_phi, out_w, out_n, out_ok):
+def _advance_batch(phi, w, tau, P, dt, method, tol, fixed, out):
     for i in range(phi.shape[0]):
-        out_phi[i], out_w[i], out_n[i], out_ok[i] = _advance(
-            phi[i], w[i], tau[i], P[i, 0], P[i, 1], P[i, 2], P[i, 3], P[i, 4], P[i, 5],
-            P[i, 6], dt, method, tol, fixed,
-        )
+        res = _advance(phi[i], w[i], tau[i], P[i, 0], P[i, 1], P[i, 2], P[i, 3], P[i, 4],
+                       P[i, 5], P[i, 6], P[i, 7], dt, method, tol, fixed)
+        (out[0, i], out[1, i], out[2, i], out[3, i], out[4, i], out[5, i], out[6, i], out[7, i],
+         out[8, i], out[9, i]) = res
 
 
 @numba.njit(cache=True, parallel=True, nogil=True)
-def _advance_batch_parallel(phi, w, tau, P, dt, method, tol, fixed, out_phi, out_w, out_n, out_ok):
+def _advance_batch_parallel(phi, w, tau, P, dt, method, tol, fixed, out):
     for i in numba.prange(phi.shape[0]):
-        out_phi[i], out_w[i], out_n[i], out_ok[i] = _advance(
-            phi[i], w[i], tau[i], P[i, 0], P[i, 1], P[i, 2], P[i, 3], P[i, 4], P[i, 5],
-            P[i, 6], dt, method, tol, fixed,
-        )
+        res = _advance(phi[i], w[i], tau[i], P[i, 0], P[i, 1], P[i, 2], P[i, 3], P[i, 4],
+                       P[i, 5], P[i, 6], P[i, 7], dt, method, tol, fixed)
+        (out[0, i], out[1, i], out[2, i], out[3, i], out[4, i], out[5, i], out[6, i], out[7, i],
+         out[8, i], out[9, i]) = res
 
 
 #: Batches at least this large are advanced on all cores.
@@ -181,20 +209,42 @@ PARALLEL_THRESHOLD = 2048
 
 @dataclass(frozen=True)
 class StepResult:
-    """The state after one control step.
+    """The outcome of one control step, at its end unless said otherwise.
 
     Attributes:
         phi: φ [rad].
         phi_dot: φ' [rad/s].
+        phi_ddot: φ'' [rad/s²] under the step's torque.
         substeps: substeps taken (for ``"dop853"``, accepted steps).
-        finite: False where the step could not stay finite; there φ, φ' are the state
-            before the step, unchanged.
+        finite: False where the step could not stay finite; there φ and φ' are the state
+            before the step, unchanged, and the other fields 0.
+        normal_force: N [N] (positive: pressing; see ``equations.contact_forces``).
+        friction_force: F [N].
+        energy: E [J].
+        liftoff_margin: the smallest N/(m g) met during the step (<= 0: lift-off).
+        slip_margin: the smallest (μN − |F|)/(m g) met during the step (< 0: slip).
     """
 
     phi: np.ndarray | float
     phi_dot: np.ndarray | float
+    phi_ddot: np.ndarray | float
     substeps: np.ndarray | int
     finite: np.ndarray | bool
+    normal_force: np.ndarray | float
+    friction_force: np.ndarray | float
+    energy: np.ndarray | float
+    liftoff_margin: np.ndarray | float
+    slip_margin: np.ndarray | float
+
+    @property
+    def lifting(self) -> np.ndarray | bool:
+        """True where the roller left the surface (N <= 0) during the step."""
+        return self.liftoff_margin <= 0
+
+    @property
+    def slipping(self) -> np.ndarray | bool:
+        """True where the friction needed exceeded μN during the step."""
+        return self.slip_margin < 0
 
 
 def _method_code(method: str) -> int:
@@ -244,10 +294,9 @@ def step(
     """
     _check_step_args(dt, tol, substeps)
     code = _method_code(method)
-    scalar = all(np.ndim(x) == 0 for x in (phi, phi_dot, tau, *scene.params))
-    arrays = np.broadcast_arrays(
-        *(np.asarray(x, dtype=float) for x in (phi, phi_dot, tau, *scene.params))
-    )
+    params = (*scene.params, scene.mu)
+    scalar = all(np.ndim(x) == 0 for x in (phi, phi_dot, tau, *params))
+    arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (phi, phi_dot, tau, *params)))
     shape = arrays[0].shape
     flat = [np.ascontiguousarray(a.reshape(-1)) for a in arrays]
     if code == METHODS["dop853"]:
@@ -255,11 +304,14 @@ def step(
     else:
         P = np.ascontiguousarray(np.stack(flat[3:], axis=1))
         n = flat[0].shape[0]
-        out = (np.empty(n), np.empty(n), np.empty(n, dtype=np.int64), np.empty(n, dtype=bool))
+        raw = np.empty((10, n))
         kernel = _advance_batch_parallel if n >= PARALLEL_THRESHOLD else _advance_batch
-        kernel(flat[0], flat[1], flat[2], P, dt, code, tol, substeps or 0, *out)
+        kernel(flat[0], flat[1], flat[2], P, dt, code, tol, substeps or 0, raw)
+        out = [raw[j].astype(t) for j, t in enumerate(_DTYPES)]
     if scalar:
-        return StepResult(float(out[0][0]), float(out[1][0]), int(out[2][0]), bool(out[3][0]))
+        return StepResult(*(t(o[0]) for o, t in zip(out, (float, float, float, int, bool,
+                                                            float, float, float, float, float),
+                                                     strict=True)))
     return StepResult(*(o.reshape(shape) for o in out))
 
 
@@ -272,29 +324,36 @@ def step_one(
     method: int,
     tol: float,
     substeps: int = 0,
-) -> tuple[float, float, int, bool]:
+) -> tuple:
     """The fast path of :func:`step` for one roller, arguments already checked.
 
-    ``params`` is ``Scene.params`` as floats, ``method`` a code of :data:`METHODS` other
-    than DOP853, ``substeps`` 0 for automatic. Returns ``(φ, φ', substeps, finite)``.
+    ``params`` is ``(*Scene.params, Scene.mu)`` as floats, ``method`` a code of
+    :data:`METHODS` other than DOP853, ``substeps`` 0 for automatic. Returns the fields of
+    :class:`StepResult` as a tuple, in its order.
     """
     return _advance(phi, phi_dot, tau, *params, dt, method, tol, substeps)
 
 
 def _dop853(phi, w, tau, P, dt, tol):
-    """The reference: scipy's DOP853 on the whole batch as one system."""
-    params = tuple(P[:, i] for i in range(7))
+    """The reference: scipy's DOP853 on the whole batch as one system (margins at the end)."""
+    params = tuple(P[:, i] for i in range(8))
     n = phi.shape[0]
 
     def rhs(_t, y):
-        return np.concatenate((y[n:], eq.accel(y[:n], y[n:], tau, *params)))
+        return np.concatenate((y[n:], eq.accel(y[:n], y[n:], tau, *params[:7])))
 
     sol = solve_ivp(rhs, (0.0, dt), np.concatenate((phi, w)), method="DOP853", rtol=tol,
                     atol=tol)
     y = sol.y[:, -1]
     ok = np.isfinite(y[:n]) & np.isfinite(y[n:]) & sol.success
     steps = np.full(n, sol.t.size - 1, dtype=np.int64)
-    return np.where(ok, y[:n], phi), np.where(ok, y[n:], w), steps, ok
+    phi1, w1 = np.where(ok, y[:n], phi), np.where(ok, y[n:], w)
+    m, r, kappa, e, k, g, c, mu = params
+    a = eq.accel(phi1, w1, tau, m, r, kappa, e, k, g, c)
+    normal, friction = eq.contact_forces(phi1, w1, a, m, r, kappa, e, g)
+    energy = eq.energy(phi1, w1, m, r, kappa, e, k, g)
+    lift, slip = normal / (m * g), (mu * normal - np.abs(friction)) / (m * g)
+    return phi1, w1, a, steps, ok, normal, friction, energy, lift, slip
 
 
 def predicted_substeps(
