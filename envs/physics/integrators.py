@@ -305,14 +305,28 @@ def step(
         P = np.ascontiguousarray(np.stack(flat[3:], axis=1))
         n = flat[0].shape[0]
         raw = np.empty((10, n))
-        kernel = _advance_batch_parallel if n >= PARALLEL_THRESHOLD else _advance_batch
-        kernel(flat[0], flat[1], flat[2], P, dt, code, tol, substeps or 0, raw)
+        advance_batch(P, flat[0], flat[1], flat[2], dt, code, tol, substeps or 0, raw)
         out = [raw[j].astype(t) for j, t in enumerate(_DTYPES)]
     if scalar:
         return StepResult(*(t(o[0]) for o, t in zip(out, (float, float, float, int, bool,
                                                             float, float, float, float, float),
                                                      strict=True)))
     return StepResult(*(o.reshape(shape) for o in out))
+
+
+def advance_batch(
+    rows: np.ndarray, phi: np.ndarray, phi_dot: np.ndarray, tau: np.ndarray, dt: float,
+    method: int, tol: float, substeps: int, out: np.ndarray,
+) -> None:
+    """The fast path of :func:`step` for a batch, arguments already checked.
+
+    ``rows`` is (n, 8): ``(*Scene.params, mu)`` per roller; ``phi``, ``phi_dot``, ``tau``
+    are float arrays of n; ``method`` a code of :data:`METHODS` other than DOP853;
+    ``substeps`` 0 for automatic. Writes the fields of :class:`StepResult`, in its order,
+    into the rows of ``out`` (10, n).
+    """
+    kernel = _advance_batch_parallel if phi.shape[0] >= PARALLEL_THRESHOLD else _advance_batch
+    kernel(phi, phi_dot, tau, rows, dt, method, tol, substeps, out)
 
 
 def step_one(

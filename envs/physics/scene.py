@@ -66,9 +66,9 @@ class Scene:
     r: Number = 0.1
     R: Number = 0.5
     e: Number = 0.04
-    k: Number = 0.06
+    k: Number = 0.1
     g: Number = 9.81
-    mu: Number = 0.8
+    mu: Number = 1.0
     damping: Number = 0.0
 
     def __post_init__(self) -> None:
@@ -193,8 +193,9 @@ PRESETS: dict[str, Scene] = {
     "floor": Scene(R=math.inf),
     # On top of a drum of radius 0.5 m; bottom-heavy enough (e > r²/(|R| + r)) to rest on top.
     "drum": Scene(R=-0.5, e=0.05),
-    # RollerBalance's scene: R = 10 r, e = 0.8 r: an unstable equilibrium at ψ ≈ 23°.
-    "balance": Scene(R=10 * _R, e=0.8 * _R, k=0.05),
+    # RollerBalance's scene: R = 10 r, e = 0.8 r: an unstable equilibrium at ψ ≈ 23°;
+    # k = r keeps φ'' = τ/J_I moderate, so the torque does not lift the roller off.
+    "balance": Scene(R=10 * _R, e=0.8 * _R, k=_R),
 }
 
 

@@ -1,0 +1,99 @@
+"""RollerBalance-v0: swing the mass center up to an unstable rest position and keep it there.
+
+In the preset ``"balance"`` (R = 10 r, e = 0.8 r) the roller has an unstable rest
+position at zero torque with its mass center over the contact point, at ψ ≈ ±23°
+(φ ≈ ±3.66 rad), where it still rolls (N > 0, |F| <= μN). The torque limit
+(default 0.4 N·m) is below the largest holding torque on the way up (≈ 0.95 N·m), so the
+agent must pump energy back and forth, as in Pendulum's swing-up, then balance. Either
+of the two symmetric rest positions counts. On the floor the target is the mass center
+straight above the axle (φ = π).
+
+## Action space
+
+``Box(-1, 1, (1,), float32)``: τ = action · ``max_torque`` [N·m] (default 0.4 N·m).
+Out-of-range actions are clipped; NaN or inf raise ``ValueError``.
+
+## Observation space
+
+``Box(-1, 1, (5,), float32)``: cos ψ, sin ψ, cos φ, sin φ, tanh(φ'/10 rad/s).
+
+## Reward
+
+``near(ε, 3 rad) · (0.5 + 0.5 near(φ', 5 rad/s)) · (0.8 + 0.2 near(action, 1))``, ε the
+error to the nearer unstable rest position ±φ_b.
+
+## Starting state
+
+At rest near the bottom: φ and φ' uniform in ±0.1 (rad, rad/s).
+
+## Episode end
+
+* Terminated: slip or lift-off during a step, or a step that could not stay finite.
+* Truncated: 400 steps (20 s).
+* ``info["is_success"]``: |ε| <= 0.1 rad and |φ'| <= 0.2 rad/s.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from envs.physics import Scene, contact
+from envs.roller_env import RollerEnv
+from envs.task import Task, unstable_rest_positions
+from envs.vector_env import RollerVectorEnv
+
+__all__ = ["BalanceTask", "RollerBalanceEnv", "RollerBalanceVectorEnv"]
+
+
+class BalanceTask(Task):
+    name = "RollerBalance"
+    default_scene = "balance"
+    default_max_torque = 0.4
+    max_episode_steps = 400
+    reward_threshold = 250.0
+    position_margin = 3.0
+    success_band = 0.1
+    success_speed = 0.2
+
+    def check_scene(self, scene: Scene) -> None:
+        self.default_target(scene)
+
+    def default_target(self, scene: Scene) -> float:
+        """φ_b > 0 [rad], the unstable rest position (its mirror −φ_b counts as well)."""
+        targets = unstable_rest_positions(scene)
+        if not targets:
+            raise ValueError(f"{scene!r} has no unstable rest position to balance at")
+        phi_b = abs(targets[0])
+        c = contact(scene, phi_b, 0.0, 0.0)
+        if c.lifting or c.slipping:
+            raise ValueError(
+                f"the unstable rest position phi={phi_b:.4f} rad of {scene!r} is not "
+                f"reachable: N={float(c.normal):.4g} N, F={float(c.friction):.4g} N, "
+                f"mu={scene.mu}"
+            )
+        return phi_b
+
+    def sample_target(self, rng: np.random.Generator, scene: Scene) -> float:
+        return self.default_target(scene)
+
+    def sample_state(
+        self, rng: np.random.Generator, scene: Scene, target: float
+    ) -> tuple[float, float]:
+        return float(rng.uniform(-0.1, 0.1)), float(rng.uniform(-0.1, 0.1))
+
+    def error(self, phi, target, q):
+        """The error to the nearer of ±φ_b [rad of φ]."""
+        up = super().error(phi, target, q)
+        down = super().error(phi, -target, q)
+        return np.where(np.abs(up) <= np.abs(down), up, down)
+
+
+class RollerBalanceEnv(RollerEnv):
+    __doc__ = __doc__
+    task_class = BalanceTask
+
+
+class RollerBalanceVectorEnv(RollerVectorEnv):
+    """The native vector environment of RollerBalance-v0 (``gymnasium.make_vec``)."""
+
+    task_class = BalanceTask

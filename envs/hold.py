@@ -1,0 +1,94 @@
+"""RollerHold-v0: hold the roller at rest at a target position on the wall.
+
+Each episode draws a target ψ* on the cylinder's wall, within the range where the
+torque limit and friction allow the roller to be held at rest (see
+:func:`envs.task.hold_range`: holding torque at most 80% of ``max_torque``, friction at
+most 90% of μN). The agent must bring the roller there and hold it, against gravity.
+
+## Action space
+
+``Box(-1, 1, (1,), float32)``: τ = action · ``max_torque`` [N·m] (default 1 N·m).
+Out-of-range actions are clipped; NaN or inf raise ``ValueError``.
+
+## Observation space
+
+``Box(-1, 1, (9,), float32)``:
+
+=====  =====================  ====================================
+index  observation            meaning
+=====  =====================  ====================================
+0, 1   cos ψ, sin ψ           position on the surface
+2, 3   cos φ, sin φ           rotation of the roller
+4      tanh(φ' / 10 rad/s)    angular speed
+5, 6   cos ψ*, sin ψ*         the target position
+7, 8   cos φ*, sin φ*         the roller's rotation at the target
+=====  =====================  ====================================
+
+## Reward
+
+As RollerStabilize, with the error measured from the target:
+``near(ε, 2 rad) · (0.5 + 0.5 near(φ', 5 rad/s)) · (0.8 + 0.2 near(action, 1))``.
+
+## Starting state
+
+ψ uniform in ±60°, φ' uniform in ±1 rad/s (redrawn until the roller rolls); the target
+uniform in the holdable range. ``reset(options={"target": psi_star})`` sets ψ* [rad]
+(on the floor, where ψ stays 0, the target is φ* [rad]).
+
+## Episode end
+
+* Terminated: slip or lift-off during a step, or a step that could not stay finite.
+* Truncated: 200 steps.
+* ``info["is_success"]``: |ε| <= 0.05 rad and |φ'| <= 0.1 rad/s.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from envs.physics import Scene
+from envs.roller_env import RollerEnv
+from envs.task import Task, hold_range, wrap_rate
+from envs.vector_env import RollerVectorEnv
+
+__all__ = ["HoldTask", "RollerHoldEnv", "RollerHoldVectorEnv"]
+
+
+class HoldTask(Task):
+    name = "RollerHold"
+    reward_threshold = 150.0
+    observes_target = True
+    default_max_torque = 1.0
+
+    def sample_target(self, rng: np.random.Generator, scene: Scene) -> float:
+        low, high = hold_range(scene, self.max_torque)
+        return float(rng.uniform(low, high))
+
+    def target_from_option(self, value: Any, scene: Scene) -> float:
+        try:
+            target = float(value)
+        except (TypeError, ValueError):
+            raise ValueError(f"options['target']={value!r} must be a number [rad]") from None
+        phi = target if scene.kappa == 0 else target / wrap_rate(scene)
+        low, high = hold_range(scene, self.max_torque)
+        if not (math.isfinite(phi) and low <= phi <= high):
+            q = 1.0 if scene.kappa == 0 else wrap_rate(scene)
+            raise ValueError(
+                f"options['target']={value!r} rad cannot be held in this scene with "
+                f"max_torque={self.max_torque} N·m: allowed [{low * q:.4f}, {high * q:.4f}] rad"
+            )
+        return phi
+
+
+class RollerHoldEnv(RollerEnv):
+    __doc__ = __doc__
+    task_class = HoldTask
+
+
+class RollerHoldVectorEnv(RollerVectorEnv):
+    """The native vector environment of RollerHold-v0 (``gymnasium.make_vec``)."""
+
+    task_class = HoldTask

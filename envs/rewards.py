@@ -1,0 +1,35 @@
+"""The reward vocabulary: a few named terms, each bounded in [0, 1], written once.
+
+As in dm_control's ``rewards.tolerance``: a term is 1 at its target and decays smoothly
+(a Gaussian) to ``value_at_margin`` at distance ``margin`` from it. A task's reward is a
+product of such terms, so it stays in [0, 1]. Each function takes floats or arrays.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["near", "product", "wrap_angle"]
+
+_LOG_VALUE_AT_MARGIN = math.log(0.1)
+
+
+def near(x, margin, value_at_margin: float = 0.1):
+    """exp(ln(value_at_margin)·(x/margin)²): 1 at x = 0, ``value_at_margin`` at |x| = margin."""
+    scale = _LOG_VALUE_AT_MARGIN if value_at_margin == 0.1 else math.log(value_at_margin)
+    return np.exp(scale * (x / margin) ** 2)
+
+
+def product(*weighted_terms):
+    """∏ (1 − w + w·term) over ``(term, w)`` pairs: each term pulls the reward down by at most w."""
+    out = 1.0
+    for term, weight in weighted_terms:
+        out = out * (1.0 - weight + weight * term)
+    return out
+
+
+def wrap_angle(x):
+    """x wrapped into [−π, π) [rad]."""
+    return x - 2.0 * np.pi * np.floor((x + np.pi) / (2.0 * np.pi))

@@ -1,0 +1,191 @@
+"""What a task asks of the roller: start state, target, observation, reward, success.
+
+A task knows the physics (:mod:`envs.physics`) but neither Gymnasium nor pygame. Its
+per-step methods take floats (one environment) or arrays (the vector environment) and are
+written once for both. The tasks themselves are in ``stabilize.py``, ``hold.py`` and
+``balance.py``.
+
+**The position error.** The target is a rest position φ* [rad]. The error is measured
+along the configuration, one turn of ψ either way: with the wrap rate q = rκ/(1 − rκ)
+(ψ = qφ; q = 1 on the floor, where ψ stays 0 and φ itself is wrapped),
+
+    error = wrap(q (φ − φ*)) / q   [rad of φ],
+
+so the contact point is r·|error| metres of rolling away from its target.
+
+**The observation** (float32, every entry in [−1, 1]):
+
+=====  ==================================================  =====
+index  entry                                               unit
+=====  ==================================================  =====
+0, 1   cos ψ, sin ψ: where the roller is on the surface    1
+2, 3   cos φ, sin φ: how it is turned                       1
+4      tanh(φ' / speed_scale), speed_scale = 10 rad/s       1
+5, 6   cos ψ*, sin ψ* (tasks with a target only)            1
+7, 8   cos φ*, sin φ* (tasks with a target only)            1
+=====  ==================================================  =====
+
+**The reward** is a product of bounded terms (:mod:`envs.rewards`), in [0, 1] per step:
+
+    reward = near(error, position_margin)
+             · (1 − w_v + w_v · near(φ', speed_margin))
+             · (1 − w_u + w_u · near(action, 1))
+
+with w_v = 0.5 (being at rest) and w_u = 0.2 (using little torque; action in [−1, 1]).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, ClassVar
+
+import numpy as np
+
+from envs import rewards
+from envs.physics import Scene, contact, equilibria, holding_torque
+
+__all__ = ["SPEED_SCALE", "Task", "hold_range", "psi_rate", "unstable_rest_positions",
+           "wrap_rate"]
+
+#: The speed [rad/s] at which the observed tanh(φ'/SPEED_SCALE) reaches 0.76.
+SPEED_SCALE = 10.0
+
+
+def wrap_rate(scene: Scene):
+    """q = rκ/(1 − rκ) = dψ/dφ on a curved surface, 1 on the floor (float or array)."""
+    kappa = np.asarray(scene.kappa, dtype=float)
+    q = np.where(kappa == 0, 1.0, scene.r * kappa / (1.0 - scene.r * kappa))
+    return float(q) if q.ndim == 0 else q
+
+
+def psi_rate(scene: Scene) -> float:
+    """dψ/dφ = rκ/(1 − rκ) [-] of a scalar scene (0 on the floor)."""
+    return float(scene.r * scene.kappa / (1.0 - scene.r * scene.kappa))
+
+
+class Task:
+    """The base of the tasks. Subclasses set the class variables and ``sample_target``."""
+
+    name: ClassVar[str]
+    #: The preset the task's scene defaults to.
+    default_scene: ClassVar[str] = "paper"
+    #: The torque [N·m] an action of ±1 asks for, by default.
+    default_max_torque: ClassVar[float] = 0.5
+    max_episode_steps: ClassVar[int] = 200
+    reward_threshold: ClassVar[float]
+    #: Whether the observation carries the target (entries 5 to 8).
+    observes_target: ClassVar[bool] = False
+    position_margin: ClassVar[float] = 2.0  # rad of φ
+    speed_margin: ClassVar[float] = 5.0  # rad/s
+    speed_weight: ClassVar[float] = 0.5
+    control_weight: ClassVar[float] = 0.2
+    #: Success: |error| <= success_band [rad] and |φ'| <= success_speed [rad/s].
+    success_band: ClassVar[float] = 0.05
+    success_speed: ClassVar[float] = 0.1
+
+    def __init__(self, max_torque: float | None = None) -> None:
+        self.max_torque = float(self.default_max_torque if max_torque is None else max_torque)
+        if not (math.isfinite(self.max_torque) and self.max_torque > 0):
+            raise ValueError(f"max_torque={max_torque!r} [N·m] must be finite and > 0")
+
+    @property
+    def observation_size(self) -> int:
+        return 9 if self.observes_target else 5
+
+    # -- per episode (one environment at a time, with its own generator) ---------------
+    def check_scene(self, scene: Scene) -> None:
+        """Raise ValueError if the task cannot be posed in ``scene`` (default: any scene)."""
+
+    def sample_target(self, rng: np.random.Generator, scene: Scene) -> float:
+        """The rest position φ* [rad] the episode asks for."""
+        raise NotImplementedError
+
+    def sample_state(
+        self, rng: np.random.Generator, scene: Scene, target: float
+    ) -> tuple[float, float]:
+        """The start state (φ [rad], φ' [rad/s]): around the bottom, up to ψ = ±60° and a
+        speed up to ±1 rad/s, redrawn until the roller rolls there (N > 0, |F| <= μN)
+        under any torque within the limit."""
+        q = wrap_rate(scene)
+        limit = math.radians(60.0) / q if scene.kappa != 0 else math.radians(60.0)
+        torques = np.array([-self.max_torque, 0.0, self.max_torque])
+        for _ in range(1000):
+            phi, phi_dot = rng.uniform(-limit, limit), rng.uniform(-1.0, 1.0)
+            c = contact(scene, phi, phi_dot, torques)
+            if not (np.any(c.lifting) or np.any(c.slipping)):
+                return float(phi), float(phi_dot)
+        raise ValueError(
+            f"no start state of {scene!r} within psi = ±60°, |phi_dot| <= 1 rad/s rolls "
+            f"under torques up to {self.max_torque} N·m; lower max_torque or raise mu"
+        )
+
+    def target_from_option(self, value: Any, scene: Scene) -> float:
+        """φ* [rad] from ``reset(options={"target": value})``; tasks with a target override."""
+        raise ValueError(f"{self.name} has no target to set; options['target'] is not allowed")
+
+    def default_target(self, scene: Scene) -> float:
+        """The target used when none is drawn (for rendering before reset)."""
+        return 0.0
+
+    # -- per step (floats or arrays) ---------------------------------------------------
+    def error(self, phi, target, q):
+        """The position error [rad of φ] (see the module docs); q from :func:`wrap_rate`."""
+        return rewards.wrap_angle(q * (phi - target)) / q
+
+    def observation_terms(self, phi, phi_dot, target, psi_rate):
+        """The observation's entries as a tuple; ``psi_rate`` = rκ/(1 − rκ) (0 on the floor)."""
+        psi = psi_rate * phi
+        terms = (np.cos(psi), np.sin(psi), np.cos(phi), np.sin(phi),
+                 np.tanh(phi_dot / SPEED_SCALE))
+        if self.observes_target:
+            psi_t = psi_rate * target
+            terms += (np.cos(psi_t), np.sin(psi_t), np.cos(target), np.sin(target))
+        return terms
+
+    def reward(self, phi, phi_dot, action, target, q):
+        """The reward in [0, 1] (formula in the module docs)."""
+        return rewards.near(self.error(phi, target, q), self.position_margin) * rewards.product(
+            (rewards.near(phi_dot, self.speed_margin), self.speed_weight),
+            (rewards.near(action, 1.0), self.control_weight),
+        )
+
+    def success(self, phi, phi_dot, target, q):
+        """Inside the tolerance band at rest."""
+        return (np.abs(self.error(phi, target, q)) <= self.success_band) & (
+            np.abs(phi_dot) <= self.success_speed
+        )
+
+
+def hold_range(scene: Scene, max_torque: float, torque_share: float = 0.8,
+               friction_share: float = 0.9, points: int = 2001) -> tuple[float, float]:
+    """The interval of rest positions φ [rad] around 0 that can be held at rest.
+
+    Contiguous around φ = 0, within one turn of ψ either way, where the holding torque is
+    at most ``torque_share``·max_torque and the contact holds with margin: N > 0 and
+    |F| <= ``friction_share``·μN (at rest N = m g cos ψ, F = m g sin ψ).
+    """
+    q = wrap_rate(scene)
+    half = math.pi / q
+    bounds = []
+    for sign in (1.0, -1.0):
+        phi = sign * np.linspace(0.0, half, points)
+        c = contact(scene, phi, 0.0, holding_torque(scene, phi))
+        normal, friction = np.asarray(c.normal), np.asarray(c.friction)
+        ok = (np.abs(holding_torque(scene, phi)) <= torque_share * max_torque) & (normal > 0)
+        ok &= np.abs(friction) <= friction_share * scene.mu * normal
+        last = int(np.argmin(ok)) - 1 if not ok.all() else points - 1
+        bounds.append(float(phi[max(last, 0)]))
+    return bounds[1], bounds[0]
+
+
+def unstable_rest_positions(scene: Scene) -> list[float]:
+    """The unstable rest positions φ [rad] at zero torque nearest to φ = 0 on each side."""
+    unstable = [eq.phi for eq in equilibria(scene, 0.0) if not eq.stable]
+    out = []
+    positive = [p for p in unstable if p > 0]
+    negative = [p for p in unstable if p <= 0]
+    if positive:
+        out.append(min(positive))
+    if negative:
+        out.append(max(negative))
+    return out
