@@ -91,7 +91,8 @@ class EnvConfig:
         for name, bounds in (randomize or {}).items():
             if name not in _SCENE_FIELDS:
                 raise ValueError(
-                    f"randomize names {name!r}, not a Scene field; allowed: {', '.join(_SCENE_FIELDS)}"
+                    f"randomize names {name!r}, not a Scene field; allowed: "
+                    f"{', '.join(_SCENE_FIELDS)}"
                 )
             try:
                 low, high = (float(b) for b in bounds)

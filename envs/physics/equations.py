@@ -90,7 +90,7 @@ def potential(phi, m, r, kappa, e, g):
 
     (R − r)(1 − cos ψ) is written r φ sin(ψ/2) sinc(ψ/2), exact and finite at κ = 0.
     """
-    s, psi, _ = shape_factors(phi, r, kappa)
+    _, psi, _ = shape_factors(phi, r, kappa)
     h = np.sin(0.5 * phi)
     return m * g * (r * phi * np.sin(0.5 * psi) * sinc(0.5 * psi) + 2.0 * e * h * h)
 
@@ -162,7 +162,7 @@ def positions(phi, r, kappa, e):
     O1 = ((R − r) sin ψ, r + (R − r)(1 − cos ψ)), written with sinc so that κ = 0 is exact,
     C = O1 + e (−sin φ, −cos φ) and I = O1 + r (sin ψ, −cos ψ).
     """
-    s, psi, _ = shape_factors(phi, r, kappa)
+    _, psi, _ = shape_factors(phi, r, kappa)
     o1x = r * phi * sinc(psi)
     o1y = r + r * phi * np.sin(0.5 * psi) * sinc(0.5 * psi)
     cx = o1x - e * np.sin(phi)

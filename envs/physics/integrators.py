@@ -296,7 +296,9 @@ def step(
     code = _method_code(method)
     params = (*scene.params, scene.mu)
     scalar = all(np.ndim(x) == 0 for x in (phi, phi_dot, tau, *params))
-    arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (phi, phi_dot, tau, *params)))
+    arrays = np.broadcast_arrays(
+        *(np.asarray(x, dtype=float) for x in (phi, phi_dot, tau, *params))
+    )
     shape = arrays[0].shape
     flat = [np.ascontiguousarray(a.reshape(-1)) for a in arrays]
     if code == METHODS["dop853"]:

@@ -44,7 +44,7 @@ def _describe(value: np.ndarray) -> str:
 
 @dataclass(frozen=True, eq=False)
 class Scene:
-    """A roller of mass ``m`` and radius ``r`` rolling without slipping on a surface of radius ``R``.
+    """A roller of mass ``m``, radius ``r``, rolling without slipping on a surface of radius ``R``.
 
     Args:
         m: mass of the roller [kg], > 0.
