@@ -76,9 +76,10 @@ class HoldTask(Task):
         low, high = hold_range(scene, self.max_torque)
         if not (math.isfinite(phi) and low <= phi <= high):
             q = 1.0 if scene.kappa == 0 else wrap_rate(scene)
+            lo, hi = sorted((low * q, high * q))  # q < 0 on a drum
             raise ValueError(
                 f"options['target']={value!r} rad cannot be held in this scene with "
-                f"max_torque={self.max_torque} N·m: allowed [{low * q:.4f}, {high * q:.4f}] rad"
+                f"max_torque={self.max_torque} N·m: allowed [{lo:.4f}, {hi:.4f}] rad"
             )
         return phi
 

@@ -42,7 +42,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from envs import rewards
-from envs.physics import Scene, contact, equilibria, holding_torque
+from envs.physics import Scene, contact, equations, equilibria, holding_torque
 
 __all__ = ["SPEED_SCALE", "Task", "hold_range", "psi_rate", "unstable_rest_positions",
            "wrap_rate"]
@@ -107,7 +107,7 @@ class Task:
         speed up to ±1 rad/s, redrawn until the roller rolls there (N > 0, |F| <= μN)
         under any torque within the limit."""
         q = wrap_rate(scene)
-        limit = math.radians(60.0) / q if scene.kappa != 0 else math.radians(60.0)
+        limit = math.radians(60.0) / abs(q)  # q < 0 on a drum; q = 1 on the floor
         torques = np.array([-self.max_torque, 0.0, self.max_torque])
         for _ in range(1000):
             phi, phi_dot = rng.uniform(-limit, limit), rng.uniform(-1.0, 1.0)
@@ -165,7 +165,7 @@ def hold_range(scene: Scene, max_torque: float, torque_share: float = 0.8,
     |F| <= ``friction_share``·μN (at rest N = m g cos ψ, F = m g sin ψ).
     """
     q = wrap_rate(scene)
-    half = math.pi / q
+    half = math.pi / abs(q)  # q < 0 on a drum
     bounds = []
     for sign in (1.0, -1.0):
         phi = sign * np.linspace(0.0, half, points)
@@ -179,8 +179,11 @@ def hold_range(scene: Scene, max_torque: float, torque_share: float = 0.8,
 
 
 def unstable_rest_positions(scene: Scene) -> list[float]:
-    """The unstable rest positions φ [rad] at zero torque nearest to φ = 0 on each side."""
-    unstable = [eq.phi for eq in equilibria(scene, 0.0) if not eq.stable]
+    """The unstable rest positions φ [rad] at zero torque nearest to φ = 0 on each side
+    (d²V/dφ² < 0: neutral ones, as everywhere for a uniform disc on the floor, do not count)."""
+    m, r, kappa, e, _, g, _ = scene.params
+    unstable = [p.phi for p in equilibria(scene, 0.0)
+                if not p.stable and equations.d2potential(p.phi, m, r, kappa, e, g) < 0]
     out = []
     positive = [p for p in unstable if p > 0]
     negative = [p for p in unstable if p <= 0]

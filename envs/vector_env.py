@@ -60,7 +60,7 @@ class RollerVectorEnv(VectorEnv):
         dt: float = DEFAULT_DT,
         max_torque: float | None = None,
         tolerance: float = DEFAULT_TOLERANCE,
-        integrator: str = "rk4",
+        integrator: str = "rk8",
         substeps: int | None = None,
         randomize: Mapping[str, tuple[float, float]] | None = None,
         render_mode: str | None = None,
@@ -77,7 +77,7 @@ class RollerVectorEnv(VectorEnv):
         )
         if integrator == "dop853":
             raise ValueError("integrator='dop853' is a reference for the single environment; "
-                             "the vector environment takes 'rk4', 'euler' or 'midpoint'")
+                             "the vector environment takes 'rk8', 'rk4', 'euler' or 'midpoint'")
         scenes = [resolve_scene(s, self.config.task.default_scene) for s in per_env] or [
             self.config.scene
         ] * num_envs

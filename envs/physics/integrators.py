@@ -10,6 +10,8 @@ method          order  what it is for
 ``"midpoint"``  2      implicit midpoint on the canonical pair (φ, p = J_I φ'), solved by
                        Newton's method: symplectic, so its energy error stays bounded over
                        long horizons at zero torque
+``"rk8"``       8      the Dormand–Prince 8 tableau at fixed substeps: the fastest at tight
+                       tolerances (few substeps), the environments' default
 ``"dop853"``    8      scipy's adaptive Dormand–Prince 8(5,3): the reference
 ==============  =====  ====================================================================
 
@@ -24,7 +26,8 @@ near ``tol``: with λ the sum of
   sqrt((k² + (r − e)²)/(re)) of θ about θ = 0),
 * the damping rate c/J_min,
 
-a method of order p takes n = ceil((C (λ dt)^(p+1) / tol)^(1/p)) substeps. The count
+a method of order p takes n = ceil((C (λ dt)^(p+1) / tol)^(1/p)) substeps, and at least
+λ dt / h_max, so that each substep stays inside the method's stability region. The count
 is first set from the speed at the start of the step; a step whose substeps reach a speed
 that asks for more is taken again with that many. An easy scene
 takes few, a stiff one as many as it needs (up to ``max_substeps``). With e = 0 the
@@ -44,6 +47,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.integrate._ivp import dop853_coefficients
 
 from envs.physics import equations as eq
 from envs.physics.scene import Scene
@@ -51,10 +55,21 @@ from envs.physics.scene import Scene
 __all__ = ["METHODS", "StepResult", "predicted_substeps", "step"]
 
 #: The integration methods and their codes in the compiled kernels.
-METHODS = {"rk4": 0, "euler": 1, "midpoint": 2, "dop853": 3}
-_ORDER = (4, 1, 2)  # by method code
-#: The constant C of the substep rule, calibrated against DOP853 on the presets (tests).
-SUBSTEP_CONSTANT = 0.02
+METHODS = {"rk4": 0, "euler": 1, "midpoint": 2, "dop853": 3, "rk8": 4}
+#: The order of each method, by code.
+_ORDER = (4, 1, 2, 8, 8)
+#: The constant C of the substep rule per method, calibrated against DOP853 on the presets
+#: so that the error per control step stays below the tolerance (tests/test_integrators.py).
+SUBSTEP_CONSTANT = (0.02, 0.5, 0.3, 0.0, 1e-7)
+#: The largest λh each explicit method is allowed per substep (inside its stability region
+#: with room to spare); the implicit midpoint is A-stable and needs none.
+STABLE_STEP = (1.0, 0.5, math.inf, 0.0, 1.0)
+#: How sharply each method feels the dip of J_I at θ = 0: the exponent of
+#: re/(k² + (r − e)²) in the sweep rate (the 8th-order tableau needs the dip resolved finer).
+SWEEP_EXPONENT = (0.5, 0.5, 0.5, 0.0, 0.75)
+# The Dormand–Prince 8(5,3) tableau (scipy's), used at fixed substeps by "rk8".
+_A8 = np.ascontiguousarray(dop853_coefficients.A[:12, :12])
+_B8 = np.ascontiguousarray(dop853_coefficients.B)
 #: The most substeps one control step may take.
 MAX_SUBSTEPS = 200_000
 
@@ -76,13 +91,15 @@ def _rhs(phi, w, tau, m, r, kappa, e, k, g, c):
 
 
 @_jit
-def _substeps(speed, m, r, kappa, e, k, g, c, dt, tol, order):
+def _substeps(speed, m, r, kappa, e, k, g, c, dt, tol, method):
     s = 1.0 - r * kappa
     j_min = m * (k * k + (r - e) * (r - e))
     omega = math.sqrt(m * g * (r * r * abs(kappa) / s + e) / j_min)
-    sweep = speed / s * (1.0 + math.sqrt(r * e / (k * k + (r - e) * (r - e))))
+    sweep = speed / s * (1.0 + (r * e / (k * k + (r - e) * (r - e))) ** SWEEP_EXPONENT[method])
     lam = (omega + sweep + c / j_min) * dt
-    n = math.ceil((SUBSTEP_CONSTANT * lam ** (order + 1) / tol) ** (1.0 / order))
+    order = _ORDER[method]
+    n = math.ceil((SUBSTEP_CONSTANT[method] * lam ** (order + 1) / tol) ** (1.0 / order))
+    n = max(n, math.ceil(lam / STABLE_STEP[method]))
     return max(1, min(n, MAX_SUBSTEPS))
 
 
@@ -132,12 +149,13 @@ def _advance(phi0, w0, tau, m, r, kappa, e, k, g, c, mu, dt, method, tol, fixed)
     step, where ``liftoff`` and ``slip`` are the smallest margins met at the start of any
     substep and at the end (see :func:`_measure`). With ``fixed`` = 0 the substeps follow
     from the speed at the start; if the step reaches a speed that asks for more, it is
-    taken again with as many as that speed asks for.
+    taken again with as many as that speed asks for, and if it does not stay finite, again
+    with twice as many (up to MAX_SUBSTEPS).
     """
-    order = _ORDER[method]
-    n = fixed if fixed > 0 else _substeps(abs(w0), m, r, kappa, e, k, g, c, dt, tol, order)
+    n = fixed if fixed > 0 else _substeps(abs(w0), m, r, kappa, e, k, g, c, dt, tol, method)
+    kp, kw = np.empty(12), np.empty(12)
     lift, slip = np.inf, np.inf
-    for _attempt in range(4):
+    for _attempt in range(12):
         h = dt / n
         phi, w, top = phi0, w0, abs(w0)
         lift, slip = np.inf, np.inf
@@ -154,20 +172,37 @@ def _advance(phi0, w0, tau, m, r, kappa, e, k, g, c, mu, dt, method, tol, fixed)
                 a4 = _rhs(phi + h * w2, w3, tau, m, r, kappa, e, k, g, c)
                 phi = phi + h * (w + h * (a1 + a2 + a3) / 6.0)
                 w = w + h * (a1 + 2.0 * a2 + 2.0 * a3 + a4) / 6.0
+            elif method == 4:
+                kp[0], kw[0] = w, a1
+                for i in range(1, 12):
+                    dp, dw = 0.0, 0.0
+                    for j in range(i):
+                        dp += _A8[i, j] * kp[j]
+                        dw += _A8[i, j] * kw[j]
+                    kp[i] = w + h * dw
+                    kw[i] = _rhs(phi + h * dp, kp[i], tau, m, r, kappa, e, k, g, c)
+                dp, dw = 0.0, 0.0
+                for i in range(12):
+                    dp += _B8[i] * kp[i]
+                    dw += _B8[i] * kw[i]
+                phi, w = phi + h * dp, w + h * dw
             elif method == 1:
                 w = w + h * a1
                 phi = phi + h * w
             else:
                 phi, w = _midpoint(phi, w, tau, m, r, kappa, e, k, g, c, h)
             if not (math.isfinite(phi) and math.isfinite(w)):
-                return phi0, w0, 0.0, n, False, 0.0, 0.0, 0.0, 0.0, 0.0
+                break
             top = max(top, abs(w))
-        if fixed > 0:
+        finite = math.isfinite(phi) and math.isfinite(w)
+        if fixed > 0 or (not finite and n >= MAX_SUBSTEPS):
             break
-        needed = _substeps(top, m, r, kappa, e, k, g, c, dt, tol, order)
+        needed = _substeps(top, m, r, kappa, e, k, g, c, dt, tol, method) if finite else 2 * n
         if needed <= n:
             break
-        n = needed
+        n = min(needed, MAX_SUBSTEPS)
+    if not (math.isfinite(phi) and math.isfinite(w)):
+        return phi0, w0, 0.0, n, False, 0.0, 0.0, 0.0, 0.0, 0.0
     a = _rhs(phi, w, tau, m, r, kappa, e, k, g, c)
     normal, friction = eq.contact_forces(phi, w, a, m, r, kappa, e, g)
     energy = eq.energy(phi, w, m, r, kappa, e, k, g)
@@ -383,6 +418,6 @@ def predicted_substeps(
     arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (phi_dot, *scene.params)))
     flat = [a.reshape(-1) for a in arrays]
     out = np.array(
-        [_substeps(abs(v[0]), *v[1:], dt, tol, _ORDER[code]) for v in zip(*flat, strict=True)]
+        [_substeps(abs(v[0]), *v[1:], dt, tol, code) for v in zip(*flat, strict=True)]
     )
     return int(out[0]) if arrays[0].ndim == 0 else out.reshape(arrays[0].shape)

@@ -1,0 +1,265 @@
+"""Classical controllers with the ``predict`` of a stable-baselines3 model.
+
+* :class:`LQR`: a linear-quadratic regulator about the target rest position, with the
+  holding torque as feedforward (RollerStabilize, RollerHold).
+* :class:`EnergySwingUp`: pumps the energy up to that of the unstable rest position, then
+  hands over to an LQR there (RollerBalance).
+* :class:`ZeroTorque` and :class:`RandomPolicy`: the floor of the results table.
+
+Each acts from the observation only (the state is decoded by
+:func:`agents.observation.decode_observation`), so one evaluation loop serves these and
+trained models alike: ``action, _ = policy.predict(obs, deterministic=True)``, for one
+observation (shape (d,) -> action (1,)) or a batch ((n, d) -> (n, 1)).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from scipy.linalg import expm, solve_discrete_are
+
+from agents.observation import decode_observation
+from envs import rewards
+from envs.physics import Scene, energy, holding_torque, linearize
+from envs.task import wrap_rate
+
+__all__ = ["LQR", "Controller", "EnergySwingUp", "RandomPolicy", "ZeroTorque", "controller_for"]
+
+
+class Controller:
+    """The interface shared with stable-baselines3 models: :meth:`predict`."""
+
+    def act(self, observation: np.ndarray) -> np.ndarray:
+        """Actions in [−1, 1] of shape (n, 1) for observations of shape (n, d)."""
+        raise NotImplementedError
+
+    def predict(
+        self,
+        observation: np.ndarray,
+        state: Any = None,
+        episode_start: np.ndarray | None = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, None]:
+        """The action for an observation, as ``stable_baselines3``'s ``model.predict``.
+
+        Args:
+            observation: one observation (shape (d,)) or a batch (shape (n, d)).
+            state: unused (no recurrent state); accepted for compatibility.
+            episode_start: unused; accepted for compatibility.
+            deterministic: unused (the controllers are deterministic, except
+                :class:`RandomPolicy`); accepted for compatibility.
+
+        Returns:
+            (actions, None): actions in [−1, 1], float32, of shape (1,) for one observation
+            or (n, 1) for a batch.
+        """
+        obs = np.asarray(observation, dtype=np.float64)
+        single = obs.ndim == 1
+        actions = self.act(obs.reshape(1, -1) if single else obs).astype(np.float32)
+        return (actions[0] if single else actions), None
+
+
+class ZeroTorque(Controller):
+    """Applies no torque: the roller swings freely (the uncontrolled baseline)."""
+
+    def act(self, observation: np.ndarray) -> np.ndarray:
+        return np.zeros((observation.shape[0], 1))
+
+
+class RandomPolicy(Controller):
+    """Uniform random actions in [−1, 1].
+
+    Args:
+        seed: the seed of its own generator (the same seed gives the same actions).
+    """
+
+    def __init__(self, seed: int | None = 0) -> None:
+        self.rng = np.random.default_rng(seed)
+
+    def act(self, observation: np.ndarray) -> np.ndarray:
+        return self.rng.uniform(-1.0, 1.0, (observation.shape[0], 1))
+
+
+def _task_settings(env: gym.Env | Any) -> tuple[Scene, float, float]:
+    """(scene, max_torque [N·m], dt [s]) of a (possibly wrapped) roller environment."""
+    base = env.unwrapped
+    return base.config.scene, float(base.task.max_torque), float(base.config.dt)
+
+
+class LQR(Controller):
+    """A discrete-time LQR about a rest position φ*, with the holding torque as feedforward.
+
+    About φ*, the holding torque τ* = dV/dφ(φ*) keeps the roller at rest; the physics
+    layer's exact Jacobians (A, B) = ``linearize(scene, φ*, 0, τ*)`` are discretized with
+    a zero-order hold over the control step dt (the environment holds the torque constant
+    over a step), and the gain K comes from the discrete algebraic Riccati equation with
+    Bryson's weights Q = diag(1/position_scale², 1/speed_scale²), R = 1/torque_scale².
+    The action is clip((τ* − K x)/max_torque, −1, 1), x = (position error [rad],
+    φ' [rad/s]), the error measured as in the task (one turn of ψ either way). Gains are
+    computed once per target and cached (RollerHold draws a target per episode).
+
+    Args:
+        scene: the scalar scene (``env.unwrapped.config.scene``).
+        max_torque: the torque [N·m] of an action of ±1.
+        dt: the control step [s].
+        target: the rest position φ* [rad]; None reads it from the observation (tasks that
+            observe their target, such as RollerHold).
+        position_scale: the acceptable position error [rad] (Bryson's rule).
+        speed_scale: the acceptable speed [rad/s].
+        torque_scale: the acceptable torque deviation from τ* [N·m].
+    """
+
+    def __init__(
+        self,
+        scene: Scene,
+        max_torque: float,
+        dt: float,
+        target: float | None = 0.0,
+        position_scale: float = 0.1,
+        speed_scale: float = 1.0,
+        torque_scale: float = 0.5,
+    ) -> None:
+        if scene.batch_size is not None:
+            raise ValueError("LQR takes a scalar scene")
+        self.scene, self.max_torque, self.dt = scene, float(max_torque), float(dt)
+        self.target = None if target is None else float(target)
+        self.Q = np.diag([1.0 / position_scale**2, 1.0 / speed_scale**2])
+        self.R = np.array([[1.0 / torque_scale**2]])
+        self.q = wrap_rate(scene)
+        self._cache: dict[float, tuple[float, np.ndarray, np.ndarray]] = {}
+
+    @classmethod
+    def from_env(cls, env: gym.Env | Any, **weights: float) -> LQR:
+        """The LQR for a RollerStabilize or RollerHold environment (target 0 or observed).
+
+        Args:
+            env: the environment (wrappers allowed); its scene, max_torque and dt are used.
+            **weights: ``position_scale``, ``speed_scale``, ``torque_scale`` (see the class).
+        """
+        scene, max_torque, dt = _task_settings(env)
+        base = env.unwrapped
+        target = None if base.task.observes_target else base.task.default_target(scene)
+        return cls(scene, max_torque, dt, target=target, **weights)
+
+    def gains(self, target: float) -> tuple[float, np.ndarray, np.ndarray]:
+        """(τ* [N·m], K (1, 2), P (2, 2)) about the rest position ``target`` [rad]."""
+        key = round(float(target), 9)
+        if key not in self._cache:
+            tau_star = float(holding_torque(self.scene, key))
+            A, B = linearize(self.scene, key, 0.0, tau_star)
+            # Zero-order hold: expm([[A, B], [0, 0]] dt) = [[Ad, Bd], [0, 1]].
+            M = np.zeros((3, 3))
+            M[:2, :2], M[:2, 2:] = A, B
+            E = expm(M * self.dt)
+            Ad, Bd = E[:2, :2], E[:2, 2:]
+            P = solve_discrete_are(Ad, Bd, self.Q, self.R)
+            K = np.linalg.solve(self.R + Bd.T @ P @ Bd, Bd.T @ P @ Ad)
+            self._cache[key] = (tau_star, K, P)
+        return self._cache[key]
+
+    def error(self, phi: np.ndarray, target: np.ndarray) -> np.ndarray:
+        """The position error [rad] as the task measures it: wrap(q (φ − φ*))/q."""
+        return rewards.wrap_angle(self.q * (phi - target)) / self.q
+
+    def torque(self, phi: np.ndarray, phi_dot: np.ndarray, target: np.ndarray) -> np.ndarray:
+        """The unsaturated torque τ* − K x [N·m] for states and targets of shape (n,)."""
+        out = np.empty_like(phi)
+        for t in np.unique(target):
+            rows = target == t
+            tau_star, K, _ = self.gains(t)
+            x = np.stack([self.error(phi[rows], t), phi_dot[rows]])
+            out[rows] = tau_star - (K @ x)[0]
+        return out
+
+    def act(self, observation: np.ndarray) -> np.ndarray:
+        s = decode_observation(observation, self.scene)
+        if self.target is not None:
+            target = np.full_like(s.phi, self.target)
+        elif s.target_phi is not None:
+            target = np.round(s.target_phi, 9)  # one cache entry per episode's target
+        else:
+            raise ValueError("LQR(target=None) needs observations that carry the target")
+        tau = self.torque(s.phi, s.phi_dot, target)
+        return np.clip(tau / self.max_torque, -1.0, 1.0)[:, None]
+
+
+class EnergySwingUp(Controller):
+    """Energy pumping up to the unstable rest position ±φ_b, then an LQR there (Balance).
+
+    With E = ½ J_I φ'² + V(φ) and dE/dt = τ φ', the torque
+    τ = clip(energy_gain · (E_b − E) · φ', ±max_torque) only ever moves E toward
+    E_b = V(φ_b), the energy of resting at the unstable position: the roller swings higher
+    each half-period until it creeps toward ±φ_b. Once the state is within the LQR's
+    capture region about the nearer of ±φ_b (|error| <= capture_angle and
+    |φ'| <= capture_speed), the :class:`LQR` about it takes over.
+
+    Args:
+        scene: the scalar scene.
+        max_torque: the torque [N·m] of an action of ±1.
+        dt: the control step [s].
+        target: φ_b > 0 [rad], the unstable rest position (−φ_b counts as well).
+        energy_gain: the gain of the energy pump [1/(J·rad/s)·N·m].
+        capture_angle: the handover band in position [rad].
+        capture_speed: the handover band in speed [rad/s].
+        **weights: the LQR's ``position_scale``, ``speed_scale``, ``torque_scale``.
+    """
+
+    def __init__(
+        self,
+        scene: Scene,
+        max_torque: float,
+        dt: float,
+        target: float,
+        energy_gain: float = 20.0,
+        capture_angle: float = 0.5,
+        capture_speed: float = 1.5,
+        **weights: float,
+    ) -> None:
+        self.scene, self.max_torque = scene, float(max_torque)
+        self.target = abs(float(target))
+        self.energy_target = float(energy(scene, self.target, 0.0))
+        self.energy_gain = float(energy_gain)
+        self.capture_angle, self.capture_speed = float(capture_angle), float(capture_speed)
+        self.lqr = LQR(scene, max_torque, dt, target=self.target, **weights)
+
+    @classmethod
+    def from_env(cls, env: gym.Env | Any, **kwargs: float) -> EnergySwingUp:
+        """The swing-up for a RollerBalance environment (target φ_b from its task).
+
+        Args:
+            env: the environment (wrappers allowed).
+            **kwargs: the other arguments of the class.
+        """
+        scene, max_torque, dt = _task_settings(env)
+        target = env.unwrapped.task.default_target(scene)
+        return cls(scene, max_torque, dt, target, **kwargs)
+
+    def act(self, observation: np.ndarray) -> np.ndarray:
+        s = decode_observation(observation, self.scene)
+        up = self.lqr.error(s.phi, self.target)
+        down = self.lqr.error(s.phi, -self.target)
+        target = np.where(np.abs(up) <= np.abs(down), self.target, -self.target)
+        error = np.minimum(np.abs(up), np.abs(down))
+        pump = self.energy_gain * (self.energy_target - energy(self.scene, s.phi, s.phi_dot))
+        tau = pump * s.phi_dot
+        captured = (error <= self.capture_angle) & (np.abs(s.phi_dot) <= self.capture_speed)
+        if captured.any():
+            tau[captured] = self.lqr.torque(s.phi[captured], s.phi_dot[captured],
+                                            target[captured])
+        return np.clip(tau / self.max_torque, -1.0, 1.0)[:, None]
+
+
+def controller_for(env: gym.Env | Any, **kwargs: float) -> Controller:
+    """The classical controller of a roller task: LQR (Stabilize, Hold) or EnergySwingUp
+    (Balance), built from the environment's scene, torque limit and control step.
+
+    Args:
+        env: a RollerStabilize, RollerHold or RollerBalance environment (wrappers allowed).
+        **kwargs: the controller's weights and gains (see :class:`LQR`,
+            :class:`EnergySwingUp`).
+    """
+    if env.unwrapped.task.name == "RollerBalance":
+        return EnergySwingUp.from_env(env, **kwargs)
+    return LQR.from_env(env, **kwargs)
