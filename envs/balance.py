@@ -85,6 +85,8 @@ class BalanceTask(Task):
         """The error to the nearer of ±φ_b [rad of φ]."""
         up = super().error(phi, target, q)
         down = super().error(phi, -target, q)
+        if type(up) is float:
+            return up if abs(up) <= abs(down) else down
         return np.where(np.abs(up) <= np.abs(down), up, down)
 
 

@@ -2,7 +2,9 @@
 
 As in dm_control's ``rewards.tolerance``: a term is 1 at its target and decays smoothly
 (a Gaussian) to ``value_at_margin`` at distance ``margin`` from it. A task's reward is a
-product of such terms, so it stays in [0, 1]. Each function takes floats or arrays.
+product of such terms, so it stays in [0, 1]. Each function takes floats (computed with
+:mod:`math`, the single environment's fast path) or arrays (NumPy, the vector environment)
+— the same formula either way, through :func:`xp`.
 """
 
 from __future__ import annotations
@@ -11,15 +13,20 @@ import math
 
 import numpy as np
 
-__all__ = ["near", "product", "wrap_angle"]
+__all__ = ["near", "product", "wrap_angle", "xp"]
 
 _LOG_VALUE_AT_MARGIN = math.log(0.1)
+
+
+def xp(x):
+    """The module that computes on ``x``: :mod:`math` for a Python float, else NumPy."""
+    return math if type(x) is float else np
 
 
 def near(x, margin, value_at_margin: float = 0.1):
     """exp(ln(value_at_margin)·(x/margin)²): 1 at x = 0, ``value_at_margin`` at |x| = margin."""
     scale = _LOG_VALUE_AT_MARGIN if value_at_margin == 0.1 else math.log(value_at_margin)
-    return np.exp(scale * (x / margin) ** 2)
+    return xp(x).exp(scale * (x / margin) ** 2)
 
 
 def product(*weighted_terms):
@@ -32,4 +39,4 @@ def product(*weighted_terms):
 
 def wrap_angle(x):
     """x wrapped into [−π, π) [rad]."""
-    return x - 2.0 * np.pi * np.floor((x + np.pi) / (2.0 * np.pi))
+    return x - 2.0 * math.pi * xp(x).floor((x + math.pi) / (2.0 * math.pi))

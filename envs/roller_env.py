@@ -112,7 +112,11 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def _set_scene(self, scene: Scene) -> None:
         self.scene = scene
-        self._row = self.config.scene_row(scene)
+        # The integrator's buffer: this scene and the settings, the state filled in per step.
+        self._buf = np.zeros(integ.OUT + 10)
+        self._buf[3:11] = self.config.scene_row(scene)
+        cfg = self.config
+        self._buf[11:15] = (cfg.dt, cfg.tolerance, cfg.method_code, cfg.substeps)
         self._q = wrap_rate(scene)
         self._psi_rate = psi_rate(scene)
 
@@ -131,7 +135,8 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         c = contact(scene, self.phi, self.phi_dot, 0.0)
         info = self._info(0.0, float(c.normal), float(c.friction),
                           float(energy(scene, self.phi, self.phi_dot)), 0, bool(c.lifting),
-                          bool(c.slipping), False, float(c.liftoff_margin), float(c.slip_margin))
+                          bool(c.slipping), False, float(c.liftoff_margin), float(c.slip_margin),
+                          self.task.error(self.phi, self.target, self._q))
         if self.render_mode == "human":
             self.render()
         return self._observation(), info
@@ -142,25 +147,28 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         else:
             a = float(self.config.action_values(action, (1,))[0])
         tau = a * self.task.max_torque
-        cfg = self.config
-        if cfg.method_code == integ.METHODS["dop853"]:
-            r = integ.step(self.scene, self.phi, self.phi_dot, tau, cfg.dt, method="dop853",
-                           tol=cfg.tolerance)
-            out = (r.phi, r.phi_dot, r.phi_ddot, r.substeps, r.finite, r.normal_force,
-                   r.friction_force, r.energy, r.liftoff_margin, r.slip_margin)
+        buf = self._buf
+        if self.config.method_code == integ.METHODS["dop853"]:
+            r = integ.step(self.scene, self.phi, self.phi_dot, tau, self.config.dt,
+                           method="dop853", tol=self.config.tolerance)
+            buf[integ.OUT:] = (r.phi, r.phi_dot, r.phi_ddot, r.substeps, r.finite,
+                               r.normal_force, r.friction_force, r.energy, r.liftoff_margin,
+                               r.slip_margin)
         else:
-            out = integ.step_one(self._row, self.phi, self.phi_dot, tau, cfg.dt,
-                                 cfg.method_code, cfg.tolerance, cfg.substeps)
-        phi, phi_dot, _, substeps, finite, normal, friction, energy, lift, slip = out
+            buf[0], buf[1], buf[2] = self.phi, self.phi_dot, tau
+            integ.advance_into(buf)
+        phi, phi_dot, _, substeps, finite, normal, friction, energy, lift, slip = (
+            buf[integ.OUT:].tolist()
+        )
         self.phi, self.phi_dot, self.torque = phi, phi_dot, tau
-        lifting, slipping = lift <= 0.0, slip < 0.0
-        terminated = bool(lifting or slipping or not finite)
-        reward = float(self.task.reward(phi, phi_dot, a, self.target, self._q))
+        lifting, slipping, nonfinite = lift <= 0.0, slip < 0.0, finite == 0.0
+        error = self.task.error(phi, self.target, self._q)
+        reward = float(self.task.reward_from_error(error, phi_dot, a))
         info = self._info(tau, normal, friction, energy, substeps, lifting, slipping,
-                          not finite, lift, slip)
+                          nonfinite, lift, slip, error)
         if self.render_mode == "human":
             self.render()
-        return self._observation(), reward, terminated, False, info
+        return self._observation(), reward, lifting or slipping or nonfinite, False, info
 
     def _observation(self) -> np.ndarray:
         return np.array(
@@ -169,7 +177,7 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         )
 
     def _info(self, tau, normal, friction, energy, substeps, lifting, slipping, nonfinite,
-              lift, slip) -> dict[str, Any]:
+              lift, slip, error) -> dict[str, Any]:
         return {
             "phi": self.phi,
             "phi_dot": self.phi_dot,
@@ -186,8 +194,8 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
             "slip_margin": slip,
             "target_phi": self.target,
             "target_psi": self._psi_rate * self.target,
-            "position_error": float(self.task.error(self.phi, self.target, self._q)),
-            "is_success": bool(self.task.success(self.phi, self.phi_dot, self.target, self._q)),
+            "position_error": float(error),
+            "is_success": bool(self.task.success_from_error(error, self.phi_dot)),
         }
 
     # -- rendering ---------------------------------------------------------------------

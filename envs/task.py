@@ -135,25 +135,32 @@ class Task:
     def observation_terms(self, phi, phi_dot, target, psi_rate):
         """The observation's entries as a tuple; ``psi_rate`` = rκ/(1 − rκ) (0 on the floor)."""
         psi = psi_rate * phi
-        terms = (np.cos(psi), np.sin(psi), np.cos(phi), np.sin(phi),
-                 np.tanh(phi_dot / SPEED_SCALE))
+        f = rewards.xp(psi)
+        terms = (f.cos(psi), f.sin(psi), f.cos(phi), f.sin(phi), f.tanh(phi_dot / SPEED_SCALE))
         if self.observes_target:
             psi_t = psi_rate * target
-            terms += (np.cos(psi_t), np.sin(psi_t), np.cos(target), np.sin(target))
+            f = rewards.xp(psi_t)
+            terms += (f.cos(psi_t), f.sin(psi_t), f.cos(target), f.sin(target))
         return terms
 
     def reward(self, phi, phi_dot, action, target, q):
         """The reward in [0, 1] (formula in the module docs)."""
-        return rewards.near(self.error(phi, target, q), self.position_margin) * rewards.product(
+        return self.reward_from_error(self.error(phi, target, q), phi_dot, action)
+
+    def success(self, phi, phi_dot, target, q):
+        """Inside the tolerance band at rest."""
+        return self.success_from_error(self.error(phi, target, q), phi_dot)
+
+    def reward_from_error(self, error, phi_dot, action):
+        """:meth:`reward` from the position error already computed."""
+        return rewards.near(error, self.position_margin) * rewards.product(
             (rewards.near(phi_dot, self.speed_margin), self.speed_weight),
             (rewards.near(action, 1.0), self.control_weight),
         )
 
-    def success(self, phi, phi_dot, target, q):
-        """Inside the tolerance band at rest."""
-        return (np.abs(self.error(phi, target, q)) <= self.success_band) & (
-            np.abs(phi_dot) <= self.success_speed
-        )
+    def success_from_error(self, error, phi_dot):
+        """:meth:`success` from the position error already computed."""
+        return (abs(error) <= self.success_band) & (abs(phi_dot) <= self.success_speed)
 
 
 def hold_range(scene: Scene, max_torque: float, torque_share: float = 0.8,

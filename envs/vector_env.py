@@ -196,9 +196,9 @@ class RollerVectorEnv(VectorEnv):
         terminated = lifting | slipping | ~finite
         self.steps += 1
         truncated = self.steps >= self.max_episode_steps
-        reward = np.asarray(self.task.reward(self.phi, self.phi_dot, a, self.target, self._q),
-                            dtype=np.float64)
-        info = self._info(raw, lifting, slipping, ~finite)
+        error = np.asarray(self.task.error(self.phi, self.target, self._q), dtype=float)
+        reward = np.asarray(self.task.reward_from_error(error, self.phi_dot, a), dtype=np.float64)
+        info = self._info(raw, lifting, slipping, ~finite, error)
 
         # Next-step autoreset: the sub-environments that ended last step start over now.
         restarted = np.flatnonzero(self._done)
@@ -217,7 +217,7 @@ class RollerVectorEnv(VectorEnv):
         terms = self.task.observation_terms(self.phi, self.phi_dot, self.target, self._psi_rate)
         return np.stack(terms, axis=1).astype(np.float32)
 
-    def _info(self, raw: np.ndarray, lifting, slipping, nonfinite) -> dict[str, Any]:
+    def _info(self, raw: np.ndarray, lifting, slipping, nonfinite, error) -> dict[str, Any]:
         info = {
             "phi": self.phi.copy(),
             "phi_dot": self.phi_dot.copy(),
@@ -234,19 +234,18 @@ class RollerVectorEnv(VectorEnv):
             "slip_margin": raw[9].copy(),
             "target_phi": self.target.copy(),
             "target_psi": self._psi_rate * self.target,
-            "position_error": np.asarray(self.task.error(self.phi, self.target, self._q),
-                                         dtype=float),
-            "is_success": np.asarray(
-                self.task.success(self.phi, self.phi_dot, self.target, self._q), dtype=bool
-            ),
+            "position_error": error,
+            "is_success": np.asarray(self.task.success_from_error(error, self.phi_dot),
+                                     dtype=bool),
         }
         mask = np.ones(self.num_envs, dtype=bool)
         info.update({f"_{k}": mask for k in _INFO_KEYS})
         return info
 
     def _reset_info(self) -> dict[str, Any]:
-        info = self._info(np.zeros((10, self.num_envs)), np.zeros(self.num_envs, bool),
-                          np.zeros(self.num_envs, bool), np.zeros(self.num_envs, bool))
+        n = self.num_envs
+        info = self._info(np.zeros((10, n)), np.zeros(n, bool), np.zeros(n, bool),
+                          np.zeros(n, bool), np.zeros(n))
         self._fill_reset_info(info, np.arange(self.num_envs))
         return info
 

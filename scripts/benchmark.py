@@ -7,8 +7,9 @@
 Read top to bottom; each part is a section:
 
 1. **Work-precision.** On the default scene and the hard cases, every integrator (semi-implicit
-   Euler, RK4 with fixed substeps, RK4 with automatic substeps at several tolerances,
-   implicit midpoint, scipy's DOP853) runs one episode of random torques. Cost: wall time per
+   Euler, RK4 with fixed substeps, RK4 with automatic substeps at several tolerances, the
+   8th-order Dormand–Prince tableau (rk8, the environments' default) likewise, implicit
+   midpoint, scipy's DOP853) runs one episode of random torques. Cost: wall time per
    simulated second. Error: the largest state error along the episode against a DOP853
    reference at rtol = atol = 1e-13 (global), and the largest error of one control step
    started from the reference state (local). Then the energy error at zero torque over a
@@ -51,16 +52,19 @@ from envs.physics import integrators as integ  # noqa: E402
 # ================================================================================================
 # Settings
 # ================================================================================================
-DT = 0.05  # the control step [s], the environments' default
-try:  # the environments' defaults, when they are importable
-    from envs.config import DEFAULT_DT, DEFAULT_TOLERANCE  # noqa: E402
-    from envs.task import Task  # noqa: E402
+DT, DEFAULT_TOL, MAX_TORQUE, DEFAULT_METHOD = 0.05, 1e-8, 0.5, "rk4"
+try:  # the environments' defaults: control step, tolerance, torque, integrator
+    import inspect
 
-    DEFAULT_TOL = float(DEFAULT_TOLERANCE)
+    from envs.config import DEFAULT_DT, DEFAULT_TOLERANCE
+    from envs.roller_env import RollerEnv
+    from envs.task import Task
+
+    DT, DEFAULT_TOL = float(DEFAULT_DT), float(DEFAULT_TOLERANCE)
     MAX_TORQUE = float(Task.default_max_torque)
-    DT = float(DEFAULT_DT)
+    DEFAULT_METHOD = inspect.signature(RollerEnv).parameters["integrator"].default
 except ImportError:  # pragma: no cover - before the environments exist
-    DEFAULT_TOL, MAX_TORQUE = 1e-8, 0.5
+    pass
 REFERENCE_TOL = 1e-13  # the reference: DOP853 at rtol = atol = 1e-13
 TARGET_ERROR = 1e-6  # [rad] the target's bound on the 10-s state error
 SEED = 0
@@ -95,7 +99,8 @@ class Config:
     scenes: tuple[str, ...] = tuple(SCENES)
     euler_substeps: tuple[int, ...] = (1, 10, 100, 1000, 10000)
     rk4_substeps: tuple[int, ...] = (1, 2, 4, 8, 16, 32, 64, 128, 256, 1024, 4096, 16384)
-    rk4_tols: tuple[float, ...] = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12)
+    rk8_substeps: tuple[int, ...] = (1, 2, 4, 8, 16, 32, 64, 256, 1024)
+    auto_tols: tuple[float, ...] = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12)
     midpoint_substeps: tuple[int, ...] = (1, 4, 16, 64, 256, 1024, 4096)
     dop853_tols: tuple[float, ...] = (1e-4, 1e-6, 1e-8, 1e-10, 1e-12)
     mujoco_default_n: tuple[int, ...] = (25, 100, 400)  # MuJoCo steps per control step
@@ -111,8 +116,8 @@ class Config:
             return cls(quick, out)
         return cls(
             quick, out, horizon_s=2.0, repeats=2, scenes=("paper", "floor"),
-            euler_substeps=(1, 10, 100), rk4_substeps=(1, 4, 16, 64),
-            rk4_tols=(1e-4, 1e-6, 1e-8, 1e-10), midpoint_substeps=(1, 16),
+            euler_substeps=(1, 10, 100), rk4_substeps=(1, 4, 16, 64), rk8_substeps=(1, 4),
+            auto_tols=(1e-4, 1e-6, 1e-8, 1e-10), midpoint_substeps=(1, 16),
             dop853_tols=(1e-6, 1e-12), mujoco_default_n=(25,), mujoco_tuned_n=(25, 100, 400),
             energy_horizon_s=20.0, vector_sizes=(1, 16, 256), env_steps=300, ppo_steps=128,
         )
@@ -248,6 +253,9 @@ class Run:
     fn: Callable[[], Trajectory]
     ours: bool = True
     setting: float = 0.0  # substeps, tolerance or MuJoCo steps per control step
+    method: str = ""  # our kernels' method, tolerance and fixed substeps (0: automatic)
+    tol: float = 0.0
+    substeps: int = 0
     seconds: float = math.inf  # the best wall time of the episode [s]
     traj: Trajectory | None = None
     err: tuple[float, float] = (math.inf, math.inf)
@@ -266,7 +274,7 @@ def time_interleaved(runs: list[Run], repeats: int) -> None:
     """
     for rep in range(repeats):
         for run in runs:
-            if rep >= 2 and run.seconds > SLOW_S or rep >= 1 and run.seconds > 10 * SLOW_S:
+            if (rep >= 2 and run.seconds > SLOW_S) or (rep >= 1 and run.seconds > 10 * SLOW_S):
                 continue
             t0 = time.perf_counter()
             traj = run.fn()
@@ -331,7 +339,19 @@ class SceneResult:
         return [r for r in self.runs if r.family == name]
 
 
-OUR_FAMILIES = ("euler", "rk4", "rk4 auto", "midpoint", "dop853")
+def kernel_families(cfg: Config) -> list[tuple[str, str, tuple[float, ...]]]:
+    """(family, method, settings) of our compiled integrators: fixed substeps or, for the
+    "auto" families, tolerances per control step (the default's tolerance always in)."""
+    tols = tuple(sorted({*cfg.auto_tols, DEFAULT_TOL}, reverse=True))
+    fams = [("euler", "euler", cfg.euler_substeps), ("rk4", "rk4", cfg.rk4_substeps),
+            ("rk4 auto", "rk4", tols)]
+    if "rk8" in integ.METHODS:
+        fams += [("rk8", "rk8", cfg.rk8_substeps), ("rk8 auto", "rk8", tols)]
+    fams += [("midpoint", "midpoint", cfg.midpoint_substeps)]
+    return fams
+
+
+OUR_FAMILIES = ("euler", "rk4", "rk4 auto", "rk8", "rk8 auto", "midpoint", "dop853")
 MJ_FAMILIES = ("MuJoCo default", "MuJoCo tuned")
 
 
@@ -339,19 +359,15 @@ def build_runs(cfg: Config, name: str, scene: Scene, torques: list[float]) -> li
     """Every candidate on one scene, ours and MuJoCo's."""
     row, dt = kernel_row(scene), DT
     runs: list[Run] = []
-
-    def kernel(method: str, tol: float, n: int) -> Callable[[], Trajectory]:
-        return lambda: run_kernel(row, torques, dt, method, tol, n)
-
-    for n in cfg.euler_substeps:
-        runs.append(Run(name, "euler", f"×{n}", kernel("euler", DEFAULT_TOL, n), setting=n))
-    for n in cfg.rk4_substeps:
-        runs.append(Run(name, "rk4", f"×{n}", kernel("rk4", DEFAULT_TOL, n), setting=n))
-    for tol in sorted({*cfg.rk4_tols, DEFAULT_TOL}, reverse=True):
-        runs.append(Run(name, "rk4 auto", f"tol {tol:.0e}", kernel("rk4", tol, 0), setting=tol))
-    for n in cfg.midpoint_substeps:
-        runs.append(Run(name, "midpoint", f"×{n}", kernel("midpoint", DEFAULT_TOL, n),
-                        setting=n))
+    for family, method, settings in kernel_families(cfg):
+        auto = family.endswith("auto")
+        for x in settings:
+            tol, n = (x, 0) if auto else (DEFAULT_TOL, int(x))
+            runs.append(Run(
+                name, family, f"tol {tol:.0e}" if auto else f"×{n}",
+                lambda method=method, tol=tol, n=n: run_kernel(row, torques, dt, method, tol, n),
+                setting=x, method=method, tol=tol, substeps=n,
+            ))
     for tol in cfg.dop853_tols:
         runs.append(Run(name, "dop853", f"tol {tol:.0e}",
                         lambda tol=tol: run_dop853(scene, torques, dt, tol), setting=tol))
@@ -387,13 +403,11 @@ def measure_scene(cfg: Config, name: str) -> SceneResult:
     row = kernel_row(scene)
     for run in runs:
         run.err = global_error(run.traj.states, ref.states)
-        if run.ours and run.family in ("euler", "rk4", "rk4 auto", "midpoint"):
-            method = "rk4" if run.family.startswith("rk4") else run.family
-            tol = run.setting if run.family == "rk4 auto" else DEFAULT_TOL
-            n = 0 if run.family == "rk4 auto" else int(run.setting)
-            run.local = local_error(row, ref.states, tq, DT, method, tol, n)
+        if run.method:
+            run.local = local_error(row, ref.states, tq, DT, run.method, run.tol, run.substeps)
     result = SceneResult(name, scene, torques, ref, ref_seconds, floor, runs)
-    result.default = next(r for r in runs if r.family == "rk4 auto" and r.setting == DEFAULT_TOL)
+    result.default = next(r for r in runs if r.family == f"{DEFAULT_METHOD} auto"
+                          and r.tol == DEFAULT_TOL)
     return result
 
 
@@ -409,8 +423,13 @@ def measure_energy(cfg: Config, result: SceneResult) -> None:
         ("euler ×10", "euler", DEFAULT_TOL, 10),
         ("midpoint ×10", "midpoint", DEFAULT_TOL, 10),
         ("rk4 ×10", "rk4", DEFAULT_TOL, 10),
-        (f"rk4 auto tol {DEFAULT_TOL:.0e} (default)", "rk4", DEFAULT_TOL, 0),
+        (f"rk4 auto tol {DEFAULT_TOL:.0e}", "rk4", DEFAULT_TOL, 0),
+        *([("rk8 ×4", "rk8", DEFAULT_TOL, 4)] if "rk8" in integ.METHODS else []),
+        (f"{DEFAULT_METHOD} auto tol {DEFAULT_TOL:.0e} (default)", DEFAULT_METHOD,
+         DEFAULT_TOL, 0),
     ):
+        if label.startswith("rk4 auto") and DEFAULT_METHOD == "rk4":
+            continue
         t0 = time.perf_counter()
         traj = run_kernel(row, zeros, DT, method, tol, n, phi0, w0)
         seconds = time.perf_counter() - t0
@@ -435,7 +454,7 @@ def envs_available() -> str | None:
         import envs  # noqa: F401
 
         gym.make("RollerStabilize-v0").close()
-    except Exception as exc:  # noqa: BLE001 - the environments may not exist yet
+    except Exception as exc:  # the environments may not exist yet
         return f"{type(exc).__name__}: {exc}"
     return None
 
@@ -622,6 +641,16 @@ def md_table(header: list[str], rows: list[list[str]]) -> list[str]:
     return out
 
 
+def verdict_single(ratio: float, error: float) -> str:
+    """The verdict on the one-environment target: speed ≥ 1.5 × Pendulum, error ≤ 1e-6 rad."""
+    misses = []
+    if ratio < 1.5:
+        misses.append(f"speed {ratio / 1.5:.2f} of the target")
+    if not error <= TARGET_ERROR:
+        misses.append(f"error {error / TARGET_ERROR:.1f} × the bound")
+    return "**met**" if not misses else "**missed**: " + "; ".join(misses)
+
+
 @dataclass
 class Comparison:
     """Ours at default settings against MuJoCo (tuned) at equal error, on one scene."""
@@ -665,10 +694,12 @@ def compare_mujoco(res: SceneResult) -> Comparison:
     )
 
 
-COLORS = {"euler": "tab:red", "rk4": "tab:blue", "rk4 auto": "tab:green",
+COLORS = {"euler": "tab:red", "rk4": "tab:blue", "rk4 auto": "tab:green", "rk8": "tab:cyan",
+          "rk8 auto": "tab:olive",
           "midpoint": "tab:purple", "dop853": "tab:gray", "MuJoCo default": "tab:orange",
           "MuJoCo tuned": "tab:brown"}
-MARKERS = {"euler": "v", "rk4": "o", "rk4 auto": "s", "midpoint": "D", "dop853": "^",
+MARKERS = {"euler": "v", "rk4": "o", "rk4 auto": "s", "rk8": "h", "rk8 auto": "p",
+           "midpoint": "D", "dop853": "^",
            "MuJoCo default": "X", "MuJoCo tuned": "P"}
 
 
@@ -692,7 +723,7 @@ def plot_work_precision(results: list[SceneResult], path: Path) -> None:
                           label=fam, lw=1.2, ms=5, ls="--" if fam.startswith("MuJoCo") else "-")
         d = res.default
         ax.loglog([max(d.err[0], 1e-16)], [d.seconds / horizon], "*", color="k", ms=15,
-                  label=f"default (rk4, tol {DEFAULT_TOL:.0e})", zorder=5)
+                  label=f"default ({DEFAULT_METHOD}, tol {DEFAULT_TOL:.0e})", zorder=5)
         ax.axvline(res.ref_floor[0], color="k", lw=0.8, ls=":", label="reference's own error")
         ax.axvline(TARGET_ERROR, color="tab:red", lw=0.8, ls="-.", label="target 1e-6 rad")
         ax.set_title(f"{res.name}: {SCENE_NOTES[res.name]}", fontsize=9)
@@ -796,9 +827,7 @@ def write_report(cfg: Config, results: list[SceneResult], tp: Throughput | None,
             "one environment ≥ 1.5 × Pendulum-v1's steps/s, 10-s error ≤ 1e-6 rad",
             f"{r1:.2f} × Pendulum-v1 ({tp.single['ours']:,.0f} against "
             f"{tp.single['Pendulum-v1']:,.0f} steps/s); error {fmt_err(tp.env_error[0])} rad",
-            "**met**" if r1 >= 1.5 and err_ok else
-            f"**missed**: {'speed ' + format(r1 / 1.5, '.2f') + ' of the target' if r1 < 1.5 else ''}"
-            f"{'; error ' + format(tp.env_error[0] / TARGET_ERROR, '.1f') + '× the bound' if not err_ok else ''}",
+            verdict_single(r1, tp.env_error[0]),
         ])
         for n in (4096, 65536):
             if n in tp.vector:
@@ -823,8 +852,8 @@ def write_report(cfg: Config, results: list[SceneResult], tp: Throughput | None,
         L += ["", f"The environments could not be measured: {tp_why}."]
     L += [""]
     L += [
-        f"- Default settings (RK4, automatic substeps at tol {DEFAULT_TOL:.0e} per control "
-        f"step, dt = {DT} s) on the default scene: largest φ error over the {horizon:g}-s "
+        f"- Default settings ({DEFAULT_METHOD}, automatic substeps at tol {DEFAULT_TOL:.0e} "
+        f"per control step, dt = {DT} s) on the default scene: largest φ error over the {horizon:g}-s "
         f"episode **{fmt_err(d.err[0])} rad** (φ' {fmt_err(d.err[1])} rad/s), at "
         f"**{fmt_time(d_cost)} per simulated second** "
         f"({len(paper.torques) / d.seconds:,.0f} control steps/s in the physics kernel).",
@@ -834,9 +863,9 @@ def write_report(cfg: Config, results: list[SceneResult], tp: Throughput | None,
     ]
     L += ["", "See *What would close the misses* at the end.", ""]
 
-    L += ["## Machine and command", ""] + machine_info() + [
-        f"- Command: `{command}` (from the repository root, in its venv: `make bench` runs "
-        "the full one)", ""]
+    L += ["## Machine and command", "", *machine_info(),
+          f"- Command: `{command}` (from the repository root, in its venv: `make bench` runs "
+          "the full one)", ""]
 
     # -- method -----------------------------------------------------------------------------
     L += ["## How it is measured", ""]
@@ -863,7 +892,9 @@ def write_report(cfg: Config, results: list[SceneResult], tp: Throughput | None,
         "- **Families**: `euler` = semi-implicit Euler with n fixed substeps (n = 1 is "
         "Gymnasium's Pendulum scheme); `rk4` = RK4 with n fixed substeps; `rk4 auto` = RK4 "
         "with the automatic substep rule at a tolerance per control step (the environments' "
-        f"default: {DEFAULT_TOL:.0e}); `midpoint` = implicit midpoint, n fixed substeps; "
+        f"default: {DEFAULT_TOL:.0e}); `rk8`, `rk8 auto` = the same with the 8th-order "
+        "Dormand–Prince tableau (the environments' default integrator: "
+        f"`{DEFAULT_METHOD}`); `midpoint` = implicit midpoint, n fixed substeps; "
         "`dop853` = scipy's, at rtol = atol = tol.",
         "",
     ]
@@ -882,8 +913,8 @@ def write_report(cfg: Config, results: list[SceneResult], tp: Throughput | None,
         for run in res.runs:
             cost = run.seconds / horizon
             subs = run.traj.substeps
-            sub = (f"{subs.mean():.0f} (max {subs.max()})" if run.family in ("rk4 auto",
-                                                                              "dop853")
+            sub = (f"{subs.mean():.0f} (max {subs.max()})"
+                   if run.family.endswith("auto") or run.family == "dop853"
                    else f"{int(run.setting)}")
             rows.append([
                 run.family + (" ★" if run is res.default else ""), run.label,
@@ -901,12 +932,12 @@ def write_report(cfg: Config, results: list[SceneResult], tp: Throughput | None,
           f"({round(cfg.energy_horizon_s / DT):,} control steps): the largest relative energy "
           "error |E − E0|/E0 over the horizon. The system is not separable (J_I depends on "
           "φ), so semi-implicit Euler is not symplectic here and drifts; the implicit midpoint "
-          "rule is symplectic and its error stays bounded; RK4 drifts slowly, by its error "
-          "per step.", "", "![energy](benchmarks/energy.png)", ""]
+          "rule is symplectic and its error stays bounded; RK4 and RK8 drift slowly, by their "
+          "error per step.", "", "![energy](benchmarks/energy.png)", ""]
     header = ["scene", *[item["label"] for item in results[0].energy]]
     rows = [[res.name, *[f"{fmt_err(item['max'])} ({fmt_time(item['seconds'])})"
                          for item in res.energy]] for res in results]
-    L += md_table(header, rows) + ["", "(wall time of the whole horizon in brackets)", ""]
+    L += [*md_table(header, rows), "", "(wall time of the whole horizon in brackets)", ""]
 
     # -- part 2 -------------------------------------------------------------------------------
     L += ["## 2. MuJoCo on the same scene", ""]
@@ -952,18 +983,19 @@ def write_report(cfg: Config, results: list[SceneResult], tp: Throughput | None,
                   rows)
     L += ["", "MuJoCo's figures per setting are in the tables of part 1 (families `MuJoCo "
           "default`, `MuJoCo tuned`; setting = MuJoCo's timestep).", ""]
-    L += ["Our whole RK4 curve against MuJoCo tuned, on the default scene (MuJoCo's cost "
+    L += [f"Our whole `{DEFAULT_METHOD} auto` curve against MuJoCo tuned, on the default scene "
+          "(MuJoCo's cost "
           "interpolated at each of our errors):", ""]
     rows = []
     hz = len(paper.torques) * DT
     mj_pts = [(r.err[0], r.seconds / hz) for r in paper.family("MuJoCo tuned")]
-    for run in paper.family("rk4 auto"):
+    for run in paper.family(f"{DEFAULT_METHOD} auto"):
         cost, how = cost_at_error(mj_pts, max(run.err[0], paper.ref_floor[0]))
         ours_cost = run.seconds / hz
         rows.append([run.label, fmt_err(run.err[0]), fmt_time(ours_cost), fmt_time(cost),
                      f"{cost / ours_cost:,.0f} × ({how})" if math.isfinite(cost) else how])
-    L += md_table(["rk4 auto", "φ error [rad]", "ours per sim. s", "MuJoCo tuned per sim. s",
-                   "ratio"], rows) + [""]
+    L += [*md_table([f"{DEFAULT_METHOD} auto", "φ error [rad]", "ours per sim. s",
+                     "MuJoCo tuned per sim. s", "ratio"], rows), ""]
 
     # -- part 3 -------------------------------------------------------------------------------
     L += ["## 3. Throughput", ""]
@@ -1006,7 +1038,8 @@ def write_report(cfg: Config, results: list[SceneResult], tp: Throughput | None,
 
     # -- part 4 -------------------------------------------------------------------------------
     L += ["## 4. Hard cases", "",
-          f"Default settings (RK4, automatic substeps, tol {DEFAULT_TOL:.0e}), the episode of "
+          f"Default settings ({DEFAULT_METHOD}, automatic substeps, tol {DEFAULT_TOL:.0e}), the "
+          "episode of "
           "part 1, and the zero-torque horizon of the energy table. `non-finite`: steps of "
           "every run of ours on the scene (all families, the energy runs) that could not stay "
           "finite (a step that fails reports it and keeps the state). `contact`: control "
@@ -1052,7 +1085,7 @@ def closing_notes(cfg: Config, results: list[SceneResult], comps: list[Compariso
     paper = next(r for r in results if r.name == "paper")
     horizon = len(paper.torques) * DT
     # how much cheaper could the default be at the same error? (fixed RK4 substeps)
-    fixed = [(r.err[0], r.seconds / horizon) for r in paper.family("rk4")]
+    fixed = [(r.err[0], r.seconds / horizon) for r in paper.family(DEFAULT_METHOD)]
     target = max(paper.default.err[0], paper.ref_floor[0])
     fixed_cost, _ = cost_at_error(fixed, target)
     d_cost = paper.default.seconds / horizon
@@ -1063,14 +1096,15 @@ def closing_notes(cfg: Config, results: list[SceneResult], comps: list[Compariso
         env_share = tp.single["ours"] / kernel_steps
         notes.append(
             f"- **One environment**: {r1:.2f} × Pendulum-v1 (target 1.5 ×). The physics alone "
-            f"runs {kernel_steps:,.0f} control steps/s (mean {subs.mean():.0f} RK4 substeps "
+            f"runs {kernel_steps:,.0f} control steps/s (mean {subs.mean():.0f} "
+            f"{DEFAULT_METHOD} substeps "
             f"per step); the environment reaches {tp.single['ours']:,.0f}, "
             f"{100 * env_share:.0f} % of that: the rest is the environment's Python (action "
             "checks, observation, reward, info dict) and Gymnasium's wrappers, which Pendulum "
             "pays too. "
             + ("Met. " if r1 >= 1.5 else
                "To close it: fewer substeps at the same error (the automatic rule is "
-               f"conservative: fixed RK4 substeps reach the default's error at "
+               f"conservative: fixed {DEFAULT_METHOD} substeps reach the default's error at "
                f"{fmt_time(fixed_cost)} per simulated second against {fmt_time(d_cost)}), "
                "and a leaner step() (the info dict of 17 entries is rebuilt every step).")
         )
@@ -1082,7 +1116,8 @@ def closing_notes(cfg: Config, results: list[SceneResult], comps: list[Compariso
                     + ("Met." if r >= 1 else
                        f"Missed by {1 / r:.1f}×. CartPole's step is a handful of NumPy "
                        "operations per batch (Euler, one substep); ours integrates "
-                       f"~{subs.mean():.0f} RK4 substeps per control step for a 1e-8 "
+                       f"~{subs.mean():.0f} {DEFAULT_METHOD} substeps per control step for a "
+                       f"{DEFAULT_TOL:.0e} "
                        "tolerance (2 cores in parallel), then restarts ended episodes in a "
                        "Python loop (one `episode_start` per ended sub-environment). To "
                        "close it: fewer substeps at the same error (see above), a vectorized "
@@ -1131,7 +1166,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     print(f"roller-gym benchmark ({'quick' if cfg.quick else 'full'}), writing to {cfg.out}")
     # warm up the compiled kernels (compilation is not what is measured)
     warm = kernel_row(SCENES["paper"])
-    for method in ("rk4", "euler", "midpoint"):
+    for method in {"rk4", "euler", "midpoint", DEFAULT_METHOD}:
         integ.step_one(warm, 0.1, 0.0, 0.0, DT, integ.METHODS[method], DEFAULT_TOL, 0)
 
     results: list[SceneResult] = []

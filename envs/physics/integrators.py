@@ -366,6 +366,26 @@ def advance_batch(
     kernel(phi, phi_dot, tau, rows, dt, method, tol, substeps, out)
 
 
+#: Layout of the buffer of :func:`advance_into`: inputs, then the outputs from OUT on.
+BUFFER_INPUTS = ("phi", "phi_dot", "tau", "m", "r", "kappa", "e", "k", "g", "c", "mu", "dt",
+                 "tol", "method", "substeps")
+OUT = len(BUFFER_INPUTS)
+
+
+@_jit
+def advance_into(buf: np.ndarray) -> None:
+    """One roller's step with every argument and result in one float array (the fastest call).
+
+    ``buf[:OUT]`` holds :data:`BUFFER_INPUTS` (``method`` a code of :data:`METHODS` other than
+    DOP853, ``substeps`` 0 for automatic); the fields of :class:`StepResult`, in its order,
+    are written to ``buf[OUT:OUT + 10]``.
+    """
+    res = _advance(buf[0], buf[1], buf[2], buf[3], buf[4], buf[5], buf[6], buf[7], buf[8],
+                   buf[9], buf[10], buf[11], int(buf[13]), buf[12], int(buf[14]))
+    (buf[OUT], buf[OUT + 1], buf[OUT + 2], buf[OUT + 3], buf[OUT + 4], buf[OUT + 5],
+     buf[OUT + 6], buf[OUT + 7], buf[OUT + 8], buf[OUT + 9]) = res
+
+
 def step_one(
     params: tuple[float, ...],
     phi: float,
