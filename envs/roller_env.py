@@ -113,7 +113,7 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
     def _set_scene(self, scene: Scene) -> None:
         self.scene = scene
         # The integrator's buffer: this scene and the settings, the state filled in per step.
-        self._buf = np.zeros(integ.OUT + 10)
+        self._buf = np.zeros(integ.BUFFER_SIZE)
         self._buf[3:11] = self.config.scene_row(scene)
         cfg = self.config
         self._buf[11:15] = (cfg.dt, cfg.tolerance, cfg.method_code, cfg.substeps)
@@ -151,14 +151,14 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         if self.config.method_code == integ.METHODS["dop853"]:
             r = integ.step(self.scene, self.phi, self.phi_dot, tau, self.config.dt,
                            method="dop853", tol=self.config.tolerance)
-            buf[integ.OUT:] = (r.phi, r.phi_dot, r.phi_ddot, r.substeps, r.finite,
+            buf[integ.OUT:integ.OUT + 10] = (r.phi, r.phi_dot, r.phi_ddot, r.substeps, r.finite,
                                r.normal_force, r.friction_force, r.energy, r.liftoff_margin,
                                r.slip_margin)
         else:
             buf[0], buf[1], buf[2] = self.phi, self.phi_dot, tau
             integ.advance_into(buf)
         phi, phi_dot, _, substeps, finite, normal, friction, energy, lift, slip = (
-            buf[integ.OUT:].tolist()
+            buf[integ.OUT:integ.OUT + 10].tolist()
         )
         self.phi, self.phi_dot, self.torque = phi, phi_dot, tau
         lifting, slipping, nonfinite = lift <= 0.0, slip < 0.0, finite == 0.0

@@ -118,7 +118,7 @@ class Config:
             quick, out, horizon_s=2.0, repeats=2, scenes=("paper", "floor"),
             euler_substeps=(1, 10, 100), rk4_substeps=(1, 4, 16, 64), rk8_substeps=(1, 4),
             auto_tols=(1e-4, 1e-6, 1e-8, 1e-10), midpoint_substeps=(1, 16),
-            dop853_tols=(1e-6, 1e-12), mujoco_default_n=(25,), mujoco_tuned_n=(25, 100, 400),
+            dop853_tols=(1e-6, 1e-12), mujoco_default_n=(25,), mujoco_tuned_n=(25, 100),
             energy_horizon_s=20.0, vector_sizes=(1, 16, 256), env_steps=300, ppo_steps=128,
         )
 
@@ -822,12 +822,11 @@ def write_report(cfg: Config, results: list[SceneResult], tp: Throughput | None,
     d_cost = d.seconds / horizon
     if tp is not None:
         r1 = tp.single["ours"] / tp.single["Pendulum-v1"]
-        err_ok = max(tp.env_error[0], d.err[0]) <= TARGET_ERROR
         targets.append([
             "one environment ≥ 1.5 × Pendulum-v1's steps/s, 10-s error ≤ 1e-6 rad",
             f"{r1:.2f} × Pendulum-v1 ({tp.single['ours']:,.0f} against "
             f"{tp.single['Pendulum-v1']:,.0f} steps/s); error {fmt_err(tp.env_error[0])} rad",
-            verdict_single(r1, tp.env_error[0]),
+            verdict_single(r1, max(tp.env_error[0], d.err[0])),
         ])
         for n in (4096, 65536):
             if n in tp.vector:
@@ -853,8 +852,8 @@ def write_report(cfg: Config, results: list[SceneResult], tp: Throughput | None,
     L += [""]
     L += [
         f"- Default settings ({DEFAULT_METHOD}, automatic substeps at tol {DEFAULT_TOL:.0e} "
-        f"per control step, dt = {DT} s) on the default scene: largest φ error over the {horizon:g}-s "
-        f"episode **{fmt_err(d.err[0])} rad** (φ' {fmt_err(d.err[1])} rad/s), at "
+        f"per control step, dt = {DT} s) on the default scene: largest φ error over the "
+        f"{horizon:g}-s episode **{fmt_err(d.err[0])} rad** (φ' {fmt_err(d.err[1])} rad/s), at "
         f"**{fmt_time(d_cost)} per simulated second** "
         f"({len(paper.torques) / d.seconds:,.0f} control steps/s in the physics kernel).",
         f"- MuJoCo at its defaults (2 ms Euler steps, soft constraint): φ error "

@@ -25,6 +25,7 @@ import functools
 import json
 import math
 import os
+import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -104,8 +105,11 @@ def make_env(env_id: str, env_config: dict[str, Any]) -> gym.Env | gym.vector.Ve
 
 def register_tasks() -> None:
     """Register every task with Ray's registry (Gymnasium's registry is not Ray's)."""
+    from ray import cloudpickle
     from ray.tune.registry import register_env
 
+    if __name__ != "__main__":  # imported (by a test): ship make_env's code, not its name,
+        cloudpickle.register_pickle_by_value(sys.modules[__name__])  # to the remote runners
     for env_id in ENV_IDS:
         register_env(env_id, functools.partial(make_env, env_id))
 

@@ -142,7 +142,7 @@ def _measure(phi, w, a, m, r, kappa, e, g, mu):
 
 
 @_jit
-def _advance(phi0, w0, tau, m, r, kappa, e, k, g, c, mu, dt, method, tol, fixed):
+def _advance(phi0, w0, tau, m, r, kappa, e, k, g, c, mu, dt, method, tol, fixed, kp, kw):
     """Advance one roller over dt at constant τ.
 
     Returns ``(φ, φ', φ'', substeps, finite, N, F, E, liftoff, slip)`` at the end of the
@@ -150,10 +150,9 @@ def _advance(phi0, w0, tau, m, r, kappa, e, k, g, c, mu, dt, method, tol, fixed)
     substep and at the end (see :func:`_measure`). With ``fixed`` = 0 the substeps follow
     from the speed at the start; if the step reaches a speed that asks for more, it is
     taken again with as many as that speed asks for, and if it does not stay finite, again
-    with twice as many (up to MAX_SUBSTEPS).
+    with twice as many (up to MAX_SUBSTEPS). ``kp``, ``kw``: scratch arrays of 12 for "rk8".
     """
     n = fixed if fixed > 0 else _substeps(abs(w0), m, r, kappa, e, k, g, c, dt, tol, method)
-    kp, kw = np.empty(12), np.empty(12)
     lift, slip = np.inf, np.inf
     for _attempt in range(12):
         h = dt / n
@@ -221,21 +220,26 @@ _DTYPES = (float, float, float, np.int64, bool, float, float, float, float, floa
 
 
 @_jit
-def _advance_batch(phi, w, tau, P, dt, method, tol, fixed, out):
-    for i in range(phi.shape[0]):
+def _advance_range(lo, hi, phi, w, tau, P, dt, method, tol, fixed, out):
+    """Advance rollers lo to hi − 1 of a batch, writing their results into ``out``."""
+    kp, kw = np.empty(12), np.empty(12)
+    for i in range(lo, hi):
         res = _advance(phi[i], w[i], tau[i], P[i, 0], P[i, 1], P[i, 2], P[i, 3], P[i, 4],
-                       P[i, 5], P[i, 6], P[i, 7], dt, method, tol, fixed)
+                       P[i, 5], P[i, 6], P[i, 7], dt, method, tol, fixed, kp, kw)
         (out[0, i], out[1, i], out[2, i], out[3, i], out[4, i], out[5, i], out[6, i], out[7, i],
          out[8, i], out[9, i]) = res
+
+
+#: Rollers per task handed to a core in a parallel batch.
+_CHUNK = 256
 
 
 @numba.njit(cache=True, parallel=True, nogil=True)
 def _advance_batch_parallel(phi, w, tau, P, dt, method, tol, fixed, out):
-    for i in numba.prange(phi.shape[0]):
-        res = _advance(phi[i], w[i], tau[i], P[i, 0], P[i, 1], P[i, 2], P[i, 3], P[i, 4],
-                       P[i, 5], P[i, 6], P[i, 7], dt, method, tol, fixed)
-        (out[0, i], out[1, i], out[2, i], out[3, i], out[4, i], out[5, i], out[6, i], out[7, i],
-         out[8, i], out[9, i]) = res
+    n = phi.shape[0]
+    for chunk in numba.prange((n + _CHUNK - 1) // _CHUNK):
+        lo = chunk * _CHUNK
+        _advance_range(lo, min(lo + _CHUNK, n), phi, w, tau, P, dt, method, tol, fixed, out)
 
 
 #: Batches at least this large are advanced on all cores.
@@ -362,14 +366,18 @@ def advance_batch(
     ``substeps`` 0 for automatic. Writes the fields of :class:`StepResult`, in its order,
     into the rows of ``out`` (10, n).
     """
-    kernel = _advance_batch_parallel if phi.shape[0] >= PARALLEL_THRESHOLD else _advance_batch
-    kernel(phi, phi_dot, tau, rows, dt, method, tol, substeps, out)
+    n = phi.shape[0]
+    if n >= PARALLEL_THRESHOLD:
+        _advance_batch_parallel(phi, phi_dot, tau, rows, dt, method, tol, substeps, out)
+    else:
+        _advance_range(0, n, phi, phi_dot, tau, rows, dt, method, tol, substeps, out)
 
 
 #: Layout of the buffer of :func:`advance_into`: inputs, then the outputs from OUT on.
 BUFFER_INPUTS = ("phi", "phi_dot", "tau", "m", "r", "kappa", "e", "k", "g", "c", "mu", "dt",
                  "tol", "method", "substeps")
 OUT = len(BUFFER_INPUTS)
+BUFFER_SIZE = OUT + 34
 
 
 @_jit
@@ -378,10 +386,11 @@ def advance_into(buf: np.ndarray) -> None:
 
     ``buf[:OUT]`` holds :data:`BUFFER_INPUTS` (``method`` a code of :data:`METHODS` other than
     DOP853, ``substeps`` 0 for automatic); the fields of :class:`StepResult`, in its order,
-    are written to ``buf[OUT:OUT + 10]``.
+    are written to ``buf[OUT:OUT + 10]``; ``buf[OUT + 10:BUFFER_SIZE]`` is scratch.
     """
     res = _advance(buf[0], buf[1], buf[2], buf[3], buf[4], buf[5], buf[6], buf[7], buf[8],
-                   buf[9], buf[10], buf[11], int(buf[13]), buf[12], int(buf[14]))
+                   buf[9], buf[10], buf[11], int(buf[13]), buf[12], int(buf[14]),
+                   buf[OUT + 10:OUT + 22], buf[OUT + 22:OUT + 34])
     (buf[OUT], buf[OUT + 1], buf[OUT + 2], buf[OUT + 3], buf[OUT + 4], buf[OUT + 5],
      buf[OUT + 6], buf[OUT + 7], buf[OUT + 8], buf[OUT + 9]) = res
 
@@ -402,7 +411,8 @@ def step_one(
     :data:`METHODS` other than DOP853, ``substeps`` 0 for automatic. Returns the fields of
     :class:`StepResult` as a tuple, in its order.
     """
-    return _advance(phi, phi_dot, tau, *params, dt, method, tol, substeps)
+    return _advance(phi, phi_dot, tau, *params, dt, method, tol, substeps, np.empty(12),
+                    np.empty(12))
 
 
 def _dop853(phi, w, tau, P, dt, tol):

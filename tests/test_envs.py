@@ -1,0 +1,602 @@
+"""The single environments (issue 4): registration, spaces, reset and step, info, errors,
+construction arguments, the checkers of Gymnasium and Stable-Baselines3, pickling and
+SubprocVecEnv.
+
+The independent source for the physics is :func:`model`, written here from
+``shared/PHYSICS.md`` in its cylinder form (R − r, not the code's curvature form); the
+documented numbers (episode lengths, default torques, observation layout, reward) are
+copied from the docstrings of ``envs/__init__.py`` and the task modules.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import pickle
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium import spaces
+from gymnasium.utils.env_checker import check_env as gym_check_env
+from stable_baselines3.common.env_checker import check_env as sb3_check_env
+from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
+
+import envs
+from envs import Scene, preset
+
+ROOT = Path(__file__).resolve().parents[1]
+
+# From the docstrings: steps per episode, default max_torque [N·m], observation size,
+# default preset.
+DOCUMENTED = {
+    "RollerStabilize-v0": {"steps": 200, "max_torque": 0.5, "obs": 5, "scene": "paper"},
+    "RollerHold-v0": {"steps": 200, "max_torque": 1.0, "obs": 9, "scene": "paper"},
+    "RollerBalance-v0": {"steps": 400, "max_torque": 0.4, "obs": 5, "scene": "balance"},
+}
+IDS = list(DOCUMENTED)
+INFO_KEYS = ("phi", "phi_dot", "psi", "torque", "normal_force", "friction_force", "energy",
+             "substeps", "lifting", "slipping")
+
+
+# -- the physics, from PHYSICS.md ------------------------------------------------------
+def model(scene: Scene, phi: float, phi_dot: float, tau: float) -> dict[str, float]:
+    """ψ, θ, φ'', N, F, E of PHYSICS.md at (φ, φ') under τ (the presets have no damping).
+
+    Written in the cylinder form with R − r; the floor (R = inf) is its limit (the terms
+    with 1/(R − r) or (R − r)(1 − cos ψ) vanish, r R/(R − r) → r).
+    """
+    m, r, R, e, k, g = (float(getattr(scene, name)) for name in ("m", "r", "R", "e", "k", "g"))
+    assert float(scene.damping) == 0.0
+    floor = math.isinf(R)
+    psi = 0.0 if floor else r * phi / (R - r)
+    theta = phi if floor else R * phi / (R - r)
+    coriolis = e * r if floor else e * r * R / (R - r)
+    phi_ddot = (
+        tau / m - coriolis * phi_dot**2 * math.sin(theta)
+        - g * (r * math.sin(psi) + e * math.sin(phi))
+    ) / (k**2 + e**2 + r**2 - 2 * e * r * math.cos(theta))
+    centripetal = 0.0 if floor else r**2 / (R - r)
+    normal = m * (g * math.cos(psi) + centripetal * phi_dot**2
+                  + e * (phi_ddot * math.sin(theta) + phi_dot**2 * math.cos(theta)))
+    friction = m * (g * math.sin(psi) + (r - e * math.cos(theta)) * phi_ddot
+                    + e * phi_dot**2 * math.sin(theta))
+    j_i = m * (k**2 + r**2 + e**2 - 2 * r * e * math.cos(theta))
+    height = 0.0 if floor else (R - r) * (1 - math.cos(psi))
+    energy = 0.5 * j_i * phi_dot**2 + m * g * (height + e * (1 - math.cos(phi)))
+    return {"psi": psi, "theta": theta, "phi_ddot": phi_ddot, "normal": normal,
+            "friction": friction, "energy": energy}
+
+
+def psi_rate(scene: Scene) -> float:
+    """dψ/dφ = r/(R − r) (0 on the floor)."""
+    R, r = float(scene.R), float(scene.r)
+    return 0.0 if math.isinf(R) else r / (R - r)
+
+
+def near(x: float, margin: float) -> float:
+    """The reward term of the docstrings: exp(ln(0.1) (x/m)²)."""
+    return math.exp(math.log(0.1) * (x / margin) ** 2)
+
+
+def wrap(x: float) -> float:
+    return (x + math.pi) % (2 * math.pi) - math.pi
+
+
+def documented_reward(env_id: str, scene: Scene, phi, phi_dot, action, target) -> float:
+    """The reward of the task docstrings, ε one turn of ψ either way (in rad of φ)."""
+    q = psi_rate(scene) or 1.0
+
+    def error(t):
+        return wrap(q * (phi - t)) / q
+
+    if env_id == "RollerBalance-v0":
+        eps, margin = min((error(target), error(-target)), key=abs), 3.0
+    else:
+        eps, margin = error(target), 2.0
+    return near(eps, margin) * (0.5 + 0.5 * near(phi_dot, 5.0)) * (0.8 + 0.2 * near(action, 1.0))
+
+
+def act(a: float) -> np.ndarray:
+    return np.array([a], dtype=np.float32)
+
+
+def check_info_physics(env, info: dict, tau: float) -> None:
+    """The info's state, ψ, forces and energy against :func:`model` at that state."""
+    scene = env.unwrapped.scene
+    ref = model(scene, info["phi"], info["phi_dot"], tau)
+    weight = float(scene.m * scene.g)
+    assert info["psi"] == pytest.approx(ref["psi"], rel=1e-12, abs=1e-12)
+    assert info["normal_force"] == pytest.approx(ref["normal"], rel=1e-9, abs=1e-9 * weight)
+    assert info["friction_force"] == pytest.approx(ref["friction"], rel=1e-9, abs=1e-9 * weight)
+    assert info["energy"] == pytest.approx(ref["energy"], rel=1e-9, abs=1e-12)
+
+
+# -- 1. registration ---------------------------------------------------------------------
+def test_import_registers_the_ids_and_the_namespace_form_imports_the_package():
+    """In a fresh interpreter: nothing registered before; ``make("envs:ID")`` imports the
+    package, which registers all three with their time limits."""
+    code = (
+        "import gymnasium as gym\n"
+        f"ids = {IDS!r}\n"
+        "assert not any(i in gym.registry for i in ids)\n"
+        "env = gym.make('envs:RollerHold-v0')\n"
+        "assert type(env.unwrapped).__name__ == 'RollerHoldEnv'\n"
+        "assert all(i in gym.registry for i in ids)\n"
+        "print([gym.spec(i).max_episode_steps for i in ids])\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True,
+                         text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == str([DOCUMENTED[i]["steps"] for i in IDS])
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_make_plain_and_namespaced(env_id):
+    spec = gym.spec(env_id)
+    assert spec.max_episode_steps == DOCUMENTED[env_id]["steps"]
+    # A per-step reward in [0, 1] caps the return at the episode length.
+    assert 0 < spec.reward_threshold <= spec.max_episode_steps
+    for name in (env_id, f"envs:{env_id}"):
+        env = gym.make(name)
+        assert env.spec.max_episode_steps == DOCUMENTED[env_id]["steps"]
+        assert env.spec.reward_threshold == spec.reward_threshold
+        assert isinstance(env.unwrapped, envs.roller_env.RollerEnv)
+        assert env.unwrapped.scene == preset(DOCUMENTED[env_id]["scene"])
+        env.close()
+
+
+# -- 2. spaces, actions, observations ----------------------------------------------------
+@pytest.mark.parametrize("env_id", IDS)
+def test_spaces(env_id):
+    env = gym.make(env_id)
+    assert env.action_space == spaces.Box(-1.0, 1.0, (1,), np.float32)
+    n = DOCUMENTED[env_id]["obs"]
+    assert env.observation_space == spaces.Box(-1.0, 1.0, (n,), np.float32)
+    obs, _ = env.reset(seed=0)
+    assert obs.dtype == np.float32 and obs.shape == (n,)
+
+
+@pytest.mark.parametrize("env_id", IDS)
+@pytest.mark.parametrize("max_torque", [None, 0.25])
+def test_action_scales_to_torque_and_is_clipped(env_id, max_torque):
+    kwargs = {} if max_torque is None else {"max_torque": max_torque}
+    limit = DOCUMENTED[env_id]["max_torque"] if max_torque is None else max_torque
+    env = gym.make(env_id, **kwargs)
+    start = {"state": (0.05, 0.0)}
+    for a in (0.3, -0.7, 1.0, -1.0, 2.5, -7.0, 0.0):
+        env.reset(seed=1, options=start)
+        obs, reward, _, _, info = env.step(act(a))
+        assert info["torque"] == pytest.approx(float(np.clip(np.float32(a), -1, 1)) * limit,
+                                               rel=1e-7, abs=0)
+        if abs(a) > 1:  # clipped: the same step as the action at the bound
+            env.reset(seed=1, options=start)
+            obs_b, reward_b, _, _, info_b = env.step(act(math.copysign(1.0, a)))
+            np.testing.assert_array_equal(obs, obs_b)
+            assert reward == reward_b and info["phi"] == info_b["phi"]
+
+
+@pytest.mark.parametrize("env_id", IDS)
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_nonfinite_action_raises_and_leaves_the_state(env_id, bad):
+    env = gym.make(env_id)
+    env.reset(seed=0)
+    before = (env.unwrapped.phi, env.unwrapped.phi_dot)
+    with pytest.raises(ValueError, match="not finite"):
+        env.step(np.array([bad], dtype=np.float32))
+    assert (env.unwrapped.phi, env.unwrapped.phi_dot) == before
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_observation_entries_match_the_state(env_id):
+    """cos/sin ψ, cos/sin φ, tanh(φ'/10), and for Hold cos/sin ψ*, cos/sin φ*, with ψ
+    recomputed from info["phi"] as rκφ/(1 − rκ) = rφ/(R − r)."""
+    env = gym.make(env_id)
+    obs, info = env.reset(seed=3)
+    scene = env.unwrapped.scene
+    q = psi_rate(scene)
+    rng = np.random.default_rng(3)
+    for t in range(12):
+        phi, phi_dot = info["phi"], info["phi_dot"]
+        psi = q * phi
+        assert info["psi"] == pytest.approx(psi, rel=1e-12, abs=1e-15)
+        assert env.observation_space.contains(obs)
+        expected = [math.cos(psi), math.sin(psi), math.cos(phi), math.sin(phi),
+                    math.tanh(phi_dot / 10.0)]
+        if env_id == "RollerHold-v0":
+            target = info["target_phi"]
+            assert info["target_psi"] == pytest.approx(q * target, rel=1e-12)
+            expected += [math.cos(q * target), math.sin(q * target), math.cos(target),
+                         math.sin(target)]
+        np.testing.assert_allclose(obs, expected, rtol=0, atol=2e-7)
+        if t < 11:
+            obs, _, terminated, _, info = env.step(act(rng.uniform(-1, 1)))
+            assert not terminated
+
+
+# -- 3. reset, seeding, info, termination ------------------------------------------------
+@pytest.mark.parametrize("env_id", IDS)
+def test_same_seed_same_episode(env_id):
+    a, b = gym.make(env_id), gym.make(env_id)
+    actions = np.random.default_rng(0).uniform(-1, 1, 25)
+    episodes = []
+    for env in (a, b, a):  # the third run re-seeds an env that has already been used
+        obs, info = env.reset(seed=42)
+        run = [(obs, 0.0, info)]
+        for u in actions:
+            obs, reward, terminated, truncated, info = env.step(act(u))
+            run.append((obs, reward, info))
+            assert not (terminated or truncated)
+        episodes.append(run)
+    for other in episodes[1:]:
+        for (o1, r1, i1), (o2, r2, i2) in zip(episodes[0], other, strict=True):
+            np.testing.assert_array_equal(o1, o2)
+            assert r1 == r2 and i1 == i2
+    first = [a.reset(seed=s)[1]["phi"] for s in range(4)]
+    assert len(set(first)) == 4  # and different seeds, different starts
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_reset_options_state_and_scene(env_id):
+    env = gym.make(env_id)
+    obs, info = env.reset(seed=0, options={"state": (0.2, -0.3)})
+    assert (info["phi"], info["phi_dot"]) == (0.2, -0.3)
+    assert (env.unwrapped.phi, env.unwrapped.phi_dot) == (0.2, -0.3)
+    assert obs[2] == pytest.approx(math.cos(0.2), abs=1e-7)
+    scene = preset("drum") if env_id == "RollerBalance-v0" else Scene(m=2.0, e=0.02)
+    obs, info = env.reset(seed=0, options={"scene": scene, "state": (0.1, 0.0)})
+    assert env.unwrapped.scene == scene
+    assert info["psi"] == pytest.approx(psi_rate(scene) * 0.1, rel=1e-12)
+    check_info_physics(env, info, 0.0)
+    obs, info = env.reset(seed=0, options={"scene": "floor", "state": (0.3, 0.0)})
+    assert env.unwrapped.scene == preset("floor")
+    assert info["psi"] == 0.0 and obs[0] == 1.0 and obs[1] == 0.0  # ψ stays 0 on the floor
+    env.reset(seed=0)  # options are per episode: back to the base scene
+    assert env.unwrapped.scene == preset(DOCUMENTED[env_id]["scene"])
+    for bad in ({"speed": 1.0}, {"state": (0.1,)}, {"state": ("a", 0.0)},
+                {"state": (math.nan, 0.0)}, {"scene": "nope"}):
+        with pytest.raises(ValueError):
+            env.reset(options=bad)
+
+
+def test_reset_option_target_hold():
+    env = gym.make("RollerHold-v0")
+    scene = env.unwrapped.scene
+    q = psi_rate(scene)
+    obs, info = env.reset(seed=0, options={"target": 0.2})
+    assert info["target_psi"] == pytest.approx(0.2, rel=1e-12)
+    assert info["target_phi"] == pytest.approx(0.2 / q, rel=1e-12)  # 0.8 rad on "paper"
+    np.testing.assert_allclose(obs[5:], [math.cos(0.2), math.sin(0.2), math.cos(0.8),
+                                         math.sin(0.8)], atol=2e-7)
+    with pytest.raises(ValueError, match=r"options\['target'\]=2\.0"):
+        env.reset(options={"target": 2.0})
+    for other in ("RollerStabilize-v0", "RollerBalance-v0"):
+        with pytest.raises(ValueError, match="target"):
+            gym.make(other).reset(options={"target": 0.1})
+
+
+def test_hold_targets_can_be_held():
+    """Each drawn target is a rest position whose holding torque m g (r sin ψ + e sin φ)
+    is at most 80% of max_torque and whose friction at rest, |tan ψ|, at most 90% of μ."""
+    env = gym.make("RollerHold-v0")
+    scene = env.unwrapped.scene
+    m, r, e, g, mu = (float(getattr(scene, n)) for n in ("m", "r", "e", "g", "mu"))
+    targets = []
+    for seed in range(20):
+        _, info = env.reset(seed=seed)
+        phi, psi = info["target_phi"], info["target_psi"]
+        assert abs(m * g * (r * math.sin(psi) + e * math.sin(phi))) <= 0.8 * 1.0 + 1e-9
+        assert abs(math.tan(psi)) <= 0.9 * mu + 1e-9
+        targets.append(phi)
+    assert min(targets) < -0.5 and max(targets) > 0.5  # the range is used, both sides
+
+
+def test_balance_target_is_the_unstable_rest_position():
+    """Documented: ψ ≈ ±23°, φ ≈ ±3.66 rad in "balance"; at rest there φ'' = 0 at zero
+    torque, d²V/dφ² < 0 (unstable) and the roller still rolls (N > 0, |F| <= μN)."""
+    env = gym.make("RollerBalance-v0")
+    _, info = env.reset(seed=0)
+    scene = env.unwrapped.scene
+    phi_b = info["target_phi"]
+    assert phi_b == pytest.approx(3.66, abs=0.01)
+    assert math.degrees(info["target_psi"]) == pytest.approx(23.0, abs=1.0)
+    ref = model(scene, phi_b, 0.0, 0.0)
+    assert abs(ref["phi_ddot"]) < 1e-9
+    r, R, e = float(scene.r), float(scene.R), float(scene.e)
+    assert r**2 / (R - r) * math.cos(ref["psi"]) + e * math.cos(phi_b) < 0
+    assert ref["normal"] > 0 and abs(ref["friction"]) <= float(scene.mu) * ref["normal"]
+    # Either of ±φ_b counts: at rest at −φ_b the error is 0 and the episode a success.
+    _, info = env.reset(seed=0, options={"state": (-phi_b, 0.0)})
+    assert info["position_error"] == pytest.approx(0.0, abs=1e-12) and info["is_success"]
+
+
+@pytest.mark.parametrize("env_id", IDS)
+@pytest.mark.parametrize("scene_name", ["default", "floor", "drum"])
+def test_info_forces_and_energy_follow_physics(env_id, scene_name):
+    """N, F and E in the info against the formulas of PHYSICS.md, at the reset (τ = 0) and
+    after each step (at the end state under the step's τ); the energy balance over a step
+    at constant τ: ΔE = τ Δφ. Flags agree with the contact at the end of each step."""
+    if env_id == "RollerBalance-v0" and scene_name != "default":
+        pytest.skip("Balance needs its preset")
+    kwargs = {} if scene_name == "default" else {"scene": scene_name}
+    env = gym.make(env_id, **kwargs)
+    _, info = env.reset(seed=5)
+    assert set(INFO_KEYS) <= set(info)
+    assert info["torque"] == 0.0 and info["substeps"] == 0
+    check_info_physics(env, info, 0.0)
+    scene = env.unwrapped.scene
+    mu = float(scene.mu)
+    rng = np.random.default_rng(5)
+    for _ in range(15):
+        before = info
+        _, _, terminated, _, info = env.step(act(rng.uniform(-1, 1)))
+        tau = info["torque"]
+        check_info_physics(env, info, tau)
+        assert info["energy"] - before["energy"] == pytest.approx(
+            tau * (info["phi"] - before["phi"]), abs=1e-8)
+        assert isinstance(info["substeps"], int) and info["substeps"] >= 1
+        n, f = info["normal_force"], info["friction_force"]
+        if n <= 0:
+            assert info["lifting"]
+        if abs(f) > mu * n:
+            assert info["slipping"]
+        assert terminated == (info["lifting"] or info["slipping"] or info["nonfinite"])
+        if terminated:
+            break
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_reward_is_the_documented_formula(env_id):
+    env = gym.make(env_id)
+    _, info = env.reset(seed=11)
+    scene = env.unwrapped.scene
+    for a in (0.4, -0.9, 0.0, 1.0, 3.0, -0.2, 0.7, -2.0):
+        _, reward, terminated, _, info = env.step(act(a))
+        expected = documented_reward(env_id, scene, info["phi"], info["phi_dot"],
+                                     float(np.clip(np.float32(a), -1, 1)), info["target_phi"])
+        assert reward == pytest.approx(expected, rel=1e-12, abs=1e-15)
+        assert 0.0 <= reward <= 1.0 and not terminated
+
+
+def test_success_flag_is_the_documented_band():
+    env = gym.make("RollerStabilize-v0")
+    assert env.reset(options={"state": (0.0, 0.0)})[1]["is_success"]
+    assert env.reset(options={"state": (0.04, -0.09)})[1]["is_success"]
+    assert not env.reset(options={"state": (0.06, 0.0)})[1]["is_success"]
+    assert not env.reset(options={"state": (0.0, 0.11)})[1]["is_success"]
+
+
+def test_terminated_when_the_roller_slips():
+    """μ = 0.05, at rest at the bottom, full torque: by PHYSICS.md, |F| > μN at once."""
+    scene = preset("paper").replace(mu=0.05)
+    env = gym.make("RollerStabilize-v0", scene=scene)
+    _, info = env.reset(seed=0, options={"state": (0.0, 0.0)})
+    assert not info["slipping"]
+    ref = model(scene, 0.0, 0.0, 0.5)
+    assert abs(ref["friction"]) > 0.05 * ref["normal"] > 0  # the precondition, independently
+    _, _, terminated, truncated, info = env.step(act(1.0))
+    assert terminated and not truncated
+    assert info["slipping"] and not info["lifting"] and info["slip_margin"] < 0
+
+
+def test_terminated_when_the_roller_lifts_off():
+    """A disc (e = 0) on top of a drum of radius 0.5 m, fast: N/m = g − r²/(|R| + r) φ'²
+    < 0 by PHYSICS.md, so the roller leaves the drum."""
+    scene = Scene(R=-0.5, e=0.0, k=0.07)
+    env = gym.make("RollerStabilize-v0", scene=scene)
+    _, info = env.reset(seed=0, options={"state": (0.0, 30.0)})
+    assert model(scene, 0.0, 30.0, 0.0)["normal"] < 0
+    assert info["lifting"] and info["normal_force"] < 0
+    _, _, terminated, truncated, info = env.step(act(0.0))
+    assert terminated and not truncated and info["lifting"]
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_truncated_by_the_time_limit(env_id):
+    """At rest at the bottom with no torque nothing happens until the documented limit."""
+    env = gym.make(env_id)
+    env.reset(seed=0, options={"state": (0.0, 0.0)})
+    steps = DOCUMENTED[env_id]["steps"]
+    for t in range(1, steps + 1):
+        _, _, terminated, truncated, info = env.step(act(0.0))
+        assert not terminated
+        assert truncated == (t == steps), t
+    assert abs(info["phi"]) < 1e-12
+    short = gym.make(env_id, max_episode_steps=3)
+    short.reset(seed=0)
+    flags = [short.step(act(0.0))[3] for _ in range(3)]
+    assert flags == [False, False, True]
+
+
+# -- 3/4. construction arguments -----------------------------------------------------------
+@pytest.mark.parametrize(
+    ("env_id", "kwargs", "message"),
+    [
+        ("RollerStabilize-v0", {"dt": 0.0}, "dt=0.0"),
+        ("RollerStabilize-v0", {"dt": -0.05}, "dt=-0.05"),
+        ("RollerStabilize-v0", {"dt": math.inf}, "dt=inf"),
+        ("RollerHold-v0", {"tolerance": math.nan}, "tolerance=nan"),
+        ("RollerHold-v0", {"tolerance": 0.0}, "tolerance=0.0"),
+        ("RollerStabilize-v0", {"integrator": "rk45"}, "integrator='rk45'"),
+        ("RollerStabilize-v0", {"scene": "nope"}, "'nope'"),
+        ("RollerStabilize-v0", {"scene": 3}, "scene=3"),
+        ("RollerStabilize-v0", {"randomize": {"mass": (1.0, 2.0)}}, "'mass'"),
+        ("RollerStabilize-v0", {"randomize": {"m": (2.0, 1.0)}}, "randomize['m']=(2.0, 1.0)"),
+        ("RollerStabilize-v0", {"randomize": {"m": (1.0,)}}, "randomize['m']=(1.0,)"),
+        ("RollerStabilize-v0", {"randomize": {"m": (1.0, math.nan)}}, "randomize['m']"),
+        ("RollerStabilize-v0", {"randomize": {"e": (-0.1, 0.05)}}, "Scene.e=-0.1"),
+        ("RollerStabilize-v0", {"max_torque": 0.0}, "max_torque=0.0"),
+        ("RollerStabilize-v0", {"max_torque": math.nan}, "max_torque=nan"),
+        ("RollerStabilize-v0", {"substeps": 0}, "substeps=0"),
+        ("RollerBalance-v0", {"scene": Scene(R=math.inf, e=0.0)}, "no unstable rest position"),
+        ("RollerBalance-v0", {"scene": "tight_fit"}, "no unstable rest position"),
+        ("RollerBalance-v0", {"scene": "paper"}, "not reachable"),
+    ],
+)
+def test_bad_construction_arguments_raise(env_id, kwargs, message):
+    with pytest.raises(ValueError) as excinfo:
+        gym.make(env_id, **kwargs)
+    assert message in str(excinfo.value)
+
+
+def test_bad_render_mode_raises():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # Gymnasium warns about the mode as well
+        with pytest.raises(ValueError, match="render_mode='ansi'"):
+            gym.make("RollerStabilize-v0", render_mode="ansi")
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_scene_argument_object_and_preset(env_id):
+    custom = Scene(m=1.5, e=0.02, k=0.08) if env_id != "RollerBalance-v0" else preset(
+        "balance").replace(m=1.5)
+    env = gym.make(env_id, scene=custom)
+    assert env.unwrapped.scene == custom
+    _, info = env.reset(seed=2)
+    check_info_physics(env, info, 0.0)
+    _, _, _, _, info = env.step(act(0.5))
+    check_info_physics(env, info, info["torque"])
+    name = "drum" if env_id == "RollerBalance-v0" else "floor"
+    env = gym.make(env_id, scene=name)
+    assert env.unwrapped.scene == preset(name)
+
+
+def _reference(scene, phi, phi_dot, tau, dt):
+    r = envs.physics.step(scene, phi, phi_dot, tau, dt, method="dop853", tol=1e-13)
+    return np.array([r.phi, r.phi_dot])
+
+
+def test_dt_argument_sets_the_control_step():
+    env = gym.make("RollerStabilize-v0", dt=0.02)
+    env.reset(options={"state": (0.3, 0.0)})
+    _, _, _, _, info = env.step(act(0.5))
+    ref = _reference(env.unwrapped.scene, 0.3, 0.0, 0.25, 0.02)
+    np.testing.assert_allclose([info["phi"], info["phi_dot"]], ref, rtol=0, atol=1e-8)
+    assert abs(info["phi_dot"] - _reference(env.unwrapped.scene, 0.3, 0.0, 0.25, 0.05)[1]) > 0.1
+
+
+@pytest.mark.parametrize("integrator", ["rk4", "euler", "midpoint", "dop853", "rk8"])
+def test_integrator_argument_and_tolerance(integrator):
+    """Each integrator meets its tolerance on one step against DOP853 at 1e-13, and a
+    tighter tolerance takes more substeps."""
+    if integrator not in envs.physics.METHODS:
+        pytest.skip(f"{integrator} is not an integrator here")
+    scene = preset("paper")
+    ref = _reference(scene, 0.5, 2.0, 0.3, 0.05)
+    substeps = []
+    for tol in (1e-4, 1e-7):
+        env = gym.make("RollerStabilize-v0", integrator=integrator, tolerance=tol)
+        assert env.unwrapped.config.integrator == integrator
+        env.reset(options={"state": (0.5, 2.0)})
+        _, _, _, _, info = env.step(act(0.6))
+        err = np.abs(np.array([info["phi"], info["phi_dot"]]) - ref).max()
+        assert err <= tol, (integrator, tol, err)
+        substeps.append(info["substeps"])
+    assert substeps[1] > substeps[0]
+
+
+def _accel(scene, phi, phi_dot, tau):
+    return model(scene, phi, phi_dot, tau)["phi_ddot"]
+
+
+@pytest.mark.parametrize(("integrator", "n"), [("rk4", 3), ("euler", 5)])
+def test_substeps_argument_is_the_number_of_fixed_substeps(integrator, n):
+    """With substeps=n the step is n steps of classical RK4 (or of semi-implicit Euler),
+    written here on the φ'' of PHYSICS.md."""
+    scene = preset("paper")
+    env = gym.make("RollerStabilize-v0", integrator=integrator, substeps=n)
+    env.reset(options={"state": (0.4, -1.0)})
+    _, _, _, _, info = env.step(act(0.8))
+    assert info["substeps"] == n
+    phi, w, tau, h = 0.4, -1.0, 0.4, 0.05 / n
+    for _ in range(n):
+        if integrator == "euler":
+            w = w + h * _accel(scene, phi, w, tau)
+            phi = phi + h * w
+            continue
+        k1p, k1w = w, _accel(scene, phi, w, tau)
+        k2p, k2w = w + h / 2 * k1w, _accel(scene, phi + h / 2 * k1p, w + h / 2 * k1w, tau)
+        k3p, k3w = w + h / 2 * k2w, _accel(scene, phi + h / 2 * k2p, w + h / 2 * k2w, tau)
+        k4p, k4w = w + h * k3w, _accel(scene, phi + h * k3p, w + h * k3w, tau)
+        phi = phi + h / 6 * (k1p + 2 * k2p + 2 * k3p + k4p)
+        w = w + h / 6 * (k1w + 2 * k2w + 2 * k3w + k4w)
+    assert info["phi"] == pytest.approx(phi, rel=0, abs=1e-12)
+    assert info["phi_dot"] == pytest.approx(w, rel=0, abs=1e-11)
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_randomize_draws_scenes_within_the_ranges(env_id):
+    ranges = {"m": (0.8, 1.2), "e": (0.06, 0.09)} if env_id == "RollerBalance-v0" else {
+        "m": (0.8, 1.2), "e": (0.03, 0.05)}
+    env = gym.make(env_id, randomize=ranges)
+    base = preset(DOCUMENTED[env_id]["scene"])
+    drawn = []
+    for seed in range(6):
+        _, info = env.reset(seed=seed)
+        scene = env.unwrapped.scene
+        for name, (low, high) in ranges.items():
+            assert low <= float(getattr(scene, name)) <= high
+        for name in ("r", "R", "k", "g", "mu", "damping"):
+            assert getattr(scene, name) == getattr(base, name)
+        check_info_physics(env, info, 0.0)  # the episode runs on the drawn scene
+        drawn.append((float(scene.m), float(scene.e)))
+    assert len(set(drawn)) == len(drawn)
+    env.reset(seed=3)
+    assert (float(env.unwrapped.scene.m), float(env.unwrapped.scene.e)) == drawn[3]
+
+
+# -- 7. conformance, pickling, SubprocVecEnv -----------------------------------------------
+@pytest.mark.parametrize("env_id", IDS)
+def test_checkers_pass_without_warnings(env_id, monkeypatch, tmp_path):
+    monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")  # Gymnasium's checker also renders "human"
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(tmp_path))
+    env = gym.make(env_id)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        gym_check_env(env.unwrapped)
+        sb3_check_env(env, warn=True)
+    assert not caught, [f"{w.category.__name__}: {w.message}" for w in caught]
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_pickled_env_continues_the_same_episode(env_id):
+    env = gym.make(env_id)
+    env.reset(seed=9)
+    env.step(act(0.3))
+    copy = pickle.loads(pickle.dumps(env))
+    for u in (0.5, -1.0, 0.25):
+        a, b = env.step(act(u)), copy.step(act(u))
+        np.testing.assert_array_equal(a[0], b[0])
+        assert a[1:] == b[1:]
+    np.testing.assert_array_equal(env.reset()[0], copy.reset()[0])  # the generator too
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_subproc_vec_env_matches_dummy_vec_env(env_id):
+    """Two worker processes, each unpickling an environment made here, against DummyVecEnv
+    under the same seeds and actions. ("fork" keeps the test quick: the default
+    "forkserver" starts fresh interpreters that import torch; the env still crosses the
+    pipe pickled.)"""
+    blob = pickle.dumps(gym.make(env_id))
+    sub = SubprocVecEnv([functools.partial(pickle.loads, blob)] * 2, start_method="fork")
+    dummy = DummyVecEnv([functools.partial(gym.make, env_id)] * 2)
+    try:
+        sub.seed(7)
+        dummy.seed(7)
+        np.testing.assert_array_equal(sub.reset(), dummy.reset())
+        actions = np.random.default_rng(1).uniform(-1, 1, (6, 2, 1)).astype(np.float32)
+        for a in actions:
+            obs_s, rew_s, done_s, info_s = sub.step(a)
+            obs_d, rew_d, done_d, info_d = dummy.step(a)
+            np.testing.assert_array_equal(obs_s, obs_d)
+            np.testing.assert_allclose(rew_s, rew_d, rtol=1e-6)  # DummyVecEnv stores float32
+            np.testing.assert_array_equal(done_s, done_d)
+            assert [i["phi"] for i in info_s] == [i["phi"] for i in info_d]
+            assert info_s[0]["phi"] != info_s[1]["phi"]  # seeds 7 and 8
+    finally:
+        sub.close()
+        dummy.close()
