@@ -104,7 +104,7 @@ class Config:
     midpoint_substeps: tuple[int, ...] = (1, 4, 16, 64, 256, 1024, 4096)
     dop853_tols: tuple[float, ...] = (1e-4, 1e-6, 1e-8, 1e-10, 1e-12)
     mujoco_default_n: tuple[int, ...] = (25, 100, 400)  # MuJoCo steps per control step
-    mujoco_tuned_n: tuple[int, ...] = (25, 50, 100, 200, 400, 800, 1600, 3200)
+    mujoco_tuned_n: tuple[int, ...] = (25, 50, 100, 200, 400, 800, 1600)
     energy_horizon_s: float = 1000.0
     vector_sizes: tuple[int, ...] = (1, 16, 256, 4096, 65536)
     env_steps: int = 4000  # steps per repeat for the single environments
@@ -235,6 +235,28 @@ def local_error(row: tuple[float, ...], ref: np.ndarray, torques: Sequence[float
     return float(worst[0]), float(worst[1])
 
 
+def mujoco_local_error(sim: mjr.MujocoRoller, ref: np.ndarray, torques: Sequence[float],
+                       dt: float) -> tuple[float, float]:
+    """The same for MuJoCo: one control step from each reference state (put on the
+    constraint), against the reference's next state."""
+    n, worst = sim.steps_per(dt), np.zeros(2)
+    for i, tau in enumerate(torques):
+        sim.reset(ref[i, 0], ref[i, 1])
+        sim.step(tau, n)
+        if sim.diverged:
+            return math.inf, math.inf
+        worst = np.maximum(worst, np.abs(np.array(sim.state()) - ref[i + 1]))
+    return float(worst[0]), float(worst[1])
+
+
+def predictability(floor: np.ndarray, bound: float = TARGET_ERROR) -> float:
+    """The time [s] at which the reference's own φ error (|ref(1e-12) − ref(1e-13)| along the
+    episode) first exceeds ``bound``: beyond it, global errors under ~1 rad are not
+    measurable, and the trajectory is sensitive (chaotic) rather than the integrators poor."""
+    above = np.flatnonzero(floor > bound)
+    return math.inf if above.size == 0 else float(above[0] * DT)
+
+
 def global_error(states: np.ndarray, ref: np.ndarray) -> tuple[float, float]:
     """The largest error along the episode (|Δφ| [rad], |Δφ'| [rad/s]); inf if it diverged."""
     if not np.isfinite(states).all():
@@ -252,6 +274,7 @@ class Run:
     label: str
     fn: Callable[[], Trajectory]
     ours: bool = True
+    sim: mjr.MujocoRoller | None = None
     setting: float = 0.0  # substeps, tolerance or MuJoCo steps per control step
     method: str = ""  # our kernels' method, tolerance and fixed substeps (0: automatic)
     tol: float = 0.0
@@ -334,6 +357,12 @@ class SceneResult:
     runs: list[Run]
     energy: list[dict] = field(default_factory=list)
     default: Run | None = None
+    predictable_s: float = math.inf  # when the reference's own error passes 1e-6 rad
+
+    @property
+    def chaotic(self) -> bool:
+        """The reference's own error passes the target bound within the episode."""
+        return self.predictable_s < len(self.torques) * DT
 
     def family(self, name: str) -> list[Run]:
         return [r for r in self.runs if r.family == name]
@@ -379,7 +408,7 @@ def build_runs(cfg: Config, name: str, scene: Scene, torques: list[float]) -> li
             sim = mjr.MujocoRoller(scene, settings(n))
             label = f"{1e3 * dt / n:.3g} ms"
             runs.append(Run(name, family, label, lambda sim=sim: run_mujoco(sim, torques, dt),
-                            ours=False, setting=n))
+                            ours=False, sim=sim, setting=n))
     return runs
 
 
@@ -400,12 +429,16 @@ def measure_scene(cfg: Config, name: str) -> SceneResult:
     else:
         check_traj = check.traj
     floor = global_error(check_traj.states, ref.states)
+    horizon_ok = predictability(np.abs(check_traj.states[:, 0] - ref.states[:, 0]))
     row = kernel_row(scene)
     for run in runs:
         run.err = global_error(run.traj.states, ref.states)
         if run.method:
             run.local = local_error(row, ref.states, tq, DT, run.method, run.tol, run.substeps)
-    result = SceneResult(name, scene, torques, ref, ref_seconds, floor, runs)
+        elif run.sim is not None:
+            run.local = mujoco_local_error(run.sim, ref.states, tq, DT)
+    result = SceneResult(name, scene, torques, ref, ref_seconds, floor, runs,
+                         predictable_s=horizon_ok)
     result.default = next(r for r in runs if r.family == f"{DEFAULT_METHOD} auto"
                           and r.tol == DEFAULT_TOL)
     return result
@@ -656,40 +689,47 @@ class Comparison:
     """Ours at default settings against MuJoCo (tuned) at equal error, on one scene."""
 
     scene: str
-    our_err: float
+    metric: str  # "global" or "local"
+    our_err: float  # [rad]
     our_cost: float  # [s per simulated s]
     mj_cost: float
     mj_how: str
     mj_setting: str
     ratio: float
-    default_err: float
+    default_err: float  # MuJoCo at its defaults
     default_cost: float
 
 
-def compare_mujoco(res: SceneResult) -> Comparison:
-    """What MuJoCo (tuned) needs to reach the error of our default settings."""
+def error_of(run: Run, metric: str) -> float:
+    """The φ error [rad] of a run: global (along the episode) or local (one control step)."""
+    return run.err[0] if metric == "global" else run.local[0]
+
+
+def compare_mujoco(res: SceneResult, metric: str = "global") -> Comparison:
+    """What MuJoCo (tuned) needs to reach the error of our default settings, and its cost."""
     horizon = len(res.torques) * DT
     ours = res.default
-    target = max(ours.err[0], res.ref_floor[0])
+    floor = res.ref_floor[0] if metric == "global" else 1e-14
+    target = max(error_of(ours, metric), floor)
     tuned = res.family("MuJoCo tuned")
-    pts = [(r.err[0], r.seconds / horizon) for r in tuned]
-    cost, how = cost_at_error(pts, target)
-    # the MuJoCo timestep that reaches it: error ∝ timestep² along the tuned family
+    cost, how = cost_at_error([(error_of(r, metric), r.seconds / horizon) for r in tuned], target)
+    # the MuJoCo timestep that reaches it: the error falls as timestep² along the tuned family
     setting = "–"
-    finite = [r for r in tuned if math.isfinite(r.err[0]) and r.err[0] > 0]
+    finite = [r for r in tuned if math.isfinite(error_of(r, metric)) and error_of(r, metric) > 0]
     if math.isfinite(cost) and finite:
-        reached = [r for r in finite if r.err[0] <= target]
+        reached = [r for r in finite if error_of(r, metric) <= target]
         if reached:
             r0 = min(reached, key=lambda r: r.seconds)
             setting = f"timestep {1e3 * DT / r0.setting:.3g} ms ({int(r0.setting)} per step)"
         else:
-            finest = min(finite, key=lambda r: r.err[0])
-            ts = DT / finest.setting * math.sqrt(target / finest.err[0])
+            finest = min(finite, key=lambda r: error_of(r, metric))
+            ts = DT / finest.setting * math.sqrt(target / error_of(finest, metric))
             setting = f"timestep ≈ {1e3 * ts:.2g} ms (≈ {DT / ts:.0f} per step, extrapolated)"
     default = next((r for r in res.family("MuJoCo default") if r.setting == 25), None)
     return Comparison(
-        res.name, ours.err[0], ours.seconds / horizon, cost, how, setting,
-        cost / (ours.seconds / horizon), default.err[0] if default else math.nan,
+        res.name, metric, error_of(ours, metric), ours.seconds / horizon, cost, how, setting,
+        cost / (ours.seconds / horizon),
+        error_of(default, metric) if default else math.nan,
         default.seconds / horizon if default else math.nan,
     )
 
@@ -703,7 +743,7 @@ MARKERS = {"euler": "v", "rk4": "o", "rk4 auto": "s", "rk8": "h", "rk8 auto": "p
            "MuJoCo default": "X", "MuJoCo tuned": "P"}
 
 
-def plot_work_precision(results: list[SceneResult], path: Path) -> None:
+def plot_work_precision(results: list[SceneResult], path: Path, metric: str) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -715,26 +755,36 @@ def plot_work_precision(results: list[SceneResult], path: Path) -> None:
     for ax, res in zip(axes.flat, results, strict=False):
         horizon = len(res.torques) * DT
         for fam in (*OUR_FAMILIES, *MJ_FAMILIES):
-            pts = sorted((r.err[0], r.seconds / horizon) for r in res.family(fam)
-                         if math.isfinite(r.err[0]))
+            pts = sorted((error_of(r, metric), r.seconds / horizon) for r in res.family(fam)
+                         if math.isfinite(error_of(r, metric)))
             if pts:
                 e, c = zip(*pts, strict=True)
                 ax.loglog(np.maximum(e, 1e-16), c, marker=MARKERS[fam], color=COLORS[fam],
                           label=fam, lw=1.2, ms=5, ls="--" if fam.startswith("MuJoCo") else "-")
         d = res.default
-        ax.loglog([max(d.err[0], 1e-16)], [d.seconds / horizon], "*", color="k", ms=15,
-                  label=f"default ({DEFAULT_METHOD}, tol {DEFAULT_TOL:.0e})", zorder=5)
-        ax.axvline(res.ref_floor[0], color="k", lw=0.8, ls=":", label="reference's own error")
-        ax.axvline(TARGET_ERROR, color="tab:red", lw=0.8, ls="-.", label="target 1e-6 rad")
-        ax.set_title(f"{res.name}: {SCENE_NOTES[res.name]}", fontsize=9)
-        ax.set_xlabel(f"largest |φ error| over {horizon:g} s [rad]")
+        ax.loglog([max(error_of(d, metric), 1e-16)], [d.seconds / horizon], "*", color="k",
+                  ms=15, label=f"default ({DEFAULT_METHOD}, tol {DEFAULT_TOL:.0e})", zorder=5)
+        if metric == "global":
+            ax.axvline(max(res.ref_floor[0], 1e-16), color="k", lw=0.8, ls=":",
+                       label="reference's own error")
+            ax.axvline(TARGET_ERROR, color="tab:red", lw=0.8, ls="-.", label="target 1e-6 rad")
+        else:
+            ax.axvline(DEFAULT_TOL, color="tab:red", lw=0.8, ls="-.",
+                       label=f"tolerance {DEFAULT_TOL:.0e}")
+        title = f"{res.name}: {SCENE_NOTES[res.name]}"
+        if metric == "global" and res.chaotic:
+            title += f"\n(chaotic: the reference itself is off by 1e-6 at {res.predictable_s:g} s)"
+        ax.set_title(title, fontsize=9)
+        ax.set_xlabel(f"largest |φ error| over {horizon:g} s [rad]" if metric == "global"
+                      else "largest |φ error| of one control step [rad]")
         ax.set_ylabel("wall time per simulated second [s]")
         ax.grid(True, which="major", alpha=0.3)
     for ax in axes.flat[len(results):]:
         ax.axis("off")
     handles, labels = axes.flat[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=5, fontsize=8)
-    fig.suptitle("Work-precision: cost against error (lower left is better), same run")
+    fig.suptitle(f"Work-precision, {metric} error: cost against error (lower left is better), "
+                 "all measured in the same run")
     fig.tight_layout(rect=(0, 0.06, 1, 0.97))
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -794,7 +844,8 @@ def write_report(cfg: Config, results: list[SceneResult], tp: Throughput | None,
     """docs/BENCHMARKS.md and the plots."""
     img_dir = cfg.out / "benchmarks"
     img_dir.mkdir(parents=True, exist_ok=True)
-    plot_work_precision(results, img_dir / "work_precision.png")
+    plot_work_precision(results, img_dir / "work_precision.png", "global")
+    plot_work_precision(results, img_dir / "work_precision_local.png", "local")
     plot_energy(results, img_dir / "energy.png", cfg.energy_horizon_s)
     if tp is not None and tp.vector:
         plot_throughput(tp, img_dir / "throughput.png")
@@ -839,11 +890,13 @@ def write_report(cfg: Config, results: list[SceneResult], tp: Throughput | None,
                     f"({1 / r:.1f}× too slow)",
                 ])
     c = next(c for c in comps if c.scene == "paper")
+    c_local = compare_mujoco(paper, "local")
     targets.append([
         "≥ 100 × MuJoCo's speed at equal error (default scene)",
         f"{c.ratio:,.0f} × (MuJoCo tuned needs {fmt_time(c.mj_cost)} per simulated second "
         f"to reach our {fmt_err(c.our_err)} rad, we take {fmt_time(c.our_cost)}; "
-        f"{c.mj_how})" if math.isfinite(c.ratio) else "MuJoCo does not reach our error",
+        f"{c.mj_how}); at equal local error {c_local.ratio:,.0f} ×"
+        if math.isfinite(c.ratio) else "MuJoCo does not reach our error",
         "**met**" if c.ratio >= 100 else f"**missed**: {c.ratio / 100:.2f} of the target",
     ])
     L += md_table(["target", "measured", "verdict"], targets)
@@ -900,14 +953,24 @@ def write_report(cfg: Config, results: list[SceneResult], tp: Throughput | None,
 
     # -- part 1 -------------------------------------------------------------------------------
     L += ["## 1. Work-precision", "",
-          "![work-precision](benchmarks/work_precision.png)", ""]
+          "Global error (along the episode):", "",
+          "![work-precision](benchmarks/work_precision.png)", "",
+          "Local error (one control step from the reference state; MuJoCo's too):", "",
+          "![work-precision, local](benchmarks/work_precision_local.png)", ""]
     for res in results:
         L += [f"### {res.name}: {SCENE_NOTES[res.name]}", ""]
         L += [f"Reference: {fmt_time(res.ref_seconds)} for the episode, "
               f"{int(res.ref.substeps.sum()):,} DOP853 steps; its own error ≈ "
               f"{fmt_err(res.ref_floor[0])} rad ({fmt_err(res.ref_floor[1])} rad/s). Largest "
               f"|φ| {np.nanmax(np.abs(res.ref.states[:, 0])):.3g} rad, largest |φ'| "
-              f"{np.nanmax(np.abs(res.ref.states[:, 1])):.3g} rad/s.", ""]
+              f"{np.nanmax(np.abs(res.ref.states[:, 1])):.3g} rad/s."]
+        if res.chaotic:
+            L[-1] += (f" **The motion is chaotic under these torques**: the reference's own "
+                      f"error passes 1e-6 rad at t = {res.predictable_s:g} s and grows to "
+                      f"{fmt_err(res.ref_floor[0])} rad, so every global error here measures "
+                      "the dynamics' sensitivity, not the integrator: read the local errors "
+                      "(and `work_precision_local.png`).")
+        L += [""]
         rows = []
         for run in res.runs:
             cost = run.seconds / horizon
@@ -964,22 +1027,26 @@ def write_report(cfg: Config, results: list[SceneResult], tp: Throughput | None,
         "",
     ]
     rows = []
-    for res, cmp in zip(results, comps, strict=True):
-        tuned = [r for r in res.family("MuJoCo tuned") if math.isfinite(r.err[0])]
-        finest = min(tuned, key=lambda r: r.err[0]) if tuned else None
+    local_comps = [compare_mujoco(r, "local") for r in results]
+    for res, cmp, loc in zip(results, comps, local_comps, strict=True):
+        glob = (f"{fmt_time(cmp.mj_cost)}: {cmp.mj_setting}, {cmp.mj_how}; "
+                f"**{cmp.ratio:,.0f} ×**" if math.isfinite(cmp.ratio) else cmp.mj_how)
+        if res.chaotic:
+            glob = (f"not measurable: the motion is chaotic (the reference's own error passes "
+                    f"1e-6 rad at {res.predictable_s:g} s)")
         rows.append([
-            res.name, fmt_err(cmp.our_err), fmt_time(cmp.our_cost),
-            f"{fmt_err(cmp.default_err)} in {fmt_time(cmp.default_cost)}",
-            (f"{fmt_err(finest.err[0])} in {fmt_time(finest.seconds / horizon)} "
-             f"({finest.label})") if finest else "diverged",
-            f"{fmt_time(cmp.mj_cost)}: {cmp.mj_setting}, {cmp.mj_how}",
-            f"**{cmp.ratio:,.0f} ×**" if math.isfinite(cmp.ratio) else "–",
+            res.name, f"{fmt_err(cmp.our_err)} / {fmt_err(loc.our_err)}",
+            fmt_time(cmp.our_cost),
+            f"{fmt_err(cmp.default_err)} / {fmt_err(loc.default_err)} in "
+            f"{fmt_time(cmp.default_cost)}",
+            glob,
+            (f"{fmt_time(loc.mj_cost)}: {loc.mj_setting}, {loc.mj_how}; "
+             f"**{loc.ratio:,.0f} ×**") if math.isfinite(loc.ratio) else loc.mj_how,
         ])
-    L += md_table(["scene", "our φ error (default settings)", "our cost per sim. s",
-                   "MuJoCo default: φ error, cost per sim. s",
-                   "MuJoCo tuned, finest: φ error, cost",
-                   "MuJoCo tuned at our error: cost per sim. s", "speed ratio at equal error"],
-                  rows)
+    L += md_table(["scene", "our φ error, global / local [rad]", "our cost per sim. s",
+                   "MuJoCo default: φ error global / local, cost per sim. s",
+                   "MuJoCo tuned at our global error: cost per sim. s; speed ratio",
+                   "MuJoCo tuned at our local error: cost; speed ratio"], rows)
     L += ["", "MuJoCo's figures per setting are in the tables of part 1 (families `MuJoCo "
           "default`, `MuJoCo tuned`; setting = MuJoCo's timestep).", ""]
     L += [f"Our whole `{DEFAULT_METHOD} auto` curve against MuJoCo tuned, on the default scene "
@@ -1063,10 +1130,12 @@ def write_report(cfg: Config, results: list[SceneResult], tp: Throughput | None,
             "none" if not nonfinite else "; ".join(nonfinite),
             f"{lift} lift-off, {slip} slip",
             f"{np.nanmax(np.abs(res.ref.states[:, 1])):.3g}",
+            f"{res.predictable_s:g} s" if res.chaotic else "whole episode",
         ])
     L += md_table(["scene", "substeps min / median / max", "local error φ / φ'",
                    "global error φ / φ'", "reference's own φ error", "energy error",
-                   "non-finite", "contact", "max |φ'| [rad/s]"], rows)
+                   "non-finite", "contact", "max |φ'| [rad/s]",
+                   "reference good to 1e-6 rad for"], rows)
     L += [""]
 
     # -- notes --------------------------------------------------------------------------------

@@ -1,0 +1,274 @@
+"""Evaluate trained agents and the baselines on the same seeded episodes; tables and plots.
+
+    python scripts/evaluate.py --env RollerStabilize-v0 --models runs/sac-RollerStabilize-v0
+    python scripts/evaluate.py --env RollerStabilize-v0 RollerHold-v0 RollerBalance-v0 \\
+        --runs runs --out docs/results --report docs/RESULTS.md --notes docs/results/notes.md
+
+Every policy (each trained model, the classical controller: LQR or the energy swing-up,
+zero torque, random actions) plays the episodes ``env.reset(seed=s)`` for s in
+range(--episodes), so all face the same start states and targets. Per task it prints and
+writes (into --out):
+
+* ``<env>.md``: the table (mean ± std return, success rate, final |position error|,
+  mean |τ|, training steps and wall time), and ``<env>.json``, the same numbers;
+* ``<env>-learning.png``: the learning curves (periodic evaluations during training)
+  against the baselines' mean returns;
+* ``<env>-trajectories.png``: episode 0 of every policy, side by side.
+
+``--report`` assembles the tasks' tables, the targets of issue 5 and the plots into one
+Markdown file (``docs/RESULTS.md``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import time
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
+
+import envs  # registers the tasks
+from agents.hyperparams import ALGOS
+from agents.policies import BASELINES, baseline, load_policy, read_config, rollout
+
+#: How the baselines are named in the tables.
+BASELINE_LABELS = {"zero": "zero torque", "random": "random"}
+#: Target of issue 5 on Stabilize and Hold: SAC's mean return within 5% of |LQR's| below it.
+RETURN_TOLERANCE = 0.05
+#: Target on Balance: SAC succeeds in at least this share of the episodes.
+BALANCE_SUCCESS = 0.9
+
+
+def parse_args() -> argparse.Namespace:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--env", nargs="+", default=["RollerStabilize-v0"], choices=envs.ENV_IDS,
+                   help="the task(s) (default RollerStabilize-v0)")
+    p.add_argument("--models", nargs="*", default=[],
+                   help="run directories of scripts/train.py to evaluate (one task)")
+    p.add_argument("--runs", default=None,
+                   help="take the runs <RUNS>/<algo>-<env> that exist, for every task")
+    p.add_argument("--baselines", nargs="*", default=list(BASELINES), choices=BASELINES,
+                   help="baselines to compare (default: classical zero random)")
+    p.add_argument("--episodes", type=int, default=100, help="episodes per policy (default 100)")
+    p.add_argument("--best", action="store_true",
+                   help="evaluate best_model.zip (best periodic evaluation) instead of model.zip")
+    p.add_argument("--out", default="results", help="output directory (default results)")
+    p.add_argument("--report", default=None, help="also write this Markdown report")
+    p.add_argument("--notes", default=None, help="Markdown appended to the report as its notes")
+    return p.parse_args()
+
+
+def evaluate(env: gym.Env, policy: Any, episodes: int) -> dict[str, Any]:
+    """The metrics of ``policy`` over the episodes reset with seeds 0 .. episodes − 1."""
+    returns, successes, final_errors, torques, terminated = [], [], [], [], 0
+    first = None
+    for seed in range(episodes):
+        ep = rollout(env, policy, seed)
+        first = ep if first is None else first
+        returns.append(ep.total_return)
+        successes.append(ep.success)
+        final_errors.append(abs(ep.error[-1]))
+        torques.append(np.abs(ep.torque))
+        terminated += ep.terminated
+    return {
+        "return_mean": float(np.mean(returns)),
+        "return_std": float(np.std(returns)),
+        "success_rate": float(np.mean(successes)),
+        "final_error_mean": float(np.mean(final_errors)),
+        "torque_mean": float(np.mean(np.concatenate(torques))),
+        "terminated": int(terminated),
+        "episodes": episodes,
+        "returns": [float(r) for r in returns],
+        "trajectory": {"time": first.time.tolist(), "error": first.error.tolist(),
+                       "phi_dot": first.phi_dot.tolist(), "torque": first.torque.tolist()},
+    }
+
+
+def classical_label(env_id: str) -> str:
+    return "energy swing-up + LQR" if env_id == "RollerBalance-v0" else "LQR"
+
+
+def markdown_table(rows: list[dict[str, Any]]) -> str:
+    lines = [
+        "| policy | training steps | wall time | return (mean ± std) | success | "
+        "final \\|error\\| [rad] | mean \\|τ\\| [N·m] |",
+        "|---|---:|---:|---:|---:|---:|---:|",
+    ]
+    for r in rows:
+        steps = f"{r['steps']:,}" if r.get("steps") else "–"
+        wall = f"{r['wall_time_s'] / 60:.1f} min" if r.get("wall_time_s") else "–"
+        lines.append(
+            f"| {r['label']} | {steps} | {wall} | {r['return_mean']:.1f} ± {r['return_std']:.1f}"
+            f" | {100 * r['success_rate']:.0f}% | {r['final_error_mean']:.3g} "
+            f"| {r['torque_mean']:.3f} |"
+        )
+    return "\n".join(lines)
+
+
+def target_check(env_id: str, rows: list[dict[str, Any]]) -> tuple[str, bool | None]:
+    """The sentence on issue 5's target for this task, and whether it is met (None: no SAC)."""
+    by_name = {r["name"]: r for r in rows}
+    sac, classical = by_name.get("sac"), by_name.get("classical")
+    if sac is None:
+        return "Target: not checked (no SAC run evaluated).", None
+    if env_id == "RollerBalance-v0":
+        met = sac["success_rate"] >= BALANCE_SUCCESS
+        return (f"Target: SAC succeeds in at least {BALANCE_SUCCESS:.0%} of the episodes: "
+                f"**{'met' if met else 'missed'}** (SAC: {sac['success_rate']:.0%}).", met)
+    if classical is None:
+        return "Target: not checked (no LQR evaluated).", None
+    bound = classical["return_mean"] - RETURN_TOLERANCE * abs(classical["return_mean"])
+    met = sac["return_mean"] >= bound
+    return (f"Target: SAC's mean return at least LQR's − {RETURN_TOLERANCE:.0%} of |LQR's| "
+            f"= {bound:.1f}: **{'met' if met else 'missed'}** (SAC: {sac['return_mean']:.1f}, "
+            f"LQR: {classical['return_mean']:.1f}).", met)
+
+
+def plot_learning_curves(env_id: str, rows: list[dict[str, Any]], path: Path) -> None:
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for r in rows:
+        if r.get("run_dir"):
+            data = np.load(Path(r["run_dir"]) / "evaluations.npz")
+            mean, std = data["results"].mean(axis=1), data["results"].std(axis=1)
+            ax.plot(data["timesteps"], mean, label=r["label"])
+            ax.fill_between(data["timesteps"], mean - std, mean + std, alpha=0.2)
+    for r, style in zip([r for r in rows if not r.get("run_dir")], ["--", ":", "-."],
+                        strict=False):
+        ax.axhline(r["return_mean"], color="k", linestyle=style, linewidth=1, label=r["label"])
+    ax.set(xlabel="environment steps", ylabel="episode return (evaluation)",
+           title=f"{env_id}: learning curves")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_trajectories(env_id: str, rows: list[dict[str, Any]], path: Path) -> None:
+    quantities = [("error", "position error [rad]"), ("phi_dot", "φ' [rad/s]"),
+                  ("torque", "τ [N·m]")]
+    fig, axes = plt.subplots(len(quantities), len(rows), sharex=True, sharey="row",
+                             figsize=(2.6 * len(rows), 6.5), squeeze=False)
+    for j, r in enumerate(rows):
+        traj = r["trajectory"]
+        for i, (key, label) in enumerate(quantities):
+            ax = axes[i, j]
+            ax.plot(traj["time"], traj[key], linewidth=1.2)
+            ax.axhline(0.0, color="k", linewidth=0.5)
+            ax.grid(alpha=0.3)
+            if j == 0:
+                ax.set_ylabel(label)
+        axes[0, j].set_title(r["label"], fontsize=9)
+        axes[-1, j].set_xlabel("time [s]")
+    fig.suptitle(f"{env_id}: episode 0 (seed 0) of each policy")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main() -> None:
+    args = parse_args()
+    matplotlib.use("Agg")  # files only, no window
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    if args.models and len(args.env) > 1:
+        raise SystemExit("--models names runs of one task; use --runs for several tasks")
+    sections = []
+    for env_id in args.env:
+        # -- the policies: trained models, then the baselines -------------------------------
+        run_dirs = [Path(m) for m in args.models]
+        if args.runs:
+            run_dirs += [Path(args.runs) / f"{a}-{env_id}" for a in ALGOS
+                         if (Path(args.runs) / f"{a}-{env_id}" / "config.json").is_file()]
+        configs = [read_config(d) for d in run_dirs]
+        for d, c in zip(run_dirs, configs, strict=True):
+            if c["env"] != env_id:
+                raise SystemExit(f"{d} was trained on {c['env']}, not {env_id}")
+        env_kwargs = configs[0]["env_kwargs"] if configs else {}
+        if any(c["env_kwargs"] != env_kwargs for c in configs):
+            raise SystemExit(f"the runs of {env_id} differ in env_kwargs; evaluate them apart")
+        env = gym.make(env_id, **env_kwargs)
+        policies: list[tuple[dict[str, Any], Any]] = []
+        for d, c in zip(run_dirs, configs, strict=True):
+            meta = {"name": c["algo"], "label": c["algo"].upper(), "run_dir": str(d),
+                    "steps": c["trained_steps"], "wall_time_s": c["wall_time_s"]}
+            policies.append((meta, load_policy(d, best=args.best)))
+        for name in args.baselines:
+            label = classical_label(env_id) if name == "classical" else BASELINE_LABELS[name]
+            policies.append(({"name": name, "label": label}, baseline(name, env, seed=0)))
+
+        # -- the same seeded episodes for every policy ----------------------------------
+        rows = []
+        for meta, policy in policies:
+            start = time.perf_counter()
+            row = {**meta, **evaluate(env, policy, args.episodes)}
+            rows.append(row)
+            print(f"{env_id:20s} {row['label']:24s} return {row['return_mean']:7.1f} ± "
+                  f"{row['return_std']:5.1f}  success {row['success_rate']:4.0%}  "
+                  f"({time.perf_counter() - start:.0f} s)", flush=True)
+        env.close()
+
+        # -- table, numbers and plots ---------------------------------------------------
+        table = markdown_table(rows)
+        check, _ = target_check(env_id, rows)
+        print(f"\n{table}\n\n{check}\n")
+        (out / f"{env_id}.md").write_text(f"## {env_id}\n\n{table}\n\n{check}\n")
+        (out / f"{env_id}.json").write_text(json.dumps(
+            {"env": env_id, "env_kwargs": env_kwargs, "episodes": args.episodes,
+             "policies": rows}, indent=1) + "\n")
+        plot_learning_curves(env_id, rows, out / f"{env_id}-learning.png")
+        plot_trajectories(env_id, rows, out / f"{env_id}-trajectories.png")
+        sections.append((env_id, table, check))
+
+    if args.report:
+        write_report(Path(args.report), out, sections, args)
+        print(f"wrote {args.report}")
+    print(f"wrote tables and plots into {out}/")
+
+
+def write_report(path: Path, out: Path, sections: list[tuple[str, str, str]],
+                 args: argparse.Namespace) -> None:
+    rel = Path(os.path.relpath(out, path.parent))
+    lines = [
+        "# Results",
+        "",
+        "Sample agents of issue 5 on the three tasks: SAC, TD3 and PPO (stable-baselines3, "
+        "trained here on the CPU) against the classical controller (LQR on Stabilize and "
+        "Hold, energy swing-up handing over to LQR on Balance), zero torque and random "
+        "actions.",
+        "",
+        "Reproduce with `make results` (it trains the nine agents with the hyperparameters "
+        "of `agents/hyperparams.py` into `runs/`, seed 0, then runs "
+        f"`python scripts/evaluate.py --env {' '.join(args.env)} --runs {args.runs} "
+        f"--out {args.out} --report {args.report}"
+        + (f" --notes {args.notes}" if args.notes else "") + "`).",
+        "",
+        f"Every policy plays the same {args.episodes} episodes, `env.reset(seed=s)` for s = 0 "
+        f"… {args.episodes - 1}, acting deterministically ({'best' if args.best else 'final'} "
+        "model of each run). *Success*: `info[\"is_success\"]` at the episode's last step. "
+        "*Final |error|*: the position error at the last step. *Mean |τ|*: over all steps. "
+        "*Wall time*: the training run's, on this machine "
+        f"({platform.machine()}, {os.cpu_count()} cores shared with other jobs; torch "
+        "on 1 thread).",
+        "",
+    ]
+    for env_id, table, check in sections:
+        lines += [f"## {env_id}", "", table, "", check, "",
+                  f"![learning curves]({rel / f'{env_id}-learning.png'})", "",
+                  f"![trajectories]({rel / f'{env_id}-trajectories.png'})", ""]
+    if args.notes and Path(args.notes).is_file():
+        lines += [Path(args.notes).read_text().rstrip(), ""]
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main()

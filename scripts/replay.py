@@ -1,0 +1,68 @@
+"""Render one episode of a policy to a GIF (or an MP4).
+
+    python scripts/replay.py runs/sac-RollerStabilize-v0                 # -> runs/.../replay.gif
+    python scripts/replay.py runs/sac-RollerHold-v0 --seed 3 --out hold.gif
+    python scripts/replay.py classical --env RollerBalance-v0 --out balance.gif
+
+The policy is a run directory of ``scripts/train.py`` (its saved model, in the environment
+it was trained in) or a baseline name (``classical``, ``zero``, ``random``, with --env).
+The episode is ``env.reset(seed=--seed)``, as in ``scripts/evaluate.py``. GIFs need only
+Pillow; an ``.mp4`` needs imageio's ffmpeg plugin (``pip install imageio[ffmpeg]``).
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import gymnasium as gym
+import imageio.v2 as imageio
+
+import envs  # registers the tasks
+from agents.policies import BASELINES, baseline, load_policy, read_config, rollout
+
+
+def parse_args() -> argparse.Namespace:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("policy", help=f"a run directory, or one of: {', '.join(BASELINES)}")
+    p.add_argument("--env", default=None, choices=envs.ENV_IDS,
+                   help="the task (default: the run's; required for a baseline)")
+    p.add_argument("--seed", type=int, default=0, help="the episode's reset seed (default 0)")
+    p.add_argument("--out", default=None,
+                   help="output .gif or .mp4 (default <run dir>/replay.gif, or "
+                        "<policy>-<env>.gif for a baseline)")
+    p.add_argument("--best", action="store_true", help="use the run's best_model.zip")
+    p.add_argument("--fps", type=int, default=20, help="frames per second (default 20 = 1/dt)")
+    return p.parse_args()
+
+
+def main() -> None:
+    args = parse_args()
+    if args.policy in BASELINES:
+        if args.env is None:
+            raise SystemExit(f"--env is needed to replay the baseline {args.policy!r}")
+        env = gym.make(args.env, render_mode="rgb_array")
+        policy = baseline(args.policy, env)
+        out = Path(args.out or f"{args.policy}-{args.env}.gif")
+    else:
+        config = read_config(args.policy)
+        if args.env is not None and args.env != config["env"]:
+            raise SystemExit(f"{args.policy} was trained on {config['env']}, not {args.env}")
+        env = gym.make(config["env"], render_mode="rgb_array", **config["env_kwargs"])
+        policy = load_policy(args.policy, best=args.best)
+        out = Path(args.out or Path(args.policy) / "replay.gif")
+
+    episode = rollout(env, policy, seed=args.seed, render=True)
+    env.close()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    if out.suffix == ".gif":
+        imageio.mimsave(out, episode.frames, duration=1000 / args.fps, loop=0)
+    else:
+        imageio.mimsave(out, episode.frames, fps=args.fps)
+    print(f"{len(episode.frames)} frames, return {episode.total_return:.1f}, success "
+          f"{episode.success} -> {out}")
+
+
+if __name__ == "__main__":
+    main()

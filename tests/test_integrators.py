@@ -1,0 +1,491 @@
+"""integrators.py: accuracy per control step, order, substeps, batches, long horizons, hard cases.
+
+The reference is scipy's DOP853 at rtol = atol = 1e-13 (and at most dt/50 per step) on
+``equations.accel`` — the equation checked against Lagrange and Newton–Euler in
+test_reference_derivations.py. "Error" is the state error after one control step,
+max(|Δφ| [rad], |Δφ'| [rad/s]), which is what ``tol`` bounds.
+
+Random states are physically meaningful: |ψ| <= π (|φ| <= 2π on the drum), kinetic energy up
+to m g r, |τ| <= m g (r + e)/2.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from envs.physics import METHODS, PRESETS, Scene, analysis, predicted_substeps, preset, step
+from envs.physics import equations as eq
+from envs.physics import integrators
+
+DT = 0.05
+SUBSTEPPED = tuple(m for m in METHODS if m != "dop853")
+#: tolerances checked per method: from loose to the tightest the reference can verify on the
+#: stiff presets (its own error there is ~2e-11).
+TOLS = {
+    "rk4": (1e-5, 1e-7, 1e-9),
+    "rk8": (1e-5, 1e-7, 1e-9),
+    "midpoint": (1e-4, 1e-6),
+    "euler": (1e-2, 1e-3, 1e-4),
+}
+ORDERS = {"rk4": 4, "rk8": 8, "midpoint": 2, "euler": 1}
+
+
+def test_every_substepped_method_is_covered():
+    assert set(SUBSTEPPED) == set(TOLS) == set(ORDERS)
+
+
+def reference(scene: Scene, phi, phi_dot, torque, dt=DT, dense=False):
+    """DOP853 at rtol = atol = 1e-13 over dt, at most dt/50 per step: the end state."""
+    params = scene.params
+
+    def rhs(_t, y):
+        return [y[1], eq.accel(y[0], y[1], torque, *params)]
+
+    sol = solve_ivp(rhs, (0.0, dt), [phi, phi_dot], method="DOP853", rtol=1e-13, atol=1e-13,
+                    max_step=dt / 50, dense_output=dense)
+    assert sol.success
+    return sol if dense else sol.y[:, -1]
+
+
+def error(result, ref) -> float:
+    return max(abs(result.phi - ref[0]), abs(result.phi_dot - ref[1]))
+
+
+def meaningful_states(scene: Scene, rng: np.random.Generator, n: int):
+    """|ψ| <= π (|φ| <= 2π where ψ turns slower), ½ J_I φ'² <= m g r, |τ| <= m g (r + e)/2."""
+    m, r, kappa, e, _, g, _ = scene.params
+    s = 1 - r * kappa
+    half = 2 * math.pi if kappa <= 0 else min(2 * math.pi, math.pi * s / (r * kappa))
+    out = []
+    for _ in range(n):
+        phi = rng.uniform(-half, half)
+        kinetic = rng.uniform(0, 1) * m * g * r
+        w = rng.choice([-1, 1]) * math.sqrt(2 * kinetic / analysis.moment_of_inertia(scene, phi))
+        torque = rng.uniform(-0.5, 0.5) * m * g * (r + e)
+        out.append((phi, w, torque))
+    return out
+
+
+SCENES = {**PRESETS, "paper+damping": PRESETS["paper"].replace(damping=0.05)}
+
+
+@pytest.fixture(scope="module")
+def cases():
+    """Per scene: 6 random states and their references (shared by all methods and tols)."""
+    out = {}
+    for i, (name, scene) in enumerate(SCENES.items()):
+        states = meaningful_states(scene, np.random.default_rng(1000 + i), 6)
+        out[name] = [(state, reference(scene, *state)) for state in states]
+    return out
+
+
+# -- accuracy per control step ----------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", list(SCENES))
+@pytest.mark.parametrize("method", SUBSTEPPED)
+def test_error_per_control_step_is_within_tol(method, name, cases):
+    """Automatic substeps: the state error after one control step is at most tol, for every
+    scene and several tols — except where the rule hits MAX_SUBSTEPS (documented: a stiff
+    scene at a tight tol for a low-order method), which must then be reported as such."""
+    scene = SCENES[name]
+    checked = 0
+    for tol in TOLS[method]:
+        for state, ref in cases[name]:
+            result = step(scene, *state, DT, method=method, tol=tol)
+            assert result.finite
+            if result.substeps >= integrators.MAX_SUBSTEPS:
+                assert result.substeps == integrators.MAX_SUBSTEPS
+                continue
+            checked += 1
+            assert error(result, ref) <= tol, (tol, state, error(result, ref) / tol)
+    if method in ("rk4", "rk8") or name not in ("tight_fit", "rim_mass"):
+        assert checked == len(TOLS[method]) * len(cases[name])  # nothing was capped
+
+
+@pytest.mark.parametrize("name", list(PRESETS))
+def test_dop853_reference_is_converged(name, cases):
+    """step(method="dop853", tol=1e-13), the test's own reference (max step dt/50) and RK4 at
+    a fixed 20,000 substeps (error ~ (λh)^4 ≈ 1e-13 or less) agree to 1e-10 on every preset."""
+    scene = PRESETS[name]
+    for state, ref in cases[name][:3]:
+        own = step(scene, *state, DT, method="dop853", tol=1e-13)
+        fine = step(scene, *state, DT, method="rk4", substeps=20_000)
+        assert error(own, ref) <= 1e-10
+        assert error(fine, ref) <= 1e-10
+
+
+@pytest.mark.parametrize("method", SUBSTEPPED)
+@pytest.mark.parametrize("name", ["paper", "drum"])
+def test_observed_order_of_convergence(method, name):
+    """Halving a fixed substep: the error falls by 2^p, p the method's order (±0.3; rk8 ±0.6
+    since it reaches rounding sooner and is measured over a longer step)."""
+    scene = preset(name).replace(damping=0.01)
+    state = (0.7, 2.0, 0.3)
+    dt, counts = {
+        "rk4": (DT, (4, 8, 16)), "rk8": (0.2, (1, 2, 4)),
+        "midpoint": (DT, (10, 20, 40)), "euler": (DT, (100, 200, 400)),
+    }[method]
+    ref = reference(scene, *state, dt=dt)
+    errors = [error(step(scene, *state, dt, method=method, substeps=n), ref) for n in counts]
+    orders = [math.log2(a / b) for a, b in zip(errors, errors[1:], strict=False)]
+    margin = 0.6 if method == "rk8" else 0.3
+    assert all(abs(p - ORDERS[method]) <= margin for p in orders), orders
+
+
+# -- the substep rule -----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("method", SUBSTEPPED)
+def test_an_easy_scene_takes_fewer_substeps_than_a_stiff_one(method):
+    for speed in (0.0, 2.0, 10.0):
+        for tol in TOLS[method]:
+            easy = predicted_substeps(preset("solid_disc"), speed, DT, tol, method)
+            for stiff in ("tight_fit", "rim_mass"):
+                hard = predicted_substeps(preset(stiff), speed, DT, tol, method)
+                assert easy < hard or hard == integrators.MAX_SUBSTEPS == easy, (stiff, tol)
+    # and the steps actually taken from rest:
+    easy = step(preset("solid_disc"), 0.3, 0.0, 0.0, DT, method=method, tol=TOLS[method][-1])
+    hard = step(preset("tight_fit"), 0.003, 0.0, 0.0, DT, method=method, tol=TOLS[method][-1])
+    assert easy.substeps < hard.substeps
+
+
+@pytest.mark.parametrize("method", SUBSTEPPED)
+def test_substeps_grow_with_speed_and_with_tighter_tol(method):
+    """The rule is monotone: never fewer substeps for a faster roller or a tighter tol, up to
+    MAX_SUBSTEPS — including absurd speeds, where it must ask for the most, not the fewest."""
+    scene = preset("paper")
+    speeds = np.array([0.0, 1.0, 10.0, 1e2, 1e4, 1e6, 1e10, 1e20, 1e100, 1e300])
+    counts = predicted_substeps(scene, speeds, DT, 1e-6, method)
+    assert np.all(np.diff(counts) >= 0), counts
+    assert counts[-1] == integrators.MAX_SUBSTEPS
+    by_tol = [predicted_substeps(scene, 5.0, DT, tol, method) for tol in (1e-3, 1e-6, 1e-9)]
+    assert by_tol == sorted(by_tol)
+
+
+def test_step_rejects_bad_arguments():
+    scene = preset("paper")
+    with pytest.raises(ValueError, match="dt=0.0"):
+        step(scene, 0.0, 0.0, 0.0, 0.0)
+    with pytest.raises(ValueError, match="tol=-1"):
+        step(scene, 0.0, 0.0, 0.0, DT, tol=-1e-9)
+    with pytest.raises(ValueError, match="substeps=0"):
+        step(scene, 0.0, 0.0, 0.0, DT, substeps=0)
+    with pytest.raises(ValueError, match="'leapfrog'"):
+        step(scene, 0.0, 0.0, 0.0, DT, method="leapfrog")
+    with pytest.raises(ValueError, match="dop853"):
+        predicted_substeps(scene, 0.0, DT, 1e-9, "dop853")
+
+
+# -- the concentric path ------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("method", SUBSTEPPED)
+def test_concentric_roller_agrees_with_the_general_equation(method):
+    """e = 0 takes accel_concentric; e = 1e-300 (the same roller to every digit) takes the
+    general accel. Same substeps, same state to 1e-14; and e = 0 is within tol of DOP853."""
+    tol = TOLS[method][-1]
+    for base in ("solid_disc", "floor", "drum"):
+        concentric = preset(base).replace(e=0.0)
+        general = concentric.replace(e=1e-300)
+        for state in ((0.4, 1.5, 0.2), (-2.0, -4.0, -0.3)):
+            a = step(concentric, *state, DT, method=method, tol=tol)
+            b = step(general, *state, DT, method=method, tol=tol)
+            assert a.substeps == b.substeps
+            assert abs(a.phi - b.phi) <= 1e-14 * (1 + abs(a.phi))
+            assert abs(a.phi_dot - b.phi_dot) <= 1e-14 * (1 + abs(a.phi_dot))
+            assert error(a, reference(concentric, *state)) <= tol
+
+
+# -- batches --------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("method", SUBSTEPPED)
+def test_batch_step_equals_single_steps_exactly(method):
+    """A batch of rollers of every preset gives bit for bit what each roller gives alone."""
+    scenes = list(PRESETS.values()) * 3
+    batch = Scene.stack(scenes)
+    rng = np.random.default_rng(5)
+    states = [meaningful_states(s, rng, 1)[0] for s in scenes]
+    phi, w, tau = (np.array(x) for x in zip(*states, strict=True))
+    tol = TOLS[method][0]
+    out = step(batch, phi, w, tau, DT, method=method, tol=tol)
+    for i, scene in enumerate(scenes):
+        one = step(scene, phi[i], w[i], tau[i], DT, method=method, tol=tol)
+        for field in ("phi", "phi_dot", "phi_ddot", "substeps", "finite", "energy",
+                      "normal_force", "friction_force", "liftoff_margin", "slip_margin"):
+            assert getattr(out, field)[i] == getattr(one, field), (field, i)
+
+
+def test_large_parallel_batch_equals_single_steps_exactly():
+    """A batch above PARALLEL_THRESHOLD (run on all cores) equals the rollers one at a time."""
+    n = integrators.PARALLEL_THRESHOLD + 37
+    rng = np.random.default_rng(6)
+    scene = Scene(m=rng.uniform(0.5, 2, n), e=rng.uniform(0, 0.08, n), k=rng.uniform(0.03, 0.08, n),
+                  R=rng.choice([0.3, 1.0, math.inf, -0.5], n))
+    phi, w, tau = rng.uniform(-1, 1, n), rng.uniform(-3, 3, n), rng.uniform(-0.3, 0.3, n)
+    out = step(scene, phi, w, tau, DT, tol=1e-7)
+    for i in rng.choice(n, 200, replace=False):
+        one = step(scene.item(i), phi[i], w[i], tau[i], DT, tol=1e-7)
+        assert (out.phi[i], out.phi_dot[i], out.substeps[i]) == (one.phi, one.phi_dot, one.substeps)
+
+
+def test_batch_broadcasts_and_scalars_stay_scalars():
+    scene = preset("paper")
+    one = step(scene, 0.2, 0.0, 0.1, DT)
+    assert isinstance(one.phi, float) and isinstance(one.substeps, int)
+    assert isinstance(one.finite, bool)
+    grid = step(scene, np.full((2, 3), 0.2), 0.0, np.array([0.1, 0.1, 0.1]), DT)
+    assert grid.phi.shape == (2, 3)
+    np.testing.assert_array_equal(grid.phi, one.phi)
+
+
+def test_dop853_batch_matches_single_references():
+    """DOP853 integrates a batch as one system (shared steps): within 1e-10 of each alone."""
+    scenes = list(PRESETS.values())
+    batch = Scene.stack(scenes)
+    phi = np.linspace(-0.5, 0.5, len(scenes))
+    out = step(batch, phi, 1.0, 0.1, DT, method="dop853", tol=1e-13)
+    for i, scene in enumerate(scenes):
+        ref = reference(scene, phi[i], 1.0, 0.1)
+        assert abs(out.phi[i] - ref[0]) <= 1e-10 and abs(out.phi_dot[i] - ref[1]) <= 1e-10
+
+
+# -- what a step reports besides the state ---------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", ["paper", "drum", "rim_mass"])
+def test_step_reports_the_end_state_and_the_worst_margins(name):
+    """φ'', N, F, E are those of analysis at the returned state; the lift-off and slip margins
+    are the smallest met during the step: no larger than at the start or the end, no smaller
+    than the minimum along the DOP853 trajectory (sampled densely) by more than 1e-6."""
+    scene = preset(name)
+    for state in meaningful_states(scene, np.random.default_rng(7), 4):
+        out = step(scene, *state, DT, tol=1e-10)
+        acc = analysis.acceleration(scene, out.phi, out.phi_dot, state[2])
+        end = analysis.contact(scene, out.phi, out.phi_dot, state[2])
+        start = analysis.contact(scene, state[0], state[1], state[2])
+        assert out.phi_ddot == pytest.approx(acc, rel=1e-13, abs=1e-12)
+        assert out.normal_force == pytest.approx(end.normal, rel=1e-13, abs=1e-12)
+        assert out.friction_force == pytest.approx(end.friction, rel=1e-13, abs=1e-12)
+        assert out.energy == pytest.approx(analysis.energy(scene, out.phi, out.phi_dot),
+                                           rel=1e-13, abs=1e-15)
+        sol = reference(scene, *state, dense=True)
+        phi, w = sol.sol(np.linspace(0, DT, 4001))
+        along = analysis.contact(scene, phi, w, state[2])
+        for field in ("liftoff_margin", "slip_margin"):
+            got = getattr(out, field)
+            assert got <= min(getattr(start, field), getattr(end, field)) + 1e-9
+            assert got >= getattr(along, field).min() - 1e-6
+        assert out.lifting == (out.liftoff_margin <= 0)
+        assert out.slipping == (out.slip_margin < 0)
+
+
+# -- long horizons --------------------------------------------------------------------------------
+
+
+def _run(scene: Scene, phi, w, torque, steps, method, tol=1e-9, substeps=0):
+    """Many control steps through step_one; the trajectory's φ and φ' (steps + 1 each)."""
+    params = (*(float(x) for x in scene.params), float(scene.mu))
+    code = METHODS[method]
+    phis, ws = np.empty(steps + 1), np.empty(steps + 1)
+    phis[0], ws[0] = phi, w
+    for i in range(steps):
+        out = integrators.step_one(params, phi, w, torque, DT, code, tol, substeps)
+        assert out[4], i
+        phi, w = out[0], out[1]
+        phis[i + 1], ws[i + 1] = phi, w
+    return phis, ws
+
+
+def test_midpoint_energy_error_stays_bounded_while_euler_drifts():
+    """Zero torque, no damping, released from φ = 1 rad (E0 ≈ 0.302 J) on "paper", 20,000
+    control steps (1000 s). The implicit midpoint (4 substeps) keeps its energy error
+    bounded: measured 4.4e-5 J, the same in the last 1000 steps as in the first; asserted
+    <= 1e-4 J and no growth (last <= 1.1 × first). Semi-implicit Euler, with ten times the
+    substeps (40), drifts: measured 0.06 J in the first 1000 steps, 0.26 J in the last;
+    asserted to grow at least 2× and to end 100× above the midpoint's."""
+    scene = preset("paper")
+    e0 = analysis.energy(scene, 1.0, 0.0)
+
+    def drift(method, substeps):
+        phi, w = _run(scene, 1.0, 0.0, 0.0, 20_000, method, substeps=substeps)
+        err = np.abs(analysis.energy(scene, phi, w) - e0)
+        return err[:1000].max(), err[-1000:].max()
+
+    mid_first, mid_last = drift("midpoint", 4)
+    assert max(mid_first, mid_last) <= 1e-4
+    assert mid_last <= 1.1 * mid_first
+    euler_first, euler_last = drift("euler", 40)
+    assert euler_last >= 2 * euler_first
+    assert euler_last >= 100 * mid_last
+
+
+#: bounds on |E(t) − E(0)| [J] over 1e5 steps of 0.05 s at tol 1e-9, measured with margin.
+LONG_RUN_BOUND = {"rk4": 5e-9, "rk8": 3e-7}
+
+
+@pytest.mark.parametrize("method", ["rk4", "rk8"])
+def test_zero_torque_for_1e5_steps_keeps_the_energy(method):
+    """1e5 control steps (5000 s) of "paper" at zero torque, no damping, tol = 1e-9, from
+    rest at φ = 1 rad (E0 ≈ 0.302 J). Measured energy error: rk4 1.3e-9 J, rk8 8.7e-8 J (a
+    slow linear drift, ~1e-14 J and ~1e-12 J per step); asserted within LONG_RUN_BOUND
+    (about 4× margin): 5e-9 J (rk4), 3e-7 J (rk8). The motion stays the same swing:
+    |φ| <= 1 rad + 1e-9 throughout."""
+    scene = preset("paper")
+    phi, w = _run(scene, 1.0, 0.0, 0.0, 100_000, method)
+    energy = analysis.energy(scene, phi, w)
+    assert np.max(np.abs(energy - energy[0])) <= LONG_RUN_BOUND[method]
+    assert np.max(np.abs(phi)) <= 1.0 + 1e-9
+
+
+#: the largest torque of these tests: m g (r + e)/2, about half of the largest the weight can
+#: hold (1.31 N·m on "paper") and below the 0.605 × 1.31 N·m above which the roller, released
+#: at rest at the bottom, would climb out of its well and spin up without bound.
+def _max_torque(scene: Scene) -> float:
+    return 0.5 * scene.m * scene.g * (scene.r + scene.e)
+
+
+def _turning_point(scene: Scene, torque: float) -> float:
+    """The φ > 0 where V(φ) = τφ (from rest at 0 with E − τφ = 0, the far turning point)."""
+    from scipy.optimize import brentq
+
+    m, r, e, g, R = scene.m, scene.r, scene.e, scene.g, scene.R
+
+    def f(phi):
+        psi = r * phi / (R - r)
+        return m * g * ((R - r) * (1 - math.cos(psi)) + e * (1 - math.cos(phi))) - torque * phi
+
+    grid = np.linspace(0.1, 20, 2000)
+    values = np.array([f(x) for x in grid])
+    i = int(np.nonzero(values >= 0)[0][0])
+    return brentq(f, grid[i - 1], grid[i], xtol=1e-14)
+
+
+@pytest.mark.parametrize("method", ["rk4", "rk8"])
+def test_maximum_torque_for_1e5_steps_keeps_e_minus_tau_phi(method):
+    """Constant maximum torque, no damping: E − τφ is an exact invariant. 1e5 steps of 0.05 s
+    at tol 1e-9 from rest at φ = 0 on "paper": measured drift 1.3e-9 J (rk4), 6.8e-8 J (rk8);
+    asserted <= 5e-9 J and 3e-7 J. The swing reaches the turning point where V(φ) = τφ
+    (solved here independently) and not beyond."""
+    scene = preset("paper")
+    torque = _max_torque(scene)
+    phi, w = _run(scene, 0.0, 0.0, torque, 100_000, method)
+    invariant = analysis.energy(scene, phi, w) - torque * phi
+    assert np.max(np.abs(invariant)) <= LONG_RUN_BOUND[method]
+    turn = _turning_point(scene, torque)
+    assert turn - 0.05 <= phi.max() <= turn + 1e-9
+    assert phi.min() >= -1e-9
+
+
+@pytest.mark.parametrize("method", ["rk4", "rk8"])
+def test_maximum_torque_segment_against_dop853(method):
+    """The first 200 control steps (10 s) under the maximum torque: each step within tol of
+    DOP853 restarted from the integrator's state, and the whole segment within 200 · tol of
+    one DOP853 run from the start."""
+    scene = preset("paper")
+    torque = _max_torque(scene)
+    tol = 1e-9
+    phi, w = _run(scene, 0.0, 0.0, torque, 200, method, tol=tol)
+    for i in range(0, 200, 10):
+        ref = reference(scene, phi[i], w[i], torque)
+        assert max(abs(phi[i + 1] - ref[0]), abs(w[i + 1] - ref[1])) <= tol
+    params = scene.params
+    sol = solve_ivp(lambda _t, y: [y[1], eq.accel(y[0], y[1], torque, *params)], (0, 200 * DT),
+                    [0.0, 0.0], method="DOP853", rtol=1e-13, atol=1e-13, max_step=DT / 10,
+                    t_eval=np.arange(201) * DT)
+    assert np.max(np.abs(phi - sol.y[0])) <= 200 * tol
+    assert np.max(np.abs(w - sol.y[1])) <= 200 * tol
+
+
+# -- hard cases -----------------------------------------------------------------------------------
+
+HARD = {
+    "R=1.001r": Scene(R=1.001 * 0.1),
+    "e=0.999r,k=0.01r": Scene(e=0.999 * 0.1, k=0.01 * 0.1),
+    "floor": Scene(R=math.inf),
+    "R=1e12": Scene(R=1e12),
+    "drum": preset("drum"),
+}
+
+
+@pytest.mark.parametrize("method", ["rk4", "rk8"])
+@pytest.mark.parametrize("name", list(HARD))
+def test_hard_scenes_stay_within_tol(name, method):
+    """R = 1.001 r (θ turns 1000× faster than φ), e = 0.999 r with k = 0.01 r (J_I dips
+    10^4-fold at θ = 0), the floor, R = 1e12 and the drum: error per step <= tol = 1e-7."""
+    scene = HARD[name]
+    tol = 1e-7
+    rng = np.random.default_rng(list(HARD).index(name))
+    for state in meaningful_states(scene, rng, 4):
+        out = step(scene, *state, DT, method=method, tol=tol)
+        assert out.finite and out.substeps < integrators.MAX_SUBSTEPS
+        assert error(out, reference(scene, *state)) <= tol, state
+
+
+def test_rim_mass_through_the_dip_of_j_i():
+    """e = 0.999 r, k = 0.01 r swinging through θ = 0 (J_I at its 10^4-fold dip) with the
+    energy of a 1 rad release: within tol = 1e-7 of DOP853, and E − τφ kept to 1e-6 J."""
+    scene = HARD["e=0.999r,k=0.01r"]
+    w0 = math.sqrt(2 * analysis.energy(scene, 1.0, 0.0) / analysis.moment_of_inertia(scene, 0.0))
+    for method in ("rk4", "rk8"):
+        out = step(scene, -0.01, w0, 0.0, DT, method=method, tol=1e-7)
+        assert error(out, reference(scene, -0.01, w0, 0.0)) <= 1e-7
+        assert abs(out.energy - analysis.energy(scene, -0.01, w0)) <= 1e-6
+
+
+def test_floor_and_a_huge_cylinder_step_alike():
+    """R = 1e12 takes the floor's substeps and ends within 1e-12 of the floor's state."""
+    floor, huge = HARD["floor"], HARD["R=1e12"]
+    for state in meaningful_states(floor, np.random.default_rng(9), 6):
+        a = step(floor, *state, DT)
+        b = step(huge, *state, DT)
+        assert a.substeps == b.substeps
+        assert abs(a.phi - b.phi) <= 1e-12 * (1 + abs(a.phi))
+        assert abs(a.phi_dot - b.phi_dot) <= 1e-12 * (1 + abs(a.phi_dot))
+
+
+def test_drum_falls_off_its_unstable_top_as_dop853_does():
+    """On top of the drum, released 1e-3 rad beside the unstable rest position: 40 steps
+    (2 s) of the fall stay within 40 · tol of one DOP853 run."""
+    scene = preset("drum")
+    unstable = [x for x in analysis.equilibria(scene) if not x.stable and x.phi > 0][0]
+    phi0, tol = unstable.phi + 1e-3, 1e-9
+    phi, w = _run(scene, phi0, 0.0, 0.0, 40, "rk4", tol=tol)
+    params = scene.params
+    sol = solve_ivp(lambda _t, y: [y[1], eq.accel(y[0], y[1], 0.0, *params)], (0, 40 * DT),
+                    [phi0, 0.0], method="DOP853", rtol=1e-13, atol=1e-13, max_step=DT / 10,
+                    t_eval=np.arange(41) * DT)
+    assert abs(phi[-1] - phi0) > 0.5  # it did fall
+    assert np.max(np.abs(phi - sol.y[0])) <= 40 * tol
+    assert np.max(np.abs(w - sol.y[1])) <= 40 * tol
+
+
+ABSURD = [
+    (0.3, 1e200, 0.0),
+    (0.3, 1e20, 0.0),
+    (0.3, -1e308, 0.0),
+    (0.3, 0.0, 1e300),
+    (0.3, 1e6, 1e6),
+]
+
+
+@pytest.mark.parametrize("method", [*SUBSTEPPED, "dop853"])
+@pytest.mark.parametrize("state", ABSURD)
+def test_absurd_states_never_return_non_finite_numbers(state, method):
+    """A state or torque far outside physics: every returned field is finite; a step that
+    could not stay finite says finite=False and returns the state unchanged."""
+    scene = preset("paper")
+    with np.errstate(all="ignore"):
+        out = step(scene, *state, DT, method=method, tol=1e-6)
+    for field in ("phi", "phi_dot", "phi_ddot", "normal_force", "friction_force", "energy",
+                  "liftoff_margin", "slip_margin"):
+        assert math.isfinite(getattr(out, field)), field
+    if not out.finite:
+        assert (out.phi, out.phi_dot) == state[:2]
+    if abs(state[1]) >= 1e200:
+        assert not out.finite

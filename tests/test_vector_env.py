@@ -1,0 +1,202 @@
+"""The native vector environments (issue 4): ``gymnasium.make_vec(ID, num_envs=N)``.
+
+The independent source is N single environments (``gymnasium.make(ID)``, seeded
+``seed + i``) driven in lockstep with the same actions, with Gymnasium's next-step
+autoreset written out here: the step after an episode ends is a ``reset()`` of that
+single environment, reported with reward 0 and both flags False.
+"""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium import spaces
+from gymnasium.vector import AsyncVectorEnv, AutoresetMode, SyncVectorEnv, VectorEnv
+
+import envs
+from envs import Scene, preset
+
+IDS = ["RollerStabilize-v0", "RollerHold-v0", "RollerBalance-v0"]
+NATIVE = {
+    "RollerStabilize-v0": envs.stabilize.RollerStabilizeVectorEnv,
+    "RollerHold-v0": envs.hold.RollerHoldVectorEnv,
+    "RollerBalance-v0": envs.balance.RollerBalanceVectorEnv,
+}
+
+
+def assert_info_row(vec_info: dict, i: int, info: dict) -> None:
+    """Sub-environment i of a vector info equals a single environment's info."""
+    for key, value in info.items():
+        assert key in vec_info, key
+        assert vec_info[f"_{key}"][i], key
+        got = vec_info[key][i]
+        if isinstance(value, bool | np.bool_ | int | np.integer):
+            assert got == value, (key, got, value)
+        else:
+            assert got == pytest.approx(value, rel=1e-12, abs=1e-12), (key, got, value)
+
+
+def lockstep(env_id, seed, actions, vec_kwargs, single_kwargs):
+    """Run the vector env and its single envs side by side; compare every output.
+
+    Returns the per-step (terminated, truncated) of the vector env.
+    """
+    n = len(single_kwargs)
+    vec = gym.make_vec(env_id, num_envs=n, **vec_kwargs)
+    singles = [gym.make(env_id, **kw) for kw in single_kwargs]
+    obs, info = vec.reset(seed=seed)
+    for i, env in enumerate(singles):
+        o, inf = env.reset(seed=seed + i)
+        np.testing.assert_array_equal(obs[i], o)
+        assert_info_row(info, i, inf)
+    done = np.zeros(n, dtype=bool)
+    flags = []
+    for a in actions:
+        obs, reward, terminated, truncated, info = vec.step(a)
+        assert obs.dtype == np.float32 and reward.shape == (n,)
+        for i, env in enumerate(singles):
+            if done[i]:  # next-step autoreset
+                o, inf = env.reset()
+                r, te, tr = 0.0, False, False
+                assert reward[i] == 0.0 and not terminated[i] and not truncated[i]
+                assert info["torque"][i] == 0.0 and info["substeps"][i] == 0
+            else:
+                o, r, te, tr, inf = env.step(a[i])
+            np.testing.assert_array_equal(obs[i], o)
+            assert reward[i] == pytest.approx(r, rel=1e-12, abs=1e-15)
+            assert (bool(terminated[i]), bool(truncated[i])) == (te, tr)
+            assert_info_row(info, i, inf)
+            done[i] = te or tr
+        flags.append((terminated.copy(), truncated.copy()))
+    vec.close()
+    return flags
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_make_vec_returns_the_native_vector_env(env_id):
+    vec = gym.make_vec(env_id, num_envs=4)
+    assert type(vec) is NATIVE[env_id]
+    assert isinstance(vec, VectorEnv)
+    assert not isinstance(vec, SyncVectorEnv | AsyncVectorEnv)
+    assert vec.num_envs == 4
+    assert vec.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP
+    single = gym.make(env_id)
+    assert vec.single_action_space == single.action_space
+    assert vec.single_observation_space == single.observation_space
+    n = single.observation_space.shape[0]
+    assert vec.observation_space == spaces.Box(-1.0, 1.0, (4, n), np.float32)
+    assert vec.action_space == spaces.Box(-1.0, 1.0, (4, 1), np.float32)
+    obs, _ = vec.reset(seed=0)
+    assert obs.shape == (4, n) and vec.observation_space.contains(obs)
+    vec.close()
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_same_trajectories_as_single_envs_across_autoresets(env_id):
+    """Seeds s + i, random actions, episodes of 7 steps: 17 steps cross two autoresets."""
+    actions = np.random.default_rng(0).uniform(-1, 1, (17, 3, 1)).astype(np.float32)
+    flags = lockstep(env_id, 5, actions, {"max_episode_steps": 7},
+                     [{"max_episode_steps": 7}] * 3)
+    truncated = np.array([tr for _, tr in flags])
+    np.testing.assert_array_equal(truncated.any(axis=1), [t in (6, 14) for t in range(17)])
+
+
+def test_per_env_scenes_and_autoreset_after_termination():
+    """scene=[...]: one scene per sub-environment; the low-friction one slips under
+    bang-bang torques, terminates and starts over on the next step."""
+    slippery = preset("paper").replace(mu=0.3)
+    scenes = ["paper", slippery, "floor"]
+    sign = np.where((np.arange(24) // 4) % 2 == 0, 1.0, -1.0)
+    actions = np.repeat(sign[:, None, None], 3, axis=1).astype(np.float32)
+    flags = lockstep("RollerStabilize-v0", 0, actions, {"scene": scenes},
+                     [{"scene": s} for s in scenes])
+    terminated = np.array([te for te, _ in flags])
+    assert terminated[:, 1].any() and not terminated[:, [0, 2]].any()
+    vec = gym.make_vec("RollerStabilize-v0", num_envs=3, scene=scenes)
+    obs, _ = vec.reset(seed=0)
+    assert vec.unwrapped.scenes == [preset("paper"), slippery, preset("floor")]
+    assert obs[2, 0] == 1.0 and obs[2, 1] == 0.0  # ψ stays 0 on the floor
+    assert obs[0, 0] != 1.0
+
+
+def test_batch_scene_and_randomize_match_single_envs():
+    """A batch Scene gives each sub-environment its roller; randomize draws each episode's
+    scene from the sub-environment's own generator, as the single env seeded s + i."""
+    batch = Scene.stack([preset("paper"), preset("paper").replace(m=2.0, e=0.02)])
+    actions = np.random.default_rng(1).uniform(-1, 1, (6, 2, 1)).astype(np.float32)
+    lockstep("RollerHold-v0", 3, actions, {"scene": batch},
+             [{"scene": batch.item(0)}, {"scene": batch.item(1)}])
+    ranges = {"m": (0.8, 1.2), "k": (0.08, 0.12)}
+    lockstep("RollerStabilize-v0", 11, actions[:, :2], {"randomize": ranges,
+                                                        "max_episode_steps": 3},
+             [{"randomize": ranges, "max_episode_steps": 3}] * 2)
+    vec = gym.make_vec("RollerStabilize-v0", num_envs=3, randomize=ranges)
+    vec.reset(seed=11)
+    drawn = vec.unwrapped.scenes
+    assert len({float(s.m) for s in drawn}) == 3
+    for i, s in enumerate(drawn):
+        single = gym.make("RollerStabilize-v0", randomize=ranges)
+        single.reset(seed=11 + i)
+        assert single.unwrapped.scene == s
+        assert 0.8 <= float(s.m) <= 1.2 and 0.08 <= float(s.k) <= 0.12
+
+
+def test_seed_list_and_reproducibility():
+    vec = gym.make_vec("RollerHold-v0", num_envs=3)
+    obs_a, _ = vec.reset(seed=[4, 9, 2])
+    for i, s in enumerate((4, 9, 2)):
+        o, _ = gym.make("RollerHold-v0").reset(seed=s)
+        np.testing.assert_array_equal(obs_a[i], o)
+    a = np.full((3, 1), 0.5, np.float32)
+    run1 = [vec.reset(seed=1)[0]] + [vec.step(a)[0] for _ in range(3)]
+    run2 = [vec.reset(seed=1)[0]] + [vec.step(a)[0] for _ in range(3)]
+    for x, y in zip(run1, run2, strict=True):
+        np.testing.assert_array_equal(x, y)
+    assert not np.array_equal(run1[0][0], run1[0][1])
+
+
+def test_actions_are_clipped_and_nonfinite_rejected():
+    vec = gym.make_vec("RollerStabilize-v0", num_envs=2)
+    vec.reset(seed=0, options={"state": (0.0, 0.0)})
+    _, _, _, _, info = vec.step(np.array([[3.0], [-0.5]], np.float32))
+    np.testing.assert_allclose(info["torque"], [0.5, -0.25])
+    before = vec.unwrapped.phi.copy()
+    for bad in (math.nan, math.inf):
+        with pytest.raises(ValueError, match="not finite"):
+            vec.step(np.array([[0.0], [bad]], np.float32))
+    np.testing.assert_array_equal(vec.unwrapped.phi, before)
+
+
+def test_reset_options_and_mask():
+    vec = gym.make_vec("RollerStabilize-v0", num_envs=2)
+    _, info = vec.reset(seed=0, options={"state": (0.2, 0.1)})
+    np.testing.assert_array_equal(info["phi"], [0.2, 0.2])
+    np.testing.assert_array_equal(info["phi_dot"], [0.1, 0.1])
+    vec.step(np.full((2, 1), 0.5, np.float32))
+    kept = vec.unwrapped.phi[1]
+    vec.reset(options={"reset_mask": [True, False], "state": (-0.3, 0.0)})
+    assert vec.unwrapped.phi[0] == -0.3 and vec.unwrapped.phi[1] == kept
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"num_envs": 2, "scene": ["paper"]}, "scene has 1 entries"),
+        ({"num_envs": 3, "scene": Scene.stack([preset("paper")] * 2)}, "batch of 2"),
+        ({"num_envs": 2, "integrator": "dop853"}, "dop853"),
+        ({"num_envs": 2, "dt": -1.0}, "dt=-1.0"),
+        ({"num_envs": 2, "scene": ["paper", "nope"]}, "'nope'"),
+    ],
+)
+def test_bad_vector_arguments_raise(kwargs, message):
+    with pytest.raises(ValueError) as excinfo:
+        gym.make_vec("RollerStabilize-v0", **kwargs)
+    assert message in str(excinfo.value)
+
+
+def test_balance_rejects_a_sub_scene_without_an_unstable_rest_position():
+    with pytest.raises(ValueError, match="no unstable rest position"):
+        gym.make_vec("RollerBalance-v0", num_envs=2, scene=["balance", "tight_fit"])
