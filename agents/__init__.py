@@ -1,1 +1,59 @@
-"""roller-gym agents."""
+"""roller-gym's sample agents: trained (stable-baselines3) and classical policies.
+
+Every policy offers stable-baselines3's ``predict(observation, deterministic=True) ->
+(action, state)``, so one evaluation path (:func:`rollout`) serves them all.
+
+=====================  ===============================================================
+module                 what it holds
+=====================  ===============================================================
+``hyperparams``        the hyperparameters per (algorithm, task), default steps
+                       included, and the classical controllers' settings
+``observation``        the state (φ, φ', target φ*) recovered from an observation
+``classical``          :class:`LQR` (Stabilize, Hold), :class:`EnergySwingUp`
+                       (Balance), :class:`ZeroTorque`, :class:`RandomPolicy`
+``policies``           loading a trained run, the baselines by name, playing an episode
+=====================  ===============================================================
+
+The scripts: ``scripts/train.py`` (train and save a run), ``scripts/evaluate.py`` (the
+results table and plots), ``scripts/replay.py`` (an episode to a GIF).
+
+Example::
+
+    import gymnasium as gym
+    import envs
+    from agents import LQR, rollout
+
+    env = gym.make("RollerHold-v0")
+    episode = rollout(env, LQR.from_env(env), seed=0)
+    print(episode.total_return, episode.success)
+"""
+
+from agents.classical import (
+    LQR,
+    Controller,
+    EnergySwingUp,
+    RandomPolicy,
+    ZeroTorque,
+    controller_for,
+)
+from agents.hyperparams import CLASSICAL, HYPERPARAMS, hyperparams
+from agents.observation import DecodedState, decode_observation
+from agents.policies import TrainedPolicy, baseline, load_policy, rollout
+
+__all__ = [
+    "CLASSICAL",
+    "HYPERPARAMS",
+    "LQR",
+    "Controller",
+    "DecodedState",
+    "EnergySwingUp",
+    "RandomPolicy",
+    "TrainedPolicy",
+    "ZeroTorque",
+    "baseline",
+    "controller_for",
+    "decode_observation",
+    "hyperparams",
+    "load_policy",
+    "rollout",
+]

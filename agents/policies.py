@@ -146,6 +146,8 @@ class Episode:
         total_return: the sum of the rewards.
         success: ``info["is_success"]`` at the last step.
         terminated: whether the episode ended early (slip, lift-off, non-finite).
+        target_phi: the episode's target rest position φ* [rad] (Balance: φ_b; −φ_b
+            counts as well).
         frames: rendered frames (only with ``render=True``).
     """
 
@@ -158,6 +160,7 @@ class Episode:
     total_return: float
     success: bool
     terminated: bool
+    target_phi: float
     frames: list[np.ndarray] | None = None
 
 
@@ -189,5 +192,5 @@ def rollout(env: gym.Env, policy: Policy, seed: int, render: bool = False) -> Ep
         time=dt * np.arange(1, data.shape[1] + 1),
         phi=data[0], phi_dot=data[1], error=data[2], torque=data[3], reward=data[4],
         total_return=float(data[4].sum()), success=bool(info["is_success"]),
-        terminated=bool(terminated), frames=frames,
+        terminated=bool(terminated), target_phi=float(info["target_phi"]), frames=frames,
     )

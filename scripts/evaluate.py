@@ -9,8 +9,9 @@ zero torque, random actions) plays the episodes ``env.reset(seed=s)`` for s in
 range(--episodes), so all face the same start states and targets. Per task it prints and
 writes (into --out):
 
-* ``<env>.md``: the table (mean ± std return, success rate, final |position error|,
-  mean |τ|, training steps and wall time), and ``<env>.json``, the same numbers;
+* ``evaluation.md``: the tables of all tasks (mean ± std return, success rate, final
+  |position error|, mean |τ|, training steps and wall time) and the targets of issue 5;
+  ``<env>.md`` and ``<env>.json``: one task's table and its numbers;
 * ``<env>-learning.png``: the learning curves (periodic evaluations during training)
   against the baselines' mean returns;
 * ``<env>-trajectories.png``: episode 0 of every policy, side by side.
@@ -87,8 +88,9 @@ def evaluate(env: gym.Env, policy: Any, episodes: int) -> dict[str, Any]:
         "terminated": int(terminated),
         "episodes": episodes,
         "returns": [float(r) for r in returns],
-        "trajectory": {"time": first.time.tolist(), "error": first.error.tolist(),
-                       "phi_dot": first.phi_dot.tolist(), "torque": first.torque.tolist()},
+        "trajectory": {"time": first.time.tolist(), "phi": first.phi.tolist(),
+                       "phi_dot": first.phi_dot.tolist(), "torque": first.torque.tolist(),
+                       "target_phi": first.target_phi},
     }
 
 
@@ -153,8 +155,9 @@ def plot_learning_curves(env_id: str, rows: list[dict[str, Any]], path: Path) ->
 
 
 def plot_trajectories(env_id: str, rows: list[dict[str, Any]], path: Path) -> None:
-    quantities = [("error", "position error [rad]"), ("phi_dot", "φ' [rad/s]"),
+    quantities = [("phi", "φ [rad] (dashed: target)"), ("phi_dot", "φ' [rad/s]"),
                   ("torque", "τ [N·m]")]
+    targets = [1.0, -1.0] if env_id == "RollerBalance-v0" else [1.0]  # ±φ_b both count
     fig, axes = plt.subplots(len(quantities), len(rows), sharex=True, sharey="row",
                              figsize=(2.6 * len(rows), 6.5), squeeze=False)
     for j, r in enumerate(rows):
@@ -163,6 +166,10 @@ def plot_trajectories(env_id: str, rows: list[dict[str, Any]], path: Path) -> No
             ax = axes[i, j]
             ax.plot(traj["time"], traj[key], linewidth=1.2)
             ax.axhline(0.0, color="k", linewidth=0.5)
+            if key == "phi":
+                for sign in targets:
+                    ax.axhline(sign * traj["target_phi"], color="g", linestyle="--",
+                               linewidth=1)
             ax.grid(alpha=0.3)
             if j == 0:
                 ax.set_ylabel(label)
@@ -228,6 +235,8 @@ def main() -> None:
         plot_trajectories(env_id, rows, out / f"{env_id}-trajectories.png")
         sections.append((env_id, table, check))
 
+    (out / "evaluation.md").write_text("\n\n".join(
+        f"## {env_id}\n\n{table}\n\n{check}" for env_id, table, check in sections) + "\n")
     if args.report:
         write_report(Path(args.report), out, sections, args)
         print(f"wrote {args.report}")

@@ -82,7 +82,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     return p.parse_args(argv)
 
 
-def main(argv: list[str] | None = None) -> Path:
+def main(argv: list[str] | None = None) -> tuple[Path, Any]:
+    """Train, save and return (the run directory, the trained model)."""
     args = parse_args(argv)
     # -- configuration ------------------------------------------------------------------
     hp = hyperparams(args.algo, args.env)
@@ -167,7 +168,7 @@ def main(argv: list[str] | None = None) -> Path:
     eval_env.close()
     print(f"done in {wall_time:.0f} s; last evaluation: mean return "
           f"{config['final_eval_return']:.1f}; saved {run_dir / 'model.zip'}")
-    return run_dir
+    return run_dir, model
 
 
 if __name__ == "__main__":

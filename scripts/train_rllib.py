@@ -10,6 +10,8 @@ Needs the ``rllib`` extra (its own environment, see README: RLlib pins its Gymna
 With no ``--address`` a local Ray is started on this machine (all its CPUs, or
 ``--num-cpus``); with one, the script joins that running cluster (``auto``: the cluster
 this node belongs to). Every node of a cluster needs roller-gym and the same extra installed.
+Ray's clusters use token authentication by default: to join one, set ``RAY_AUTH_MODE=token``
+and give the head's token (``ray get-auth-token`` there) as ``RAY_AUTH_TOKEN``.
 
 Top to bottom: parse the arguments, start or join Ray, register the tasks with Ray's
 registry, build the algorithm's configuration, train while printing progress, save a
@@ -68,6 +70,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
                    help="CPUs of the local Ray (default: all of this machine's)")
     p.add_argument("--checkpoint-dir", type=Path, default=None,
                    help="where to save the checkpoint (default runs/rllib-ALGO-ENV)")
+    p.add_argument("--torch-threads", type=int, default=1,
+                   help="torch threads of the learner (in this process); small networks gain "
+                        "nothing from more, and on a busy machine more threads are much slower")
     p.add_argument("--seed", type=int, default=0)
     return p.parse_args(argv)
 
@@ -187,21 +192,24 @@ def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
     env_kwargs = parse_env_kwargs(args.env_kwarg)
     import ray
+    import torch
 
+    torch.set_num_threads(args.torch_threads)  # the env runners get 1 each from Ray
     # Start (no --address) or join (--address) Ray. "local" forces a new local instance
     # even if this machine already runs a cluster started by `ray start`.
     if args.address is None:
         ray.init(address="local", num_cpus=args.num_cpus or os.cpu_count(),
                  include_dashboard=False)
-    else:
+    else:  # a cluster with token authentication (Ray's default) needs RAY_AUTH_MODE=token
         ray.init(address=args.address)
     print(f"Ray: {ray.cluster_resources().get('CPU', 0):.0f} CPUs on "
           f"{len([n for n in ray.nodes() if n['Alive']])} node(s)")
 
     register_tasks()
     algo = build_config(args, env_kwargs).build_algo()
-    print(f"{args.algo} on {args.env} {env_kwargs or ''}: {args.num_env_runners} env runner(s) "
-          f"x {args.envs_per_runner} env(s) ({args.vectorize})")
+    print(f"{args.algo} on {args.env}{' ' + json.dumps(env_kwargs) if env_kwargs else ''}: "
+          f"{args.num_env_runners} env runner(s) x {args.envs_per_runner} env(s) "
+          f"({args.vectorize})")
 
     env_steps, start = 0, time.perf_counter()
     for _ in range(args.iterations):

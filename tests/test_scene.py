@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from envs.physics import PRESETS, Scene, analysis, preset
+from envs.physics import equations as eq
 
 FIELDS = ("m", "r", "R", "e", "k", "g", "mu", "damping")
 
@@ -240,3 +241,41 @@ def test_batch_evaluation_equals_scalar_evaluation():
             for name, (value, size) in got.items():
                 assert np.shape(value) == shape, name
                 assert abs(value[i, j] - ref[name][0]) <= 1e-15 * size[i, j], (name, i, j)
+
+
+def test_every_equation_broadcasts_per_element_scene_parameters():
+    """Each function of `equations` with a batch of scene parameters and (3, 7) states gives,
+    element by element, its value for that element's scalar parameters."""
+    scenes = list(PRESETS.values())
+    batch = Scene.stack(scenes)
+    rng = np.random.default_rng(3)
+    shape = (3, len(scenes))
+    phi, w, tau, acc = (rng.uniform(-3, 3, shape) for _ in range(4))
+
+    def calls(scene, phi, w, tau, acc):
+        m, r, kappa, e, k, g, c = scene.params
+        return {
+            "accel": eq.accel(phi, w, tau, m, r, kappa, e, k, g, c),
+            "accel_concentric": eq.accel_concentric(phi, w, tau, m, r, kappa, k, g, c),
+            "inertia": eq.inertia(phi, m, r, kappa, e, k),
+            "dinertia": eq.dinertia(phi, m, r, kappa, e),
+            "d2inertia": eq.d2inertia(phi, m, r, kappa, e),
+            "ic_squared": eq.ic_squared(phi, r, kappa, e),
+            "potential": eq.potential(phi, m, r, kappa, e, g),
+            "dpotential": eq.dpotential(phi, m, r, kappa, e, g),
+            "d2potential": eq.d2potential(phi, m, r, kappa, e, g),
+            "energy": eq.energy(phi, w, m, r, kappa, e, k, g),
+            "denergy_dt": eq.denergy_dt(w, tau, c),
+            "positions": np.array(eq.positions(phi, r, kappa, e)),
+            "instant_center_velocity": np.array(eq.instant_center_velocity(phi, w, r, kappa)),
+            "contact_forces": np.array(eq.contact_forces(phi, w, acc, m, r, kappa, e, g)),
+            "shape_factors": np.array(np.broadcast_arrays(*eq.shape_factors(phi, r, kappa))),
+        }
+
+    got = calls(batch, phi, w, tau, acc)
+    for i in range(shape[0]):
+        for j, scene in enumerate(scenes):
+            ref = calls(scene, phi[i, j], w[i, j], tau[i, j], acc[i, j])
+            for name, value in got.items():
+                np.testing.assert_allclose(value[..., i, j], ref[name], rtol=1e-14,
+                                           atol=1e-14, err_msg=name)

@@ -121,6 +121,8 @@ class Scene:
         """``"cylinder"``, ``"floor"`` or ``"drum"`` (an array of them for a batch)."""
         kappa = np.asarray(self.kappa)
         names = np.where(kappa > 0, "cylinder", np.where(kappa < 0, "drum", "floor"))
+        batch = np.broadcast_shapes(*(np.shape(getattr(self, f.name)) for f in fields(self)))
+        names = np.broadcast_to(names, batch) if batch else names  # a batch with a scalar R
         return str(names) if names.ndim == 0 else names
 
     @property
