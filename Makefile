@@ -5,7 +5,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: run test lint bench results clean
+.PHONY: run test test-rllib train-rllib bench results clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -28,8 +28,24 @@ test: $(STAMP)  ## the whole test suite and the linter
 	$(PY) -m ruff check .
 	$(PY) -m pytest -q
 
+# Ray RLlib pins its own Gymnasium release (1.2.2): a second environment, .venv-rllib.
+RLLIB_VENV := .venv-rllib
+RLLIB_STAMP := $(RLLIB_VENV)/.installed
+
+$(RLLIB_STAMP): pyproject.toml
+	$(PYTHON) -m venv $(RLLIB_VENV)
+	$(RLLIB_VENV)/bin/python -m pip install --quiet --upgrade pip
+	$(RLLIB_VENV)/bin/python -m pip install --quiet -e ".[all,rllib]"
+	touch $(RLLIB_STAMP)
+
+test-rllib: $(RLLIB_STAMP)  ## the physics and env tests on RLlib's Gymnasium release, and the RLlib test
+	$(RLLIB_VENV)/bin/python -m pytest -q --ignore=tests/test_agents.py --ignore=tests/test_benchmark.py
+
+train-rllib: $(RLLIB_STAMP)  ## PPO on a local Ray
+	$(RLLIB_VENV)/bin/python scripts/train_rllib.py
+
 bench: $(STAMP)
 	$(PY) scripts/benchmark.py
 
 clean:
-	rm -rf $(VENV) runs results
+	rm -rf $(VENV) $(RLLIB_VENV) runs results

@@ -200,7 +200,7 @@ class EnergySwingUp(Controller):
         max_torque: the torque [N·m] of an action of ±1.
         dt: the control step [s].
         target: φ_b > 0 [rad], the unstable rest position (−φ_b counts as well).
-        energy_gain: the gain of the energy pump [1/(J·rad/s)·N·m].
+        energy_gain: the gain k of the energy pump τ = k (E_b − E) φ' [N·m·s/(J·rad)].
         capture_angle: the handover band in position [rad].
         capture_speed: the handover band in speed [rad/s].
         **weights: the LQR's ``position_scale``, ``speed_scale``, ``torque_scale``.

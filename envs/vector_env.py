@@ -284,6 +284,6 @@ class RollerVectorEnv(VectorEnv):
         )
 
     def close_extras(self, **kwargs: Any) -> None:
-        for r in self._renderers or []:
+        for r in getattr(self, "_renderers", None) or []:  # also after a failed __init__
             r.close()
         self._renderers = None

@@ -163,7 +163,7 @@ def main(argv: list[str] | None = None) -> tuple[Path, Any]:
         },
         "cpu": platform.processor() or platform.machine(),
     }
-    (run_dir / "config.json").write_text(json.dumps(config, indent=2) + "\n")
+    (run_dir / "config.json").write_text(json.dumps(config, indent=2, default=repr) + "\n")
     env.close()
     eval_env.close()
     print(f"done in {wall_time:.0f} s; last evaluation: mean return "

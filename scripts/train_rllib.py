@@ -191,8 +191,12 @@ def progress(result: dict[str, Any], env_steps_before: int) -> tuple[str, int]:
 def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
     env_kwargs = parse_env_kwargs(args.env_kwarg)
-    import ray
-    import torch
+    try:
+        import ray
+        import torch
+    except ImportError as e:
+        raise SystemExit(f"{e}: the rllib extra is not installed; it needs its own "
+                         "environment (see README): pip install -e '.[rllib]'") from None
 
     torch.set_num_threads(args.torch_threads)  # the env runners get 1 each from Ray
     # Start (no --address) or join (--address) Ray. "local" forces a new local instance
@@ -221,7 +225,8 @@ def main(argv: list[str] | None = None) -> None:
 
     checkpoint_dir = (args.checkpoint_dir or Path("runs") / f"rllib-{args.algo}-{args.env}")
     saved = algo.save_to_path(str(checkpoint_dir.resolve()))
-    print(f"checkpoint: {saved}  (restore: Algorithm.from_checkpoint({str(saved)!r}))")
+    print(f"checkpoint: {saved}\n  restore it (tasks registered with Ray first): "
+          f"register_tasks(); Algorithm.from_checkpoint({str(saved)!r})")
     algo.stop()
     ray.shutdown()
 

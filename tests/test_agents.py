@@ -24,7 +24,8 @@ torch.set_num_threads(1)
 
 
 def _load_script(name: str):
-    spec = importlib.util.spec_from_file_location(f"_script_{name}", ROOT / "scripts" / f"{name}.py")
+    path = ROOT / "scripts" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(f"_script_{name}", path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
@@ -69,7 +70,7 @@ def test_decode_picks_the_turn_beyond_one_revolution_of_phi():
     (cos ψ, sin ψ) tells them apart."""
     env = gym.make("RollerStabilize-v0")
     for phi in (4.0, 4.0 - 2 * np.pi, -3.9, 7.5):
-        obs, info = env.reset(options={"state": (phi, -2.0)})
+        obs, _ = env.reset(options={"state": (phi, -2.0)})
         s = decode_observation(obs, env.unwrapped.scene)
         assert s.phi[0] == pytest.approx(phi, abs=1e-5)
         assert s.phi_dot[0] == pytest.approx(-2.0, rel=1e-5)
@@ -77,7 +78,7 @@ def test_decode_picks_the_turn_beyond_one_revolution_of_phi():
 
 def test_decode_on_the_floor_gives_phi_modulo_one_turn():
     env = gym.make("RollerStabilize-v0", scene="floor")
-    obs, info = env.reset(options={"state": (5.0, 0.5)})
+    obs, _ = env.reset(options={"state": (5.0, 0.5)})
     s = decode_observation(obs, env.unwrapped.scene)
     assert _wrapped_difference(s.phi[0], 5.0) < 1e-5
     assert -np.pi <= s.phi[0] < np.pi
@@ -168,21 +169,29 @@ def test_hyperparameters_cover_every_algorithm_and_task():
 
 
 # -- training, saving, loading -------------------------------------------------------------
-@pytest.fixture(scope="module", params=ALGOS)
+_RUNS: dict[str, tuple] = {}
+
+
+def _short_run(algo: str, tmp_path_factory) -> tuple:
+    """(algo, run directory, model) of a short training run (2,000 steps), made once."""
+    if algo not in _RUNS:
+        run_dir = tmp_path_factory.mktemp(algo) / "run"
+        run_dir, model = _load_script("train").main([
+            "--algo", algo, "--env", "RollerStabilize-v0", "--steps", "2000",
+            "--run-dir", str(run_dir), "--eval-freq", "1000", "--eval-episodes", "2",
+            "--checkpoints", "1", "--no-progress-bar",
+        ])
+        _RUNS[algo] = (algo, run_dir, model)
+    return _RUNS[algo]
+
+
+@pytest.fixture(params=ALGOS)
 def short_run(request, tmp_path_factory):
-    """A short training run of each algorithm (about 2,000 steps)."""
-    train = _load_script("train")
-    run_dir = tmp_path_factory.mktemp(request.param) / "run"
-    run_dir, model = train.main([
-        "--algo", request.param, "--env", "RollerStabilize-v0", "--steps", "2000",
-        "--run-dir", str(run_dir), "--eval-freq", "1000", "--eval-episodes", "2",
-        "--checkpoints", "1", "--no-progress-bar",
-    ])
-    return request.param, run_dir, model
+    return _short_run(request.param, tmp_path_factory)
 
 
 def test_short_training_run_completes_and_saves(short_run):
-    algo, run_dir, model = short_run
+    algo, run_dir, _ = short_run
     config = json.loads((run_dir / "config.json").read_text())
     assert config["algo"] == algo and config["env"] == "RollerStabilize-v0"
     assert config["trained_steps"] >= 2000 == config["total_steps"]
@@ -226,10 +235,8 @@ def test_normalized_run_saves_its_statistics_and_reloads_them(tmp_path, monkeypa
 
 
 # -- the scripts end to end ----------------------------------------------------------------
-def test_evaluate_and_replay_scripts(short_run, tmp_path):
-    algo, run_dir, _ = short_run
-    if algo != "sac":
-        pytest.skip("once is enough")
+def test_evaluate_and_replay_scripts(tmp_path, tmp_path_factory):
+    _, run_dir, _ = _short_run("sac", tmp_path_factory)
     out = tmp_path / "results"
     subprocess.run(
         [sys.executable, str(ROOT / "scripts" / "evaluate.py"), "--env", "RollerStabilize-v0",
