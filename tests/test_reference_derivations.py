@@ -16,11 +16,10 @@ vector forms only lose digits to large coordinates).
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 import sympy as sp
+from sampling import SHAPES, accel_scale, sample
 from sympy.physics import mechanics as me
 
 from envs.physics import FORMS, Scene, analysis
@@ -130,60 +129,6 @@ def derivations(curved, flat):
 
 
 # -- random scenes and states ------------------------------------------------------------------
-
-SHAPES = ("cylinder", "floor", "drum")
-
-
-def sample(rng: np.random.Generator, n: int, shape: str):
-    """n random scenes of one shape with states and torques in a physically meaningful range.
-
-    m in [0.1, 10] kg, r in [0.03, 1] m, e in [0, 0.99 r) (10 % exactly 0), k in
-    [0.05 r, r], g in [1, 20], damping in [0, m r² sqrt(g/r)] (20 % exactly 0); R/r in
-    (1.01, 33) inside a cylinder, −R/r in (0.3, 33) for a drum. |ψ| <= π and |φ| <= 4π,
-    |φ'| <= 3 sqrt(g/r), |τ| <= 2 m g (r + e).
-    """
-    m_ = 10 ** rng.uniform(-1, 1, n)
-    r_ = 10 ** rng.uniform(-1.5, 0, n)
-    e_ = r_ * rng.uniform(0, 0.99, n)
-    e_[rng.random(n) < 0.1] = 0.0
-    k_ = r_ * 10 ** rng.uniform(-1.3, 0, n)
-    g_ = rng.uniform(1, 20, n)
-    c_ = m_ * r_**2 * np.sqrt(g_ / r_) * rng.uniform(0, 1, n)
-    c_[rng.random(n) < 0.2] = 0.0
-    if shape == "cylinder":
-        R_ = r_ * (1 + 10 ** rng.uniform(-2, 1.5, n))
-    elif shape == "floor":
-        R_ = np.full(n, math.inf)
-    else:
-        R_ = -r_ * 10 ** rng.uniform(-0.5, 1.5, n)
-    scene = Scene(m=m_, r=r_, R=R_, e=e_, k=k_, g=g_, damping=c_)
-    kappa = scene.kappa
-    s = 1 - r_ * kappa
-    with np.errstate(divide="ignore"):
-        phi_max = np.minimum(4 * math.pi, math.pi * np.abs(s) / (r_ * np.abs(kappa)))
-    phi = rng.uniform(-1, 1, n) * phi_max
-    phi_dot = rng.uniform(-3, 3, n) * np.sqrt(g_ / r_)
-    torque = rng.uniform(-2, 2, n) * m_ * g_ * (r_ + e_)
-    return scene, phi, phi_dot, torque
-
-
-def accel_scale(scene: Scene, phi, phi_dot, torque):
-    """The size of φ'' as the sum of the magnitudes of the terms that make it up.
-
-    Each form sums moments about I — the drive and damping |τ − cφ'|, gravity's m g|IC|
-    <= m g (r + e), and the velocity terms, each at most m |IC| (r + e + r/|s| + r²|κ|/|s|)
-    φ'² — and divides by J_I. Rounding errors of a sum are relative to the sum of the
-    magnitudes of its terms, not to the result (which may cancel to ~0), so agreement is
-    asked to 1e-12 of this scale.
-    """
-    m_, r_, kappa, e_, k_, g_, c_ = scene.params
-    s = 1 - r_ * kappa
-    theta = phi / s
-    ic2 = np.maximum(r_**2 + e_**2 - 2 * r_ * e_ * np.cos(theta), 0.0)
-    speed_terms = (r_ + e_) * (r_ + e_ + (r_ + r_**2 * np.abs(kappa)) / np.abs(s)) * phi_dot**2
-    moments = (np.abs(torque) + c_ * np.abs(phi_dot)) / m_ + g_ * (r_ + e_) + speed_terms
-    return moments / (k_**2 + ic2)
-
 
 def _R(scene: Scene):
     return np.asarray(scene.R, dtype=float)
