@@ -12,45 +12,20 @@ module                 what it holds
 =====================  ================================================================
 """
 
-from envs.physics.analysis import (
-    Contact,
-    Equilibrium,
-    Kinematics,
-    acceleration,
-    contact,
-    energy,
-    equilibria,
-    holding_torque,
-    kinematics,
-    linearize,
-    moment_of_inertia,
-    power,
-    small_oscillation_frequency,
-)
+from envs.physics import analysis
+from envs.physics.analysis import *  # noqa: F403  (its __all__: kinematics, contact, energy, ...)
 from envs.physics.forms import FORMS
 from envs.physics.integrators import METHODS, StepResult, predicted_substeps, step
 from envs.physics.scene import PRESETS, Scene, preset
 
 __all__ = [
+    *analysis.__all__,
     "FORMS",
     "METHODS",
     "PRESETS",
-    "Contact",
-    "Equilibrium",
-    "Kinematics",
     "Scene",
     "StepResult",
-    "acceleration",
-    "contact",
-    "energy",
-    "equilibria",
-    "holding_torque",
-    "kinematics",
-    "linearize",
-    "moment_of_inertia",
-    "power",
     "predicted_substeps",
     "preset",
-    "small_oscillation_frequency",
     "step",
 ]
