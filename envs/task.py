@@ -36,6 +36,7 @@ with w_v = 0.5 (being at rest) and w_u = 0.2 (using little torque; action in [�
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any, ClassVar
 
@@ -163,6 +164,21 @@ class Task:
         return (abs(error) <= self.success_band) & (abs(phi_dot) <= self.success_speed)
 
 
+def _cached_per_scene(function):
+    """Memoize ``function(scene, *args)`` on the scene's values (resets call it per episode)."""
+
+    @functools.lru_cache(maxsize=1024)
+    def cached(values: tuple[tuple[str, float], ...], *args):
+        return function(Scene(**dict(values)), *args)
+
+    @functools.wraps(function)
+    def wrapper(scene: Scene, *args):
+        return cached(tuple(scene.as_dict().items()), *args)
+
+    return wrapper
+
+
+@_cached_per_scene
 def hold_range(scene: Scene, max_torque: float, torque_share: float = 0.8,
                friction_share: float = 0.9, points: int = 2001) -> tuple[float, float]:
     """The interval of rest positions φ [rad] around 0 that can be held at rest.
@@ -185,7 +201,8 @@ def hold_range(scene: Scene, max_torque: float, torque_share: float = 0.8,
     return bounds[1], bounds[0]
 
 
-def unstable_rest_positions(scene: Scene) -> list[float]:
+@_cached_per_scene
+def unstable_rest_positions(scene: Scene) -> tuple[float, ...]:
     """The unstable rest positions φ [rad] at zero torque nearest to φ = 0 on each side
     (d²V/dφ² < 0: neutral ones, as everywhere for a uniform disc on the floor, do not count)."""
     m, r, kappa, e, _, g, _ = scene.params
@@ -198,4 +215,4 @@ def unstable_rest_positions(scene: Scene) -> list[float]:
         out.append(min(positive))
     if negative:
         out.append(max(negative))
-    return out
+    return tuple(out)
