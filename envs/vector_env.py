@@ -133,10 +133,11 @@ class RollerVectorEnv(VectorEnv):
         """Start a new episode in sub-environment i (the same draws as RollerEnv.reset)."""
         config = self._configs[i]
         scene, target, phi, phi_dot = episode_start(config, self._rngs[i], options)
-        self.scenes[i] = scene
-        self._rows[i] = config.scene_row(scene)
-        self._q[i] = wrap_rate(scene)
-        self._psi_rate[i] = psi_rate(scene)
+        if scene is not self.scenes[i]:  # randomized or set by options: its numbers anew
+            self.scenes[i] = scene
+            self._rows[i] = config.scene_row(scene)
+            self._q[i] = wrap_rate(scene)
+            self._psi_rate[i] = psi_rate(scene)
         self.target[i], self.phi[i], self.phi_dot[i] = target, phi, phi_dot
         self.torque[i] = 0.0
         self.steps[i] = 0
