@@ -59,7 +59,7 @@ __all__ = ["HoldTask", "RollerHoldEnv", "RollerHoldVectorEnv"]
 
 class HoldTask(Task):
     name = "RollerHold"
-    reward_threshold = 150.0
+    reward_threshold = 172.0  # LQR/swing-up return − 5% (docs/RESULTS.md)
     observes_target = True
     default_max_torque = 1.0
 
