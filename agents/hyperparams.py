@@ -36,13 +36,15 @@ TASKS = ("RollerStabilize-v0", "RollerHold-v0", "RollerBalance-v0")
 class Linear:
     """A schedule (e.g. of the learning rate) from ``start`` down to 0 at the end of training.
 
-    stable-baselines3 calls it with the remaining progress, 1 at the start and 0 at the end.
+    stable-baselines3 calls it with the remaining progress, 1 at the start and 0 at the end;
+    it goes below 0 when a run overshoots its steps (PPO finishes its last rollout), where
+    the schedule stays at 0: a negative learning rate would undo the training.
     """
 
     start: float
 
     def __call__(self, progress_remaining: float) -> float:
-        return self.start * progress_remaining
+        return self.start * max(progress_remaining, 0.0)
 
 
 # Small networks: the state is two numbers (three with a target), and on this CPU the

@@ -90,7 +90,7 @@ def evaluate(env: gym.Env, policy: Any, episodes: int) -> dict[str, Any]:
         "returns": [float(r) for r in returns],
         "trajectory": {"time": first.time.tolist(), "phi": first.phi.tolist(),
                        "phi_dot": first.phi_dot.tolist(), "torque": first.torque.tolist(),
-                       "target_phi": first.target_phi},
+                       "target_phi": first.target_phi, "terminated": first.terminated},
     }
 
 
@@ -173,7 +173,8 @@ def plot_trajectories(env_id: str, rows: list[dict[str, Any]], path: Path) -> No
             ax.grid(alpha=0.3)
             if j == 0:
                 ax.set_ylabel(label)
-        axes[0, j].set_title(r["label"], fontsize=9)
+        ended = f"\n(terminated at {traj['time'][-1]:.2f} s)" if traj["terminated"] else ""
+        axes[0, j].set_title(r["label"] + ended, fontsize=9)
         axes[-1, j].set_xlabel("time [s]")
     fig.suptitle(f"{env_id}: episode 0 (seed 0) of each policy")
     fig.tight_layout()

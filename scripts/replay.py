@@ -59,7 +59,11 @@ def main() -> None:
     if out.suffix == ".gif":
         imageio.mimsave(out, episode.frames, duration=1000 / args.fps, loop=0)
     else:
-        imageio.mimsave(out, episode.frames, fps=args.fps)
+        try:
+            imageio.mimsave(out, episode.frames, fps=args.fps)
+        except (ImportError, ValueError) as exc:
+            raise SystemExit(f"cannot write {out}: {exc}\n(an .mp4 needs "
+                             "`pip install imageio[ffmpeg]`; a .gif needs nothing more)") from None
     print(f"{len(episode.frames)} frames, return {episode.total_return:.1f}, success "
           f"{episode.success} -> {out}")
 

@@ -111,9 +111,8 @@ def main(argv: list[str] | None = None) -> tuple[Path, Any]:
                                 **{k: v for k, v in normalize.items() if k != "norm_reward"})
 
     # -- the model -------------------------------------------------------------------------
-    noise = None if noise_std is None else NormalActionNoise(np.zeros(1), noise_std * np.ones(1))
-    if noise is not None:
-        algo_kwargs["action_noise"] = noise
+    if noise_std is not None:  # TD3 explores with Gaussian noise on its actions
+        algo_kwargs["action_noise"] = NormalActionNoise(np.zeros(1), noise_std * np.ones(1))
     model = algorithm_class(args.algo)(
         "MlpPolicy", env, seed=args.seed, verbose=0, device="cpu",
         tensorboard_log=str(run_dir / "tb"), **algo_kwargs,

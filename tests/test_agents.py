@@ -16,7 +16,7 @@ import torch
 
 import envs
 from agents import LQR, EnergySwingUp, baseline, decode_observation, load_policy, rollout
-from agents.hyperparams import ALGOS, CLASSICAL, HYPERPARAMS, TASKS
+from agents.hyperparams import ALGOS, CLASSICAL, HYPERPARAMS, TASKS, Linear
 from envs.physics import holding_torque
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -159,6 +159,13 @@ def test_baselines_by_name():
     assert a1.std() > 0.3
     with pytest.raises(ValueError, match="not one of"):
         baseline("pid", env)
+
+
+def test_linear_schedule_decays_to_zero_and_never_below():
+    schedule = Linear(1e-3)
+    assert schedule(1.0) == 1e-3 and schedule(0.5) == pytest.approx(5e-4)
+    # PPO's last rollout overshoots the requested steps: progress goes slightly negative.
+    assert schedule(0.0) == 0.0 == schedule(-0.01)
 
 
 def test_hyperparameters_cover_every_algorithm_and_task():
