@@ -51,6 +51,7 @@ class Linear:
 # gradient step, not the physics, is what a training run spends its time on.
 _SMALL = {"net_arch": [64, 64]}
 
+# SAC and TD3 share the off-policy settings; TD3 adds its exploration noise.
 _SAC = {
     "n_envs": 1,
     "normalize": False,
@@ -64,19 +65,7 @@ _SAC = {
     "policy_kwargs": _SMALL,
 }
 
-_TD3 = {
-    "n_envs": 1,
-    "normalize": False,
-    "action_noise_std": 0.1,
-    "learning_rate": 1e-3,
-    "buffer_size": 100_000,
-    "learning_starts": 1_000,
-    "batch_size": 256,
-    "gamma": 0.99,
-    "train_freq": 1,
-    "gradient_steps": 1,
-    "policy_kwargs": _SMALL,
-}
+_TD3 = {**_SAC, "action_noise_std": 0.1}
 
 _PPO = {
     "n_envs": 8,

@@ -109,7 +109,7 @@ def markdown_table(rows: list[dict[str, Any]]) -> str:
         wall = f"{r['wall_time_s'] / 60:.1f} min" if r.get("wall_time_s") else "–"
         lines.append(
             f"| {r['label']} | {steps} | {wall} | {r['return_mean']:.1f} ± {r['return_std']:.1f}"
-            f" | {100 * r['success_rate']:.0f}% | {r['final_error_mean']:.3g} "
+            f" | {100 * r['success_rate']:.0f}% | {r['final_error_mean']:.3f} "
             f"| {r['torque_mean']:.3f} |"
         )
     return "\n".join(lines)
