@@ -29,10 +29,6 @@ from envs.task import Task, psi_rate, wrap_rate
 
 __all__ = ["RollerVectorEnv"]
 
-_INFO_KEYS = ("phi", "phi_dot", "psi", "torque", "normal_force", "friction_force", "energy",
-              "substeps", "lifting", "slipping", "nonfinite", "liftoff_margin", "slip_margin",
-              "target_phi", "target_psi", "position_error", "is_success")
-
 
 class RollerVectorEnv(VectorEnv):
     """N rollers, each with its own scene, target and random generator.
@@ -240,7 +236,7 @@ class RollerVectorEnv(VectorEnv):
                                      dtype=bool),
         }
         mask = np.ones(self.num_envs, dtype=bool)
-        info.update({f"_{k}": mask for k in _INFO_KEYS})
+        info.update({f"_{k}": mask for k in list(info)})
         return info
 
     def _reset_info(self) -> dict[str, Any]:

@@ -225,7 +225,7 @@ def _advance(phi0, w0, tau, m, r, kappa, e, k, g, c, mu, dt, method, tol, fixed,
 #: The fields of a step's outcome, in the order the kernels return them.
 _FIELDS = ("phi", "phi_dot", "phi_ddot", "substeps", "finite", "normal_force",
            "friction_force", "energy", "liftoff_margin", "slip_margin")
-_DTYPES = (float, float, float, np.int64, bool, float, float, float, float, float)
+_DTYPES = (float, float, float, int, bool, float, float, float, float, float)
 
 
 @_jit
@@ -358,9 +358,7 @@ def step(
         advance_batch(P, flat[0], flat[1], flat[2], dt, code, tol, substeps or 0, raw)
         out = [raw[j].astype(t) for j, t in enumerate(_DTYPES)]
     if scalar:
-        return StepResult(*(t(o[0]) for o, t in zip(out, (float, float, float, int, bool,
-                                                            float, float, float, float, float),
-                                                     strict=True)))
+        return StepResult(*(t(o[0]) for o, t in zip(out, _DTYPES, strict=True)))
     return StepResult(*(o.reshape(shape) for o in out))
 
 
