@@ -15,9 +15,9 @@ $(STAMP): pyproject.toml
 
 run: $(STAMP)  ## train the default agent on the default task, evaluate it, write results/
 	$(PY) scripts/train.py
-	$(PY) scripts/evaluate.py --env RollerStabilize-v0 --models runs/sac-RollerStabilize-v0 --out results
+	$(PY) scripts/evaluate.py --env roller_gym/RollerStabilize-v0 --models runs/sac-RollerStabilize-v0 --out results
 
-TASKS := RollerStabilize-v0 RollerHold-v0 RollerBalance-v0
+TASKS := roller_gym/RollerStabilize-v0 roller_gym/RollerHold-v0 roller_gym/RollerBalance-v0
 results: $(STAMP)  ## train SAC, TD3 and PPO on every task, evaluate all, write docs/RESULTS.md
 	set -e; for env in $(TASKS); do for algo in sac td3 ppo; do \
 		$(PY) scripts/train.py --algo $$algo --env $$env; done; done

@@ -20,15 +20,15 @@ results table and plots), ``scripts/replay.py`` (an episode to a GIF).
 Example::
 
     import gymnasium as gym
-    import envs
-    from agents import LQR, rollout
+    import roller_gym
+    from roller_gym.agents import LQR, rollout
 
-    env = gym.make("RollerHold-v0")
+    env = gym.make("roller_gym/RollerHold-v0")
     episode = rollout(env, LQR.from_env(env), seed=0)
     print(episode.total_return, episode.success)
 """
 
-from agents.classical import (
+from roller_gym.agents.classical import (
     LQR,
     Controller,
     EnergySwingUp,
@@ -36,9 +36,9 @@ from agents.classical import (
     ZeroTorque,
     controller_for,
 )
-from agents.hyperparams import CLASSICAL, HYPERPARAMS, hyperparams
-from agents.observation import DecodedState, decode_observation
-from agents.policies import TrainedPolicy, baseline, load_policy, rollout
+from roller_gym.agents.hyperparams import CLASSICAL, HYPERPARAMS, hyperparams
+from roller_gym.agents.observation import DecodedState, decode_observation
+from roller_gym.agents.policies import TrainedPolicy, baseline, load_policy, rollout
 
 __all__ = [
     "CLASSICAL",

@@ -7,7 +7,7 @@
 * :class:`ZeroTorque` and :class:`RandomPolicy`: the floor of the results table.
 
 Each acts from the observation only (the state is decoded by
-:func:`agents.observation.decode_observation`), so one evaluation loop serves these and
+:func:`roller_gym.agents.observation.decode_observation`), so one evaluation loop serves these and
 trained models alike: ``action, _ = policy.predict(obs, deterministic=True)``, for one
 observation (shape (d,) -> action (1,)) or a batch ((n, d) -> (n, 1)).
 """
@@ -18,12 +18,11 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from roller_gym import rewards
+from roller_gym.agents.observation import decode_observation
+from roller_gym.physics import Scene, energy, holding_torque, linearize
+from roller_gym.task import wrap_rate
 from scipy.linalg import expm, solve_discrete_are
-
-from agents.observation import decode_observation
-from envs import rewards
-from envs.physics import Scene, energy, holding_torque, linearize
-from envs.task import wrap_rate
 
 __all__ = ["LQR", "Controller", "EnergySwingUp", "RandomPolicy", "ZeroTorque", "controller_for"]
 

@@ -17,7 +17,7 @@ The steps were chosen to fit the whole results run (9 trainings) in about an hou
 shared 2-core CPU; see ``docs/RESULTS.md`` for what they achieve.
 
 ``CLASSICAL[env_id]`` holds the classical controllers' settings (see
-:mod:`agents.classical`): Bryson's-rule scales of the LQR, the swing-up's energy gain and
+:mod:`roller_gym.agents.classical`): Bryson's-rule scales of the LQR, the swing-up's energy gain and
 its handover band.
 """
 
@@ -30,7 +30,7 @@ from typing import Any
 __all__ = ["ALGOS", "CLASSICAL", "HYPERPARAMS", "TASKS", "Linear", "hyperparams"]
 
 ALGOS = ("sac", "td3", "ppo")
-TASKS = ("RollerStabilize-v0", "RollerHold-v0", "RollerBalance-v0")
+TASKS = ("roller_gym/RollerStabilize-v0", "roller_gym/RollerHold-v0", "roller_gym/RollerBalance-v0")
 
 @dataclass(frozen=True)
 class Linear:
@@ -84,30 +84,32 @@ _PPO = {
 }
 
 HYPERPARAMS: dict[tuple[str, str], dict[str, Any]] = {
-    # -- RollerStabilize-v0: 200 steps, rest at the bottom --------------------------------
+    # -- roller_gym/RollerStabilize-v0: 200 steps, rest at the bottom
     # SAC and TD3 reach LQR's return after about 3,000 steps, PPO after about 10,000.
-    ("sac", "RollerStabilize-v0"): {**_SAC, "total_steps": 10_000},
-    ("td3", "RollerStabilize-v0"): {**_TD3, "total_steps": 10_000},
-    ("ppo", "RollerStabilize-v0"): {**_PPO, "total_steps": 50_000},
-    # -- RollerHold-v0: 200 steps, a target drawn per episode ------------------------------
+    ("sac", "roller_gym/RollerStabilize-v0"): {**_SAC, "total_steps": 10_000},
+    ("td3", "roller_gym/RollerStabilize-v0"): {**_TD3, "total_steps": 10_000},
+    ("ppo", "roller_gym/RollerStabilize-v0"): {**_PPO, "total_steps": 50_000},
+    # -- roller_gym/RollerHold-v0: 200 steps, a target drawn per episode
     # All three reach LQR's return after 4,000 to 10,000 steps (SAC, TD3), 20,000 (PPO).
-    ("sac", "RollerHold-v0"): {**_SAC, "total_steps": 15_000},
-    ("td3", "RollerHold-v0"): {**_TD3, "total_steps": 15_000},
-    ("ppo", "RollerHold-v0"): {**_PPO, "total_steps": 100_000},
-    # -- RollerBalance-v0: 400 steps, swing-up and balance ---------------------------------
+    ("sac", "roller_gym/RollerHold-v0"): {**_SAC, "total_steps": 15_000},
+    ("td3", "roller_gym/RollerHold-v0"): {**_TD3, "total_steps": 15_000},
+    ("ppo", "roller_gym/RollerHold-v0"): {**_PPO, "total_steps": 100_000},
+    # -- roller_gym/RollerBalance-v0: 400 steps, swing-up and balance
     # SAC balances after about 6,000 steps, TD3 after 12,000-15,000, PPO after 60,000.
-    ("sac", "RollerBalance-v0"): {**_SAC, "total_steps": 25_000},
-    ("td3", "RollerBalance-v0"): {**_TD3, "total_steps": 25_000},
-    ("ppo", "RollerBalance-v0"): {**_PPO, "total_steps": 150_000},
+    ("sac", "roller_gym/RollerBalance-v0"): {**_SAC, "total_steps": 25_000},
+    ("td3", "roller_gym/RollerBalance-v0"): {**_TD3, "total_steps": 25_000},
+    ("ppo", "roller_gym/RollerBalance-v0"): {**_PPO, "total_steps": 150_000},
 }
 
 CLASSICAL: dict[str, dict[str, float]] = {
     # LQR weights (Bryson's rule): acceptable error 0.1 rad, speed 1 rad/s, torque 0.5 N·m.
     # The return is flat around them (±0.3% over a 4 x 4 x 3 grid of scales).
-    "RollerStabilize-v0": {"position_scale": 0.1, "speed_scale": 1.0, "torque_scale": 0.5},
-    "RollerHold-v0": {"position_scale": 0.1, "speed_scale": 1.0, "torque_scale": 0.5},
+    "roller_gym/RollerStabilize-v0": {
+        "position_scale": 0.1, "speed_scale": 1.0, "torque_scale": 0.5,
+    },
+    "roller_gym/RollerHold-v0": {"position_scale": 0.1, "speed_scale": 1.0, "torque_scale": 0.5},
     # Swing-up: energy gain [N·m·s/(J·rad)]; LQR handover within 0.5 rad and 1.5 rad/s.
-    "RollerBalance-v0": {
+    "roller_gym/RollerBalance-v0": {
         "energy_gain": 20.0,
         "capture_angle": 0.5,
         "capture_speed": 1.5,
@@ -123,7 +125,7 @@ def hyperparams(algo: str, env_id: str) -> dict[str, Any]:
 
     Args:
         algo: ``"sac"``, ``"td3"`` or ``"ppo"``.
-        env_id: a task ID, e.g. ``"RollerStabilize-v0"``.
+        env_id: a task ID, e.g. ``"roller_gym/RollerStabilize-v0"``.
 
     Raises:
         ValueError: no entry for the pair; the message lists the known ones.

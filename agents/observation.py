@@ -16,9 +16,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-
-from envs.physics import Scene
-from envs.task import SPEED_SCALE, psi_rate
+from roller_gym.physics import Scene
+from roller_gym.task import SPEED_SCALE, psi_rate
 
 __all__ = ["DecodedState", "decode_angle", "decode_observation"]
 
@@ -32,7 +31,7 @@ def decode_angle(cos_psi, sin_psi, cos_phi, sin_phi, rate: float) -> np.ndarray:
     Args:
         cos_psi, sin_psi: cos ψ and sin ψ (floats or arrays).
         cos_phi, sin_phi: cos φ and sin φ.
-        rate: dψ/dφ = rκ/(1 − rκ) of the scene (:func:`envs.task.psi_rate`).
+        rate: dψ/dφ = rκ/(1 − rκ) of the scene (:func:`roller_gym.task.psi_rate`).
 
     Returns:
         φ [rad] within one turn of ψ either way (φ in [−π, π) on the floor).

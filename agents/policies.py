@@ -2,7 +2,7 @@
 
 A *policy* is anything with stable-baselines3's ``predict(observation, deterministic=True)
 -> (action, state)``: a trained model (:class:`TrainedPolicy`, which applies the saved
-observation normalization), or a controller of :mod:`agents.classical`.
+observation normalization), or a controller of :mod:`roller_gym.agents.classical`.
 
 A training run (``scripts/train.py``) writes a directory::
 
@@ -25,9 +25,8 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-
-from agents.classical import Controller, RandomPolicy, ZeroTorque, controller_for
-from agents.hyperparams import CLASSICAL
+from roller_gym.agents.classical import Controller, RandomPolicy, ZeroTorque, controller_for
+from roller_gym.agents.hyperparams import CLASSICAL
 
 __all__ = [
     "BASELINES",
@@ -118,7 +117,7 @@ def baseline(name: str, env: gym.Env, seed: int = 0) -> Controller:
 
     Args:
         name: ``"classical"`` (LQR on Stabilize and Hold, the energy swing-up on Balance,
-            with the settings of :data:`agents.hyperparams.CLASSICAL`), ``"zero"`` (no
+            with the settings of :data:`roller_gym.agents.hyperparams.CLASSICAL`), ``"zero"`` (no
             torque) or ``"random"`` (uniform actions).
         env: the environment the policy will act in (its scene, torque limit and dt).
         seed: the seed of the random policy.

@@ -1,4 +1,5 @@
-"""RollerBalance-v0: swing the mass center up to an unstable rest position and keep it there.
+"""roller_gym/RollerBalance-v0: swing the mass center up to an unstable rest position and
+keep it there.
 
 In the preset ``"balance"`` (R = 10 r, e = 0.8 r) the roller has an unstable rest
 position at zero torque with its mass center over the contact point, at ψ ≈ ±23°
@@ -36,11 +37,10 @@ At rest near the bottom: φ and φ' uniform in ±0.1 (rad, rad/s).
 from __future__ import annotations
 
 import numpy as np
-
-from envs.physics import Scene, contact
-from envs.roller_env import RollerEnv
-from envs.task import Task, unstable_rest_positions
-from envs.vector_env import RollerVectorEnv
+from roller_gym.physics import Scene, contact
+from roller_gym.roller_env import RollerEnv
+from roller_gym.task import Task, unstable_rest_positions
+from roller_gym.vector_env import RollerVectorEnv
 
 __all__ = ["BalanceTask", "RollerBalanceEnv", "RollerBalanceVectorEnv"]
 
@@ -96,6 +96,6 @@ class RollerBalanceEnv(RollerEnv):
 
 
 class RollerBalanceVectorEnv(RollerVectorEnv):
-    """The native vector environment of RollerBalance-v0 (``gymnasium.make_vec``)."""
+    """The native vector environment of roller_gym/RollerBalance-v0 (``gymnasium.make_vec``)."""
 
     task_class = BalanceTask

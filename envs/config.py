@@ -1,7 +1,7 @@
 """The construction arguments every roller environment takes, checked in one place.
 
-Both the single environment (:mod:`envs.roller_env`) and the native vector environment
-(:mod:`envs.vector_env`) build their settings here, so they accept the same keywords with
+Both the single environment (:mod:`roller_gym.roller_env`) and the native vector environment
+(:mod:`roller_gym.vector_env`) build their settings here, so they accept the same keywords with
 the same errors, draw scenes the same way and turn actions into torques the same way.
 """
 
@@ -13,10 +13,9 @@ from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
-
-from envs.physics import METHODS, Scene, preset
-from envs.physics.integrators import MAX_SUBSTEPS
-from envs.task import Task
+from roller_gym.physics import METHODS, Scene, preset
+from roller_gym.physics.integrators import MAX_SUBSTEPS
+from roller_gym.task import Task
 
 __all__ = ["DEFAULT_DT", "DEFAULT_TOLERANCE", "EnvConfig", "resolve_scene"]
 
@@ -38,14 +37,14 @@ def resolve_scene(scene: Scene | str | None, default: str) -> Scene:
             raise ValueError("scene must be a scalar Scene here; a batch goes to the vector env")
         return scene
     raise ValueError(
-        f"scene={scene!r} is not allowed: pass an envs.Scene or a preset name "
-        "(see envs.PRESETS)"
+        f"scene={scene!r} is not allowed: pass an roller_gym.Scene or a preset name "
+        "(see roller_gym.PRESETS)"
     )
 
 
 @dataclass(frozen=True)
 class EnvConfig:
-    """Checked construction arguments (see :class:`envs.roller_env.RollerEnv` for each)."""
+    """Checked construction arguments (see :class:`roller_gym.roller_env.RollerEnv` for each)."""
 
     task: Task
     scene: Scene

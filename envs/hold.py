@@ -1,8 +1,8 @@
-"""RollerHold-v0: hold the roller at rest at a target position on the wall.
+"""roller_gym/RollerHold-v0: hold the roller at rest at a target position on the wall.
 
 Each episode draws a target ψ* on the cylinder's wall, within the range where the
 torque limit and friction allow the roller to be held at rest (see
-:func:`envs.task.hold_range`: holding torque at most 80% of ``max_torque``, friction at
+:func:`roller_gym.task.hold_range`: holding torque at most 80% of ``max_torque``, friction at
 most 90% of μN). The agent must bring the roller there and hold it, against gravity.
 
 ## Action space
@@ -48,11 +48,10 @@ import math
 from typing import Any
 
 import numpy as np
-
-from envs.physics import Scene
-from envs.roller_env import RollerEnv
-from envs.task import Task, hold_range, wrap_rate
-from envs.vector_env import RollerVectorEnv
+from roller_gym.physics import Scene
+from roller_gym.roller_env import RollerEnv
+from roller_gym.task import Task, hold_range, wrap_rate
+from roller_gym.vector_env import RollerVectorEnv
 
 __all__ = ["HoldTask", "RollerHoldEnv", "RollerHoldVectorEnv"]
 
@@ -90,6 +89,6 @@ class RollerHoldEnv(RollerEnv):
 
 
 class RollerHoldVectorEnv(RollerVectorEnv):
-    """The native vector environment of RollerHold-v0 (``gymnasium.make_vec``)."""
+    """The native vector environment of roller_gym/RollerHold-v0 (``gymnasium.make_vec``)."""
 
     task_class = HoldTask

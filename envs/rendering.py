@@ -11,8 +11,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-
-from envs.physics import Scene, kinematics
+from roller_gym.physics import Scene, kinematics
 
 __all__ = ["Renderer"]
 

@@ -1,7 +1,7 @@
-"""The single roller environment: a Gymnasium ``Env`` on the physics of :mod:`envs.physics`.
+"""The single roller environment: a Gymnasium ``Env`` on the physics of :mod:`roller_gym.physics`.
 
 The tasks (``stabilize.py``, ``hold.py``, ``balance.py``) subclass :class:`RollerEnv`
-with their :class:`~envs.task.Task`; this file holds what they share: construction,
+with their :class:`~roller_gym.task.Task`; this file holds what they share: construction,
 reset, step, info and rendering.
 """
 
@@ -14,11 +14,10 @@ from typing import Any, ClassVar
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
-
-from envs.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig
-from envs.physics import Scene, contact, energy
-from envs.physics import integrators as integ
-from envs.task import Task, psi_rate, wrap_rate
+from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig
+from roller_gym.physics import Scene, contact, energy
+from roller_gym.physics import integrators as integ
+from roller_gym.task import Task, psi_rate, wrap_rate
 
 __all__ = ["RollerEnv", "episode_start"]
 
@@ -65,8 +64,8 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
     """A roller driven by a torque, rolling without slipping on a fixed surface.
 
     Args:
-        scene: an :class:`envs.Scene` or a preset's name (``envs.PRESETS``); default: the
-            task's preset.
+        scene: an :class:`roller_gym.Scene` or a preset's name (``roller_gym.PRESETS``);
+            default: the task's preset.
         dt: the control step [s]; the torque is constant over it.
         max_torque: the torque [N·m] an action of ±1 applies; default: the task's.
         tolerance: the integrator's target state error per control step (φ [rad],
@@ -207,7 +206,7 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
             )
             return None
         if self._renderer is None:
-            from envs.rendering import Renderer  # pygame is imported only when rendering
+            from roller_gym.rendering import Renderer  # pygame is imported only when rendering
 
             self._renderer = Renderer(self.render_mode, self.metadata["render_fps"])
         return self._renderer.draw(self.scene, self.phi, self.target, self.torque,

@@ -1,4 +1,4 @@
-"""RollerStabilize-v0: bring the roller to rest at the bottom.
+"""roller_gym/RollerStabilize-v0: bring the roller to rest at the bottom.
 
 A roller rolls without slipping inside a fixed cylinder (the scene of
 ``../shared/PHYSICS.md``; by default the preset ``"paper"``). A torque drives it. It
@@ -42,19 +42,18 @@ In [0, 1] per step, ε the position error (rad of φ, one turn of ψ either way)
 
 ## Arguments
 
-``gymnasium.make("RollerStabilize-v0", scene=..., dt=..., max_torque=..., tolerance=...,
+``gymnasium.make("roller_gym/RollerStabilize-v0", scene=..., dt=..., max_torque=..., tolerance=...,
 integrator=..., substeps=..., randomize=..., render_mode=...)``: see
-:class:`envs.roller_env.RollerEnv`.
+:class:`roller_gym.roller_env.RollerEnv`.
 """
 
 from __future__ import annotations
 
 import numpy as np
-
-from envs.physics import Scene
-from envs.roller_env import RollerEnv
-from envs.task import Task
-from envs.vector_env import RollerVectorEnv
+from roller_gym.physics import Scene
+from roller_gym.roller_env import RollerEnv
+from roller_gym.task import Task
+from roller_gym.vector_env import RollerVectorEnv
 
 __all__ = ["RollerStabilizeEnv", "RollerStabilizeVectorEnv", "StabilizeTask"]
 
@@ -73,6 +72,6 @@ class RollerStabilizeEnv(RollerEnv):
 
 
 class RollerStabilizeVectorEnv(RollerVectorEnv):
-    """The native vector environment of RollerStabilize-v0 (``gymnasium.make_vec``)."""
+    """The native vector environment of roller_gym/RollerStabilize-v0 (``gymnasium.make_vec``)."""
 
     task_class = StabilizeTask

@@ -1,6 +1,6 @@
 """What a task asks of the roller: start state, target, observation, reward, success.
 
-A task knows the physics (:mod:`envs.physics`) but neither Gymnasium nor pygame. Its
+A task knows the physics (:mod:`roller_gym.physics`) but neither Gymnasium nor pygame. Its
 per-step methods take floats (one environment) or arrays (the vector environment) and are
 written once for both. The tasks themselves are in ``stabilize.py``, ``hold.py`` and
 ``balance.py``.
@@ -25,7 +25,7 @@ index  entry                                               unit
 7, 8   cos φ*, sin φ* (tasks with a target only)            1
 =====  ==================================================  =====
 
-**The reward** is a product of bounded terms (:mod:`envs.rewards`), in [0, 1] per step:
+**The reward** is a product of bounded terms (:mod:`roller_gym.rewards`), in [0, 1] per step:
 
     reward = near(error, position_margin)
              · (1 − w_v + w_v · near(φ', speed_margin))
@@ -41,9 +41,8 @@ import math
 from typing import Any, ClassVar
 
 import numpy as np
-
-from envs import rewards
-from envs.physics import Scene, contact, equations, equilibria, holding_torque
+from roller_gym import rewards
+from roller_gym.physics import Scene, contact, equations, equilibria, holding_torque
 
 __all__ = ["SPEED_SCALE", "Task", "hold_range", "psi_rate", "unstable_rest_positions",
            "wrap_rate"]

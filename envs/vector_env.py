@@ -19,13 +19,12 @@ from gymnasium import spaces
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
-
-from envs.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig, resolve_scene
-from envs.physics import Scene
-from envs.physics import equations as eq
-from envs.physics import integrators as integ
-from envs.roller_env import episode_start
-from envs.task import Task, psi_rate, wrap_rate
+from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig, resolve_scene
+from roller_gym.physics import Scene
+from roller_gym.physics import equations as eq
+from roller_gym.physics import integrators as integ
+from roller_gym.roller_env import episode_start
+from roller_gym.task import Task, psi_rate, wrap_rate
 
 __all__ = ["RollerVectorEnv"]
 
@@ -39,7 +38,7 @@ class RollerVectorEnv(VectorEnv):
             sub-environment), or a batch Scene of ``num_envs`` rollers.
         max_episode_steps: truncation; default the task's.
         dt, max_torque, tolerance, integrator, substeps, randomize, render_mode: as in
-            :class:`envs.roller_env.RollerEnv`, for every sub-environment.
+            :class:`roller_gym.roller_env.RollerEnv`, for every sub-environment.
     """
 
     metadata: ClassVar[dict[str, Any]] = {
@@ -147,7 +146,7 @@ class RollerVectorEnv(VectorEnv):
         """Reset sub-environments (all, or those in ``options["reset_mask"]``).
 
         ``seed``: an int gives sub-environment i the seed ``seed + i``; a list gives each its
-        own. ``options`` as in :meth:`envs.roller_env.RollerEnv.reset`, for every reset
+        own. ``options`` as in :meth:`roller_gym.roller_env.RollerEnv.reset`, for every reset
         sub-environment.
         """
         options = dict(options or {})
@@ -269,7 +268,7 @@ class RollerVectorEnv(VectorEnv):
         """One RGB frame per sub-environment (``render_mode="rgb_array"``)."""
         if self.render_mode is None:
             return None
-        from envs.rendering import Renderer
+        from roller_gym.rendering import Renderer
 
         if self._renderers is None:
             self._renderers = [Renderer("rgb_array", self.metadata["render_fps"])

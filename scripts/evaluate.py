@@ -1,7 +1,9 @@
 """Evaluate trained agents and the baselines on the same seeded episodes; tables and plots.
 
-    python scripts/evaluate.py --env RollerStabilize-v0 --models runs/sac-RollerStabilize-v0
-    python scripts/evaluate.py --env RollerStabilize-v0 RollerHold-v0 RollerBalance-v0 \\
+    python scripts/evaluate.py --env roller_gym/RollerStabilize-v0 \\
+        --models runs/sac-RollerStabilize-v0
+    python scripts/evaluate.py --env roller_gym/RollerStabilize-v0 roller_gym/RollerHold-v0 \\
+        roller_gym/RollerBalance-v0 \\
         --runs runs --out docs/results --report docs/RESULTS.md --notes docs/results/notes.md
 
 Every policy (each trained model, the classical controller: LQR or the energy swing-up,
@@ -34,10 +36,10 @@ import gymnasium as gym
 import matplotlib
 import matplotlib.pyplot as plt
 import numpy as np
-
-import envs  # registers the tasks
-from agents.hyperparams import ALGOS
-from agents.policies import BASELINES, baseline, load_policy, read_config, rollout
+import roller_gym  # registers the tasks
+from roller_gym import file_name
+from roller_gym.agents.hyperparams import ALGOS
+from roller_gym.agents.policies import BASELINES, baseline, load_policy, read_config, rollout
 
 #: How the baselines are named in the tables.
 BASELINE_LABELS = {"zero": "zero torque", "random": "random"}
@@ -50,8 +52,9 @@ BALANCE_SUCCESS = 0.9
 def parse_args() -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--env", nargs="+", default=["RollerStabilize-v0"], choices=envs.ENV_IDS,
-                   help="the task(s) (default RollerStabilize-v0)")
+    p.add_argument("--env", nargs="+", default=["roller_gym/RollerStabilize-v0"],
+                   choices=roller_gym.ENV_IDS,
+                   help="the task(s) (default roller_gym/RollerStabilize-v0)")
     p.add_argument("--models", nargs="*", default=[],
                    help="run directories of scripts/train.py to evaluate (one task)")
     p.add_argument("--runs", default=None,
@@ -95,7 +98,7 @@ def evaluate(env: gym.Env, policy: Any, episodes: int) -> dict[str, Any]:
 
 
 def classical_label(env_id: str) -> str:
-    return "energy swing-up + LQR" if env_id == "RollerBalance-v0" else "LQR"
+    return "energy swing-up + LQR" if env_id == "roller_gym/RollerBalance-v0" else "LQR"
 
 
 def markdown_table(rows: list[dict[str, Any]]) -> str:
@@ -121,7 +124,7 @@ def target_check(env_id: str, rows: list[dict[str, Any]]) -> tuple[str, bool | N
     sac, classical = by_name.get("sac"), by_name.get("classical")
     if sac is None:
         return "Target: not checked (no SAC run evaluated).", None
-    if env_id == "RollerBalance-v0":
+    if env_id == "roller_gym/RollerBalance-v0":
         met = sac["success_rate"] >= BALANCE_SUCCESS
         return (f"Target: SAC succeeds in at least {BALANCE_SUCCESS:.0%} of the episodes: "
                 f"**{'met' if met else 'missed'}** (SAC: {sac['success_rate']:.0%}).", met)
@@ -157,7 +160,7 @@ def plot_learning_curves(env_id: str, rows: list[dict[str, Any]], path: Path) ->
 def plot_trajectories(env_id: str, rows: list[dict[str, Any]], path: Path) -> None:
     quantities = [("phi", "φ [rad] (dashed: target)"), ("phi_dot", "φ' [rad/s]"),
                   ("torque", "τ [N·m]")]
-    targets = [1.0, -1.0] if env_id == "RollerBalance-v0" else [1.0]  # ±φ_b both count
+    targets = [1.0, -1.0] if env_id == "roller_gym/RollerBalance-v0" else [1.0]  # ±φ_b both count
     fig, axes = plt.subplots(len(quantities), len(rows), sharex=True, sharey="row",
                              figsize=(2.6 * len(rows), 6.5), squeeze=False)
     for j, r in enumerate(rows):
@@ -194,8 +197,8 @@ def main() -> None:
         # -- the policies: trained models, then the baselines -------------------------------
         run_dirs = [Path(m) for m in args.models]
         if args.runs:
-            run_dirs += [Path(args.runs) / f"{a}-{env_id}" for a in ALGOS
-                         if (Path(args.runs) / f"{a}-{env_id}" / "config.json").is_file()]
+            candidates = [Path(args.runs) / f"{a}-{file_name(env_id)}" for a in ALGOS]
+            run_dirs += [d for d in candidates if (d / "config.json").is_file()]
         configs = [read_config(d) for d in run_dirs]
         for d, c in zip(run_dirs, configs, strict=True):
             if c["env"] != env_id:
@@ -228,12 +231,12 @@ def main() -> None:
         table = markdown_table(rows)
         check, _ = target_check(env_id, rows)
         print(f"\n{table}\n\n{check}\n")
-        (out / f"{env_id}.md").write_text(f"## {env_id}\n\n{table}\n\n{check}\n")
-        (out / f"{env_id}.json").write_text(json.dumps(
+        (out / f"{file_name(env_id)}.md").write_text(f"## {env_id}\n\n{table}\n\n{check}\n")
+        (out / f"{file_name(env_id)}.json").write_text(json.dumps(
             {"env": env_id, "env_kwargs": env_kwargs, "episodes": args.episodes,
              "policies": rows}, indent=1) + "\n")
-        plot_learning_curves(env_id, rows, out / f"{env_id}-learning.png")
-        plot_trajectories(env_id, rows, out / f"{env_id}-trajectories.png")
+        plot_learning_curves(env_id, rows, out / f"{file_name(env_id)}-learning.png")
+        plot_trajectories(env_id, rows, out / f"{file_name(env_id)}-trajectories.png")
         sections.append((env_id, table, check))
 
     (out / "evaluation.md").write_text("\n\n".join(
@@ -272,8 +275,8 @@ def write_report(path: Path, out: Path, sections: list[tuple[str, str, str]],
     ]
     for env_id, table, check in sections:
         lines += [f"## {env_id}", "", table, "", check, "",
-                  f"![learning curves]({rel / f'{env_id}-learning.png'})", "",
-                  f"![trajectories]({rel / f'{env_id}-trajectories.png'})", ""]
+                  f"![learning curves]({rel / f'{file_name(env_id)}-learning.png'})", "",
+                  f"![trajectories]({rel / f'{file_name(env_id)}-trajectories.png'})", ""]
     if args.notes and Path(args.notes).is_file():
         lines += [Path(args.notes).read_text().rstrip(), ""]
     path.parent.mkdir(parents=True, exist_ok=True)

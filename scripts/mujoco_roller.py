@@ -38,8 +38,7 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
-
-from envs.physics import Scene
+from roller_gym.physics import Scene
 
 __all__ = ["DEFAULT", "HUGE_R", "MujocoRoller", "MujocoSettings", "roller_xml", "tuned"]
 
@@ -117,7 +116,7 @@ def _fmt(x: float) -> str:
 
 
 def roller_xml(scene: Scene, settings: MujocoSettings = DEFAULT) -> str:
-    """The MJCF of ``scene`` (a scalar :class:`~envs.physics.Scene`) under ``settings``."""
+    """The MJCF of ``scene`` (a scalar :class:`~roller_gym.physics.Scene`) under ``settings``."""
     if scene.batch_size is not None:
         raise ValueError("roller_xml() takes a scalar scene")
     if float(scene.damping) != 0.0:

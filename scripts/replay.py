@@ -1,8 +1,8 @@
 """Render one episode of a policy to a GIF (or an MP4).
 
-    python scripts/replay.py runs/sac-RollerStabilize-v0                 # -> runs/.../replay.gif
+    python scripts/replay.py runs/sac-RollerStabilize-v0   # -> runs/.../replay.gif
     python scripts/replay.py runs/sac-RollerHold-v0 --seed 3 --out hold.gif
-    python scripts/replay.py classical --env RollerBalance-v0 --out balance.gif
+    python scripts/replay.py classical --env roller_gym/RollerBalance-v0 --out balance.gif
 
 The policy is a run directory of ``scripts/train.py`` (its saved model, in the environment
 it was trained in) or a baseline name (``classical``, ``zero``, ``random``, with --env).
@@ -17,16 +17,16 @@ from pathlib import Path
 
 import gymnasium as gym
 import imageio.v2 as imageio
-
-import envs  # registers the tasks
-from agents.policies import BASELINES, baseline, load_policy, read_config, rollout
+import roller_gym  # registers the tasks
+from roller_gym import file_name
+from roller_gym.agents.policies import BASELINES, baseline, load_policy, read_config, rollout
 
 
 def parse_args() -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("policy", help=f"a run directory, or one of: {', '.join(BASELINES)}")
-    p.add_argument("--env", default=None, choices=envs.ENV_IDS,
+    p.add_argument("--env", default=None, choices=roller_gym.ENV_IDS,
                    help="the task (default: the run's; required for a baseline)")
     p.add_argument("--seed", type=int, default=0, help="the episode's reset seed (default 0)")
     p.add_argument("--out", default=None,
@@ -44,7 +44,7 @@ def main() -> None:
             raise SystemExit(f"--env is needed to replay the baseline {args.policy!r}")
         env = gym.make(args.env, render_mode="rgb_array")
         policy = baseline(args.policy, env)
-        out = Path(args.out or f"{args.policy}-{args.env}.gif")
+        out = Path(args.out or f"{args.policy}-{file_name(args.env)}.gif")
     else:
         config = read_config(args.policy)
         if args.env is not None and args.env != config["env"]:

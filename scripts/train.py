@@ -1,8 +1,8 @@
 """Train a stable-baselines3 agent (SAC, TD3 or PPO) on a roller-gym task.
 
-    python scripts/train.py                                      # SAC on RollerStabilize-v0
-    python scripts/train.py --algo ppo --env RollerHold-v0
-    python scripts/train.py --algo td3 --env RollerBalance-v0 --steps 50000 --seed 1
+    python scripts/train.py                     # SAC on roller_gym/RollerStabilize-v0
+    python scripts/train.py --algo ppo --env roller_gym/RollerHold-v0
+    python scripts/train.py --algo td3 --env roller_gym/RollerBalance-v0 --steps 50000 --seed 1
     python scripts/train.py --env-kwargs max_torque=0.6 scene=solid_disc
 
 The hyperparameters, default steps included, come from ``agents/hyperparams.py``. The run
@@ -26,16 +26,16 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import roller_gym  # registers the tasks
 import stable_baselines3
 import torch
+from roller_gym import file_name
+from roller_gym.agents.hyperparams import ALGOS, hyperparams
+from roller_gym.agents.policies import algorithm_class
 from stable_baselines3.common.callbacks import CheckpointCallback, EvalCallback
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.noise import NormalActionNoise
 from stable_baselines3.common.vec_env import VecNormalize
-
-import envs  # registers the tasks
-from agents.hyperparams import ALGOS, hyperparams
-from agents.policies import algorithm_class
 
 #: The entries of the hyperparameters this script reads; the rest go to the algorithm.
 SCRIPT_KEYS = ("total_steps", "n_envs", "normalize", "action_noise_std")
@@ -60,8 +60,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--algo", default="sac", choices=ALGOS, help="the algorithm (default sac)")
-    p.add_argument("--env", default="RollerStabilize-v0", choices=envs.ENV_IDS,
-                   help="the task (default RollerStabilize-v0)")
+    p.add_argument("--env", default="roller_gym/RollerStabilize-v0", choices=roller_gym.ENV_IDS,
+                   help="the task (default roller_gym/RollerStabilize-v0)")
     p.add_argument("--steps", type=int, default=None,
                    help="environment steps (default: the hyperparameters' total_steps)")
     p.add_argument("--seed", type=int, default=0, help="the seed of training (default 0)")
@@ -92,7 +92,7 @@ def main(argv: list[str] | None = None) -> tuple[Path, Any]:
     normalize, noise_std = hp["normalize"], hp.get("action_noise_std")
     algo_kwargs = {k: v for k, v in hp.items() if k not in SCRIPT_KEYS}
     env_kwargs = parse_env_kwargs(args.env_kwargs)
-    run_dir = Path(args.run_dir or f"runs/{args.algo}-{args.env}")
+    run_dir = Path(args.run_dir or f"runs/{args.algo}-{file_name(args.env)}")
     if run_dir.exists():  # a fresh run: never mix the logs of two runs
         shutil.rmtree(run_dir)
     run_dir.mkdir(parents=True)

@@ -2,7 +2,7 @@
 
 Needs the ``rllib`` extra (its own environment, see README: RLlib pins its Gymnasium)::
 
-    python scripts/train_rllib.py --algo PPO --env RollerStabilize-v0 --iterations 20
+    python scripts/train_rllib.py --algo PPO --env roller_gym/RollerStabilize-v0 --iterations 20
     python scripts/train_rllib.py --algo SAC --num-env-runners 1 --envs-per-runner 4
     python scripts/train_rllib.py --env-kwarg dt=0.02 --env-kwarg 'randomize={"m": [0.8, 1.2]}'
     python scripts/train_rllib.py --address HEAD_IP:6379 --num-env-runners 16   # a cluster
@@ -34,7 +34,8 @@ from typing import Any
 
 import gymnasium as gym
 
-ENV_IDS = ("RollerStabilize-v0", "RollerHold-v0", "RollerBalance-v0")  # = envs.ENV_IDS
+ENV_IDS = ("roller_gym/RollerStabilize-v0", "roller_gym/RollerHold-v0",
+           "roller_gym/RollerBalance-v0")  # = roller_gym.ENV_IDS
 VECTORIZE_MODES = {"sync": "sync", "async": "async", "native": "vector_entry_point"}
 
 
@@ -42,7 +43,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("--algo", choices=["PPO", "SAC"], default="PPO")
-    p.add_argument("--env", choices=ENV_IDS, default="RollerStabilize-v0")
+    p.add_argument("--env", choices=ENV_IDS, default="roller_gym/RollerStabilize-v0")
     p.add_argument("--env-kwarg", action="append", default=[], metavar="KEY=VALUE",
                    help="a keyword argument of gymnasium.make (VALUE is JSON if it parses, "
                         "else a string), e.g. dt=0.02, scene=paper; repeat for more")
@@ -94,11 +95,11 @@ def parse_env_kwargs(items: list[str]) -> dict[str, Any]:
 def make_env(env_id: str, env_config: dict[str, Any]) -> gym.Env | gym.vector.VectorEnv:
     """Ray's env creator: ``gymnasium.make(env_id, **env_config)``, in whatever process runs it.
 
-    ``import envs`` is here, not at the top, so that it runs in each remote env runner (on
+    ``import roller_gym`` is here, not at the top, so that it runs in each remote env runner (on
     any node): it registers the tasks with Gymnasium in that process. RLlib passes
     ``num_envs`` only with ``--vectorize native`` (its VECTOR_ENTRY_POINT mode).
     """
-    import envs  # noqa: F401  (registers the tasks with Gymnasium)
+    import roller_gym  # noqa: F401  (registers the tasks with Gymnasium)
 
     kwargs = dict(env_config)  # RLlib's EnvContext is a dict: its items are our kwargs
     num_envs = kwargs.pop("num_envs", None)
@@ -223,7 +224,8 @@ def main(argv: list[str] | None = None) -> None:
     print(f"{args.iterations} iterations, {env_steps} env steps in {elapsed:.1f} s "
           f"({env_steps / elapsed:.0f} env steps/s overall)")
 
-    checkpoint_dir = (args.checkpoint_dir or Path("runs") / f"rllib-{args.algo}-{args.env}")
+    name = args.env.split("/")[-1]  # the task ID without its namespace
+    checkpoint_dir = args.checkpoint_dir or Path("runs") / f"rllib-{args.algo}-{name}"
     saved = algo.save_to_path(str(checkpoint_dir.resolve()))
     print(f"checkpoint: {saved}\n  restore it (tasks registered with Ray first): "
           f"register_tasks(); Algorithm.from_checkpoint({str(saved)!r})")

@@ -5,8 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-
-from envs.physics import Scene
+from roller_gym.physics import Scene
 
 SHAPES = ("cylinder", "floor", "drum")
 

@@ -12,12 +12,11 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import pytest
+import roller_gym
 import torch
-
-import envs
-from agents import LQR, EnergySwingUp, baseline, decode_observation, load_policy, rollout
-from agents.hyperparams import ALGOS, CLASSICAL, HYPERPARAMS, TASKS, Linear
-from envs.physics import holding_torque
+from roller_gym.agents import LQR, EnergySwingUp, baseline, decode_observation, load_policy, rollout
+from roller_gym.agents.hyperparams import ALGOS, CLASSICAL, HYPERPARAMS, TASKS, Linear
+from roller_gym.physics import holding_torque
 
 ROOT = Path(__file__).resolve().parents[1]
 torch.set_num_threads(1)
@@ -37,11 +36,11 @@ def _wrapped_difference(a, b):
 
 # -- observation decoding --------------------------------------------------------------
 @pytest.mark.parametrize(("env_id", "scene"), [
-    ("RollerStabilize-v0", None),
-    ("RollerHold-v0", None),
-    ("RollerBalance-v0", None),
-    ("RollerStabilize-v0", "drum"),
-    ("RollerHold-v0", "solid_disc"),
+    ("roller_gym/RollerStabilize-v0", None),
+    ("roller_gym/RollerHold-v0", None),
+    ("roller_gym/RollerBalance-v0", None),
+    ("roller_gym/RollerStabilize-v0", "drum"),
+    ("roller_gym/RollerHold-v0", "solid_disc"),
 ])
 def test_decode_recovers_the_state_the_env_reports(env_id, scene):
     kwargs = {} if scene is None else {"scene": scene}
@@ -68,7 +67,7 @@ def test_decode_recovers_the_state_the_env_reports(env_id, scene):
 def test_decode_picks_the_turn_beyond_one_revolution_of_phi():
     """In the paper's scene ψ = φ/4: φ = 4 rad and φ = 4 − 2π share cos φ and sin φ, and only
     (cos ψ, sin ψ) tells them apart."""
-    env = gym.make("RollerStabilize-v0")
+    env = gym.make("roller_gym/RollerStabilize-v0")
     for phi in (4.0, 4.0 - 2 * np.pi, -3.9, 7.5):
         obs, _ = env.reset(options={"state": (phi, -2.0)})
         s = decode_observation(obs, env.unwrapped.scene)
@@ -77,7 +76,7 @@ def test_decode_picks_the_turn_beyond_one_revolution_of_phi():
 
 
 def test_decode_on_the_floor_gives_phi_modulo_one_turn():
-    env = gym.make("RollerStabilize-v0", scene="floor")
+    env = gym.make("roller_gym/RollerStabilize-v0", scene="floor")
     obs, _ = env.reset(options={"state": (5.0, 0.5)})
     s = decode_observation(obs, env.unwrapped.scene)
     assert _wrapped_difference(s.phi[0], 5.0) < 1e-5
@@ -85,7 +84,7 @@ def test_decode_on_the_floor_gives_phi_modulo_one_turn():
 
 
 def test_decode_takes_batches_and_rejects_wrong_shapes():
-    env = gym.make("RollerHold-v0")
+    env = gym.make("roller_gym/RollerHold-v0")
     observations = np.stack([env.reset(seed=s)[0] for s in range(4)])
     batch = decode_observation(observations, env.unwrapped.scene)
     single = [decode_observation(o, env.unwrapped.scene) for o in observations]
@@ -96,7 +95,7 @@ def test_decode_takes_batches_and_rejects_wrong_shapes():
 
 
 # -- the classical controllers -------------------------------------------------------------
-@pytest.mark.parametrize("env_id", ["RollerStabilize-v0", "RollerHold-v0"])
+@pytest.mark.parametrize("env_id", ["roller_gym/RollerStabilize-v0", "roller_gym/RollerHold-v0"])
 def test_lqr_succeeds_in_all_100_seeded_episodes(env_id):
     env = gym.make(env_id)
     policy = LQR.from_env(env, **CLASSICAL[env_id])
@@ -109,7 +108,7 @@ def test_lqr_succeeds_in_all_100_seeded_episodes(env_id):
 
 
 def test_lqr_predict_is_shaped_like_a_stable_baselines3_model():
-    env = gym.make("RollerHold-v0")
+    env = gym.make("roller_gym/RollerHold-v0")
     policy = LQR.from_env(env)
     observations = np.stack([env.reset(seed=s)[0] for s in range(6)])
     actions, state = policy.predict(observations, deterministic=True)
@@ -123,7 +122,7 @@ def test_lqr_predict_is_shaped_like_a_stable_baselines3_model():
 
 
 def test_lqr_holds_the_target_with_the_holding_torque_and_pushes_back_when_off_it():
-    env = gym.make("RollerHold-v0")
+    env = gym.make("roller_gym/RollerHold-v0")
     policy = LQR.from_env(env)
     max_torque = env.unwrapped.task.max_torque
     obs, info = env.reset(seed=3)
@@ -140,8 +139,8 @@ def test_lqr_holds_the_target_with_the_holding_torque_and_pushes_back_when_off_i
 
 
 def test_energy_swing_up_balances_in_every_episode():
-    env = gym.make("RollerBalance-v0")
-    policy = EnergySwingUp.from_env(env, **CLASSICAL["RollerBalance-v0"])
+    env = gym.make("roller_gym/RollerBalance-v0")
+    policy = EnergySwingUp.from_env(env, **CLASSICAL["roller_gym/RollerBalance-v0"])
     episodes = [rollout(env, policy, seed) for seed in range(20)]
     assert all(e.success and not e.terminated for e in episodes)
     # It does swing: the torque limit is below the largest holding torque on the way up.
@@ -149,7 +148,7 @@ def test_energy_swing_up_balances_in_every_episode():
 
 
 def test_baselines_by_name():
-    env = gym.make("RollerBalance-v0")
+    env = gym.make("roller_gym/RollerBalance-v0")
     assert isinstance(baseline("classical", env), EnergySwingUp)
     obs, _ = env.reset(seed=0)
     assert np.all(baseline("zero", env).predict(obs)[0] == 0)
@@ -170,7 +169,7 @@ def test_linear_schedule_decays_to_zero_and_never_below():
 
 def test_hyperparameters_cover_every_algorithm_and_task():
     assert set(HYPERPARAMS) == {(a, t) for a in ALGOS for t in TASKS}
-    assert set(TASKS) == set(envs.ENV_IDS)
+    assert set(TASKS) == set(roller_gym.ENV_IDS)
     for params in HYPERPARAMS.values():
         assert params["total_steps"] > 0 and params["n_envs"] >= 1
 
@@ -184,7 +183,7 @@ def _short_run(algo: str, tmp_path_factory) -> tuple:
     if algo not in _RUNS:
         run_dir = tmp_path_factory.mktemp(algo) / "run"
         run_dir, model = _load_script("train").main([
-            "--algo", algo, "--env", "RollerStabilize-v0", "--steps", "2000",
+            "--algo", algo, "--env", "roller_gym/RollerStabilize-v0", "--steps", "2000",
             "--run-dir", str(run_dir), "--eval-freq", "1000", "--eval-episodes", "2",
             "--checkpoints", "1", "--no-progress-bar",
         ])
@@ -200,7 +199,7 @@ def short_run(request, tmp_path_factory):
 def test_short_training_run_completes_and_saves(short_run):
     algo, run_dir, _ = short_run
     config = json.loads((run_dir / "config.json").read_text())
-    assert config["algo"] == algo and config["env"] == "RollerStabilize-v0"
+    assert config["algo"] == algo and config["env"] == "roller_gym/RollerStabilize-v0"
     assert config["trained_steps"] >= 2000 == config["total_steps"]
     assert config["wall_time_s"] > 0
     for name in ("model.zip", "best_model.zip", "evaluations.npz"):
@@ -213,7 +212,7 @@ def test_short_training_run_completes_and_saves(short_run):
 def test_saved_model_loads_and_acts_identically(short_run):
     _, run_dir, model = short_run
     loaded = load_policy(run_dir)
-    env = gym.make("RollerStabilize-v0")
+    env = gym.make("roller_gym/RollerStabilize-v0")
     observations = np.stack([env.reset(seed=s)[0] for s in range(50)])
     expected, _ = model.predict(observations, deterministic=True)
     actual, _ = loaded.predict(observations, deterministic=True)
@@ -222,7 +221,7 @@ def test_saved_model_loads_and_acts_identically(short_run):
 
 
 def test_normalized_run_saves_its_statistics_and_reloads_them(tmp_path, monkeypatch):
-    key = ("ppo", "RollerStabilize-v0")
+    key = ("ppo", "roller_gym/RollerStabilize-v0")
     monkeypatch.setitem(HYPERPARAMS, key, {
         **HYPERPARAMS[key], "n_envs": 2, "n_steps": 512,
         "normalize": {"norm_obs": True, "norm_reward": True},
@@ -233,7 +232,7 @@ def test_normalized_run_saves_its_statistics_and_reloads_them(tmp_path, monkeypa
     ])
     assert (run_dir / "vecnormalize.pkl").is_file()
     loaded = load_policy(run_dir)
-    env = gym.make("RollerStabilize-v0")
+    env = gym.make("roller_gym/RollerStabilize-v0")
     observations = np.stack([env.reset(seed=s)[0] for s in range(20)])
     normalized = model.get_env().normalize_obs(observations)
     assert not np.allclose(normalized, observations)
@@ -246,7 +245,8 @@ def test_evaluate_and_replay_scripts(tmp_path, tmp_path_factory):
     _, run_dir, _ = _short_run("sac", tmp_path_factory)
     out = tmp_path / "results"
     subprocess.run(
-        [sys.executable, str(ROOT / "scripts" / "evaluate.py"), "--env", "RollerStabilize-v0",
+        [sys.executable, str(ROOT / "scripts" / "evaluate.py"),
+         "--env", "roller_gym/RollerStabilize-v0",
          "--models", str(run_dir), "--episodes", "3", "--out", str(out),
          "--report", str(tmp_path / "RESULTS.md")],
         check=True, cwd=tmp_path, capture_output=True,

@@ -10,11 +10,10 @@ import math
 
 import numpy as np
 import pytest
+from roller_gym.physics import PRESETS, Scene, analysis, preset
+from roller_gym.physics import equations as eq
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
-
-from envs.physics import PRESETS, Scene, analysis, preset
-from envs.physics import equations as eq
 
 STABLE_AT_REST = ["paper", "solid_disc", "tight_fit", "rim_mass", "floor", "drum", "balance"]
 

@@ -23,15 +23,12 @@ import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-SCRIPTS = ROOT / "scripts"
-sys.path[:0] = [str(ROOT), str(SCRIPTS)]
 
 mujoco = pytest.importorskip("mujoco")
 
-import benchmark  # noqa: E402
-import mujoco_roller as mjr  # noqa: E402
-
-from envs.physics import Scene, preset  # noqa: E402
+from roller_gym.physics import Scene, preset  # noqa: E402
+from roller_gym.scripts import benchmark  # noqa: E402
+from roller_gym.scripts import mujoco_roller as mjr  # noqa: E402
 
 SECTIONS = ("## Summary", "## Machine and command", "## How it is measured",
             "## 1. Work-precision", "### Energy at zero torque", "## 2. MuJoCo on the same scene",
@@ -54,7 +51,7 @@ def _table_rows(text: str, heading: str) -> list[list[str]]:
 def quick_report(tmp_path_factory: pytest.TempPathFactory) -> str:
     out = tmp_path_factory.mktemp("bench")
     proc = subprocess.run(
-        [sys.executable, str(SCRIPTS / "benchmark.py"), "--quick", "--out", str(out)],
+        [sys.executable, "-m", "roller_gym.scripts.benchmark", "--quick", "--out", str(out)],
         capture_output=True, text=True, timeout=600, cwd=ROOT,
     )
     assert proc.returncode == 0, proc.stderr[-3000:]

@@ -21,22 +21,21 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import pytest
+import roller_gym
 from gymnasium import spaces
 from gymnasium.utils.env_checker import check_env as gym_check_env
+from roller_gym import Scene, preset
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
-
-import envs
-from envs import Scene, preset
 
 ROOT = Path(__file__).resolve().parents[1]
 
 # From the docstrings: steps per episode, default max_torque [N·m], observation size,
 # default preset.
 DOCUMENTED = {
-    "RollerStabilize-v0": {"steps": 200, "max_torque": 0.5, "obs": 5, "scene": "paper"},
-    "RollerHold-v0": {"steps": 200, "max_torque": 1.0, "obs": 9, "scene": "paper"},
-    "RollerBalance-v0": {"steps": 400, "max_torque": 0.4, "obs": 5, "scene": "balance"},
+    "roller_gym/RollerStabilize-v0": {"steps": 200, "max_torque": 0.5, "obs": 5, "scene": "paper"},
+    "roller_gym/RollerHold-v0": {"steps": 200, "max_torque": 1.0, "obs": 9, "scene": "paper"},
+    "roller_gym/RollerBalance-v0": {"steps": 400, "max_torque": 0.4, "obs": 5, "scene": "balance"},
 }
 IDS = list(DOCUMENTED)
 INFO_KEYS = ("phi", "phi_dot", "psi", "torque", "normal_force", "friction_force", "energy",
@@ -94,7 +93,7 @@ def documented_reward(env_id: str, scene: Scene, phi, phi_dot, action, target) -
     def error(t):
         return wrap(q * (phi - t)) / q
 
-    if env_id == "RollerBalance-v0":
+    if env_id == "roller_gym/RollerBalance-v0":
         eps, margin = min((error(target), error(-target)), key=abs), 3.0
     else:
         eps, margin = error(target), 2.0
@@ -118,13 +117,13 @@ def check_info_physics(env, info: dict, tau: float) -> None:
 
 # -- 1. registration ---------------------------------------------------------------------
 def test_import_registers_the_ids_and_the_namespace_form_imports_the_package():
-    """In a fresh interpreter: nothing registered before; ``make("envs:ID")`` imports the
-    package, which registers all three with their time limits."""
+    """In a fresh interpreter: nothing registered before; ``make("roller_gym:ID")`` imports
+    the package, which registers all three with their time limits."""
     code = (
         "import gymnasium as gym\n"
         f"ids = {IDS!r}\n"
         "assert not any(i in gym.registry for i in ids)\n"
-        "env = gym.make('envs:RollerHold-v0')\n"
+        "env = gym.make('roller_gym:roller_gym/RollerHold-v0')\n"
         "assert type(env.unwrapped).__name__ == 'RollerHoldEnv'\n"
         "assert all(i in gym.registry for i in ids)\n"
         "print([gym.spec(i).max_episode_steps for i in ids])\n"
@@ -141,11 +140,11 @@ def test_make_plain_and_namespaced(env_id):
     assert spec.max_episode_steps == DOCUMENTED[env_id]["steps"]
     # A per-step reward in [0, 1] caps the return at the episode length.
     assert 0 < spec.reward_threshold <= spec.max_episode_steps
-    for name in (env_id, f"envs:{env_id}"):
+    for name in (env_id, f"roller_gym:{env_id}"):
         env = gym.make(name)
         assert env.spec.max_episode_steps == DOCUMENTED[env_id]["steps"]
         assert env.spec.reward_threshold == spec.reward_threshold
-        assert isinstance(env.unwrapped, envs.roller_env.RollerEnv)
+        assert isinstance(env.unwrapped, roller_gym.roller_env.RollerEnv)
         assert env.unwrapped.scene == preset(DOCUMENTED[env_id]["scene"])
         env.close()
 
@@ -207,7 +206,7 @@ def test_observation_entries_match_the_state(env_id):
         assert env.observation_space.contains(obs)
         expected = [math.cos(psi), math.sin(psi), math.cos(phi), math.sin(phi),
                     math.tanh(phi_dot / 10.0)]
-        if env_id == "RollerHold-v0":
+        if env_id == "roller_gym/RollerHold-v0":
             target = info["target_phi"]
             assert info["target_psi"] == pytest.approx(q * target, rel=1e-12)
             expected += [math.cos(q * target), math.sin(q * target), math.cos(target),
@@ -247,7 +246,7 @@ def test_reset_options_state_and_scene(env_id):
     assert (info["phi"], info["phi_dot"]) == (0.2, -0.3)
     assert (env.unwrapped.phi, env.unwrapped.phi_dot) == (0.2, -0.3)
     assert obs[2] == pytest.approx(math.cos(0.2), abs=1e-7)
-    scene = preset("drum") if env_id == "RollerBalance-v0" else Scene(m=2.0, e=0.02)
+    scene = preset("drum") if env_id == "roller_gym/RollerBalance-v0" else Scene(m=2.0, e=0.02)
     obs, info = env.reset(seed=0, options={"scene": scene, "state": (0.1, 0.0)})
     assert env.unwrapped.scene == scene
     assert info["psi"] == pytest.approx(psi_rate(scene) * 0.1, rel=1e-12)
@@ -264,7 +263,7 @@ def test_reset_options_state_and_scene(env_id):
 
 
 def test_reset_option_target_hold():
-    env = gym.make("RollerHold-v0")
+    env = gym.make("roller_gym/RollerHold-v0")
     scene = env.unwrapped.scene
     q = psi_rate(scene)
     obs, info = env.reset(seed=0, options={"target": 0.2})
@@ -274,7 +273,7 @@ def test_reset_option_target_hold():
                                          math.sin(0.8)], atol=2e-7)
     with pytest.raises(ValueError, match=r"options\['target'\]=2\.0"):
         env.reset(options={"target": 2.0})
-    for other in ("RollerStabilize-v0", "RollerBalance-v0"):
+    for other in ("roller_gym/RollerStabilize-v0", "roller_gym/RollerBalance-v0"):
         with pytest.raises(ValueError, match="target"):
             gym.make(other).reset(options={"target": 0.1})
 
@@ -282,7 +281,7 @@ def test_reset_option_target_hold():
 def test_hold_targets_can_be_held():
     """Each drawn target is a rest position whose holding torque m g (r sin ψ + e sin φ)
     is at most 80% of max_torque and whose friction at rest, |tan ψ|, at most 90% of μ."""
-    env = gym.make("RollerHold-v0")
+    env = gym.make("roller_gym/RollerHold-v0")
     scene = env.unwrapped.scene
     m, r, e, g, mu = (float(getattr(scene, n)) for n in ("m", "r", "e", "g", "mu"))
     targets = []
@@ -298,7 +297,7 @@ def test_hold_targets_can_be_held():
 def test_balance_target_is_the_unstable_rest_position():
     """Documented: ψ ≈ ±23°, φ ≈ ±3.66 rad in "balance"; at rest there φ'' = 0 at zero
     torque, d²V/dφ² < 0 (unstable) and the roller still rolls (N > 0, |F| <= μN)."""
-    env = gym.make("RollerBalance-v0")
+    env = gym.make("roller_gym/RollerBalance-v0")
     _, info = env.reset(seed=0)
     scene = env.unwrapped.scene
     phi_b = info["target_phi"]
@@ -317,7 +316,8 @@ def test_balance_target_is_the_unstable_rest_position():
 @pytest.mark.parametrize(
     ("env_id", "scene_name"),
     [(i, "default") for i in IDS]
-    + [(i, s) for i in IDS if i != "RollerBalance-v0" for s in ("floor", "drum", "rim_mass")],
+    + [(i, s) for i in IDS if i != "roller_gym/RollerBalance-v0"
+       for s in ("floor", "drum", "rim_mass")],
 )
 def test_info_forces_and_energy_follow_physics(env_id, scene_name):
     """N, F and E in the info against the formulas of PHYSICS.md, at the reset (τ = 0) and
@@ -364,7 +364,7 @@ def test_reward_is_the_documented_formula(env_id):
 
 
 def test_success_flag_is_the_documented_band():
-    env = gym.make("RollerStabilize-v0")
+    env = gym.make("roller_gym/RollerStabilize-v0")
     assert env.reset(options={"state": (0.0, 0.0)})[1]["is_success"]
     assert env.reset(options={"state": (0.04, -0.09)})[1]["is_success"]
     assert not env.reset(options={"state": (0.06, 0.0)})[1]["is_success"]
@@ -374,7 +374,7 @@ def test_success_flag_is_the_documented_band():
 def test_terminated_when_the_roller_slips():
     """μ = 0.05, at rest at the bottom, full torque: by PHYSICS.md, |F| > μN at once."""
     scene = preset("paper").replace(mu=0.05)
-    env = gym.make("RollerStabilize-v0", scene=scene)
+    env = gym.make("roller_gym/RollerStabilize-v0", scene=scene)
     _, info = env.reset(seed=0, options={"state": (0.0, 0.0)})
     assert not info["slipping"]
     ref = model(scene, 0.0, 0.0, 0.5)
@@ -388,7 +388,7 @@ def test_terminated_when_the_roller_lifts_off():
     """A disc (e = 0) on top of a drum of radius 0.5 m, fast: N/m = g − r²/(|R| + r) φ'²
     < 0 by PHYSICS.md, so the roller leaves the drum."""
     scene = Scene(R=-0.5, e=0.0, k=0.07)
-    env = gym.make("RollerStabilize-v0", scene=scene)
+    env = gym.make("roller_gym/RollerStabilize-v0", scene=scene)
     _, info = env.reset(seed=0, options={"state": (0.0, 30.0)})
     assert model(scene, 0.0, 30.0, 0.0)["normal"] < 0
     assert info["lifting"] and info["normal_force"] < 0
@@ -417,25 +417,27 @@ def test_truncated_by_the_time_limit(env_id):
 @pytest.mark.parametrize(
     ("env_id", "kwargs", "message"),
     [
-        ("RollerStabilize-v0", {"dt": 0.0}, "dt=0.0"),
-        ("RollerStabilize-v0", {"dt": -0.05}, "dt=-0.05"),
-        ("RollerStabilize-v0", {"dt": math.inf}, "dt=inf"),
-        ("RollerHold-v0", {"tolerance": math.nan}, "tolerance=nan"),
-        ("RollerHold-v0", {"tolerance": 0.0}, "tolerance=0.0"),
-        ("RollerStabilize-v0", {"integrator": "rk45"}, "integrator='rk45'"),
-        ("RollerStabilize-v0", {"scene": "nope"}, "'nope'"),
-        ("RollerStabilize-v0", {"scene": 3}, "scene=3"),
-        ("RollerStabilize-v0", {"randomize": {"mass": (1.0, 2.0)}}, "'mass'"),
-        ("RollerStabilize-v0", {"randomize": {"m": (2.0, 1.0)}}, "randomize['m']=(2.0, 1.0)"),
-        ("RollerStabilize-v0", {"randomize": {"m": (1.0,)}}, "randomize['m']=(1.0,)"),
-        ("RollerStabilize-v0", {"randomize": {"m": (1.0, math.nan)}}, "randomize['m']"),
-        ("RollerStabilize-v0", {"randomize": {"e": (-0.1, 0.05)}}, "Scene.e=-0.1"),
-        ("RollerStabilize-v0", {"max_torque": 0.0}, "max_torque=0.0"),
-        ("RollerStabilize-v0", {"max_torque": math.nan}, "max_torque=nan"),
-        ("RollerStabilize-v0", {"substeps": 0}, "substeps=0"),
-        ("RollerBalance-v0", {"scene": Scene(R=math.inf, e=0.0)}, "no unstable rest position"),
-        ("RollerBalance-v0", {"scene": "tight_fit"}, "no unstable rest position"),
-        ("RollerBalance-v0", {"scene": "paper"}, "not reachable"),
+        ("roller_gym/RollerStabilize-v0", {"dt": 0.0}, "dt=0.0"),
+        ("roller_gym/RollerStabilize-v0", {"dt": -0.05}, "dt=-0.05"),
+        ("roller_gym/RollerStabilize-v0", {"dt": math.inf}, "dt=inf"),
+        ("roller_gym/RollerHold-v0", {"tolerance": math.nan}, "tolerance=nan"),
+        ("roller_gym/RollerHold-v0", {"tolerance": 0.0}, "tolerance=0.0"),
+        ("roller_gym/RollerStabilize-v0", {"integrator": "rk45"}, "integrator='rk45'"),
+        ("roller_gym/RollerStabilize-v0", {"scene": "nope"}, "'nope'"),
+        ("roller_gym/RollerStabilize-v0", {"scene": 3}, "scene=3"),
+        ("roller_gym/RollerStabilize-v0", {"randomize": {"mass": (1.0, 2.0)}}, "'mass'"),
+        ("roller_gym/RollerStabilize-v0", {"randomize": {"m": (2.0, 1.0)}},
+         "randomize['m']=(2.0, 1.0)"),
+        ("roller_gym/RollerStabilize-v0", {"randomize": {"m": (1.0,)}}, "randomize['m']=(1.0,)"),
+        ("roller_gym/RollerStabilize-v0", {"randomize": {"m": (1.0, math.nan)}}, "randomize['m']"),
+        ("roller_gym/RollerStabilize-v0", {"randomize": {"e": (-0.1, 0.05)}}, "Scene.e=-0.1"),
+        ("roller_gym/RollerStabilize-v0", {"max_torque": 0.0}, "max_torque=0.0"),
+        ("roller_gym/RollerStabilize-v0", {"max_torque": math.nan}, "max_torque=nan"),
+        ("roller_gym/RollerStabilize-v0", {"substeps": 0}, "substeps=0"),
+        ("roller_gym/RollerBalance-v0", {"scene": Scene(R=math.inf, e=0.0)},
+         "no unstable rest position"),
+        ("roller_gym/RollerBalance-v0", {"scene": "tight_fit"}, "no unstable rest position"),
+        ("roller_gym/RollerBalance-v0", {"scene": "paper"}, "not reachable"),
     ],
 )
 def test_bad_construction_arguments_raise(env_id, kwargs, message):
@@ -448,12 +450,12 @@ def test_bad_render_mode_raises():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # Gymnasium warns about the mode as well
         with pytest.raises(ValueError, match="render_mode='ansi'"):
-            gym.make("RollerStabilize-v0", render_mode="ansi")
+            gym.make("roller_gym/RollerStabilize-v0", render_mode="ansi")
 
 
 @pytest.mark.parametrize("env_id", IDS)
 def test_scene_argument_object_and_preset(env_id):
-    custom = Scene(m=1.5, e=0.02, k=0.08) if env_id != "RollerBalance-v0" else preset(
+    custom = Scene(m=1.5, e=0.02, k=0.08) if env_id != "roller_gym/RollerBalance-v0" else preset(
         "balance").replace(m=1.5)
     env = gym.make(env_id, scene=custom)
     assert env.unwrapped.scene == custom
@@ -461,18 +463,18 @@ def test_scene_argument_object_and_preset(env_id):
     check_info_physics(env, info, 0.0)
     _, _, _, _, info = env.step(act(0.5))
     check_info_physics(env, info, info["torque"])
-    name = "drum" if env_id == "RollerBalance-v0" else "floor"
+    name = "drum" if env_id == "roller_gym/RollerBalance-v0" else "floor"
     env = gym.make(env_id, scene=name)
     assert env.unwrapped.scene == preset(name)
 
 
 def _reference(scene, phi, phi_dot, tau, dt):
-    r = envs.physics.step(scene, phi, phi_dot, tau, dt, method="dop853", tol=1e-13)
+    r = roller_gym.physics.step(scene, phi, phi_dot, tau, dt, method="dop853", tol=1e-13)
     return np.array([r.phi, r.phi_dot])
 
 
 def test_dt_argument_sets_the_control_step():
-    env = gym.make("RollerStabilize-v0", dt=0.02)
+    env = gym.make("roller_gym/RollerStabilize-v0", dt=0.02)
     env.reset(options={"state": (0.3, 0.0)})
     _, _, _, _, info = env.step(act(0.5))
     ref = _reference(env.unwrapped.scene, 0.3, 0.0, 0.25, 0.02)
@@ -490,12 +492,12 @@ def test_dt_argument_sets_the_control_step():
 def test_integrator_argument_and_tolerance(integrator, tolerances):
     """Each integrator meets its tolerance on one step against DOP853 at 1e-13, and a
     tighter tolerance takes more substeps."""
-    if integrator not in envs.physics.METHODS:
+    if integrator not in roller_gym.physics.METHODS:
         pytest.skip(f"{integrator} is not an integrator here")
     scene = preset("paper")
     substeps = []
     for tol in tolerances:
-        env = gym.make("RollerStabilize-v0", integrator=integrator, tolerance=tol)
+        env = gym.make("roller_gym/RollerStabilize-v0", integrator=integrator, tolerance=tol)
         assert env.unwrapped.config.integrator == integrator
         env.reset(options={"state": (0.5, 2.0)})
         _, _, _, _, info = env.step(act(0.6))
@@ -515,7 +517,7 @@ def test_substeps_argument_is_the_number_of_fixed_substeps(integrator, n):
     """With substeps=n the step is n steps of classical RK4 (or of semi-implicit Euler),
     written here on the φ'' of PHYSICS.md."""
     scene = preset("paper")
-    env = gym.make("RollerStabilize-v0", integrator=integrator, substeps=n)
+    env = gym.make("roller_gym/RollerStabilize-v0", integrator=integrator, substeps=n)
     env.reset(options={"state": (0.4, -1.0)})
     _, _, _, _, info = env.step(act(0.8))
     assert info["substeps"] == n
@@ -537,7 +539,7 @@ def test_substeps_argument_is_the_number_of_fixed_substeps(integrator, n):
 
 @pytest.mark.parametrize("env_id", IDS)
 def test_randomize_draws_scenes_within_the_ranges(env_id):
-    ranges = {"m": (0.8, 1.2), "e": (0.06, 0.09)} if env_id == "RollerBalance-v0" else {
+    ranges = {"m": (0.8, 1.2), "e": (0.06, 0.09)} if env_id == "roller_gym/RollerBalance-v0" else {
         "m": (0.8, 1.2), "e": (0.03, 0.05)}
     env = gym.make(env_id, randomize=ranges)
     base = preset(DOCUMENTED[env_id]["scene"])

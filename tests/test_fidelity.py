@@ -1,5 +1,5 @@
 """Fidelity (issue 4): over 10 s of seeded random torques, the environment's state against
-a reference integration, ``envs.physics.step(..., method="dop853", tol=1e-13)`` per
+a reference integration, ``roller_gym.physics.step(..., method="dop853", tol=1e-13)`` per
 control step under the same torque sequence.
 
 ``tolerance`` is the target state error per control step (φ [rad], φ' [rad/s]), so:
@@ -31,8 +31,7 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 import pytest
-
-from envs.physics import METHODS, step
+from roller_gym.physics import METHODS, step
 
 REF_TOL = 1e-13
 STEPS = 200  # 10 s at dt = 0.05 s
@@ -62,10 +61,10 @@ def test_state_matches_the_reference_within_tolerance(scene):
         kwargs["max_torque"] = max_torque
     runs = {}
     for method in (m for m in methods if m in METHODS):
-        env = gym.make("RollerStabilize-v0", integrator=method, **kwargs).unwrapped
+        env = gym.make("roller_gym/RollerStabilize-v0", integrator=method, **kwargs).unwrapped
         env.reset(seed=0, options=options)
         runs[method] = env
-    default = gym.make("RollerStabilize-v0", **kwargs).unwrapped.config
+    default = gym.make("roller_gym/RollerStabilize-v0", **kwargs).unwrapped.config
     assert default.integrator in runs  # the default integrator is among those checked
     first = next(iter(runs.values()))
     scene_obj, dt = first.scene, first.config.dt

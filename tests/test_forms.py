@@ -16,10 +16,9 @@ import math
 
 import numpy as np
 import pytest
+from roller_gym.physics import FORMS, PRESETS, Scene
+from roller_gym.physics import equations as eq
 from sampling import SHAPES, accel_scale, sample, states
-
-from envs.physics import FORMS, PRESETS, Scene
-from envs.physics import equations as eq
 
 TOL = 1e-12  # relative to the magnitude of the terms (see sampling.accel_scale)
 

@@ -15,9 +15,7 @@ import math
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
-
-from envs.physics import (
+from roller_gym.physics import (
     METHODS,
     PRESETS,
     Scene,
@@ -27,7 +25,8 @@ from envs.physics import (
     preset,
     step,
 )
-from envs.physics import equations as eq
+from roller_gym.physics import equations as eq
+from scipy.integrate import solve_ivp
 
 DT = 0.05
 SUBSTEPPED = tuple(m for m in METHODS if m != "dop853")

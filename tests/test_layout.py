@@ -37,8 +37,8 @@ def test_tasks_know_nothing_of_pygame(name: str) -> None:
     assert "pygame" not in imported_modules(ROOT / "envs" / name)
 
 
-def test_import_envs_does_not_import_pygame() -> None:
-    code = "import envs, sys; print('pygame' in sys.modules)"
+def test_import_roller_gym_does_not_import_pygame() -> None:
+    code = "import roller_gym, sys; print('pygame' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, cwd=ROOT)
     assert out.stdout.strip() == "False"

@@ -1,4 +1,4 @@
-"""The physics checked against derivations written here, independently of envs.physics.
+"""The physics checked against derivations written here, independently of roller_gym.physics.
 
 * Lagrange's equations with ``sympy.physics.mechanics``, built from PHYSICS.md alone: the
   generalized coordinate φ, the mass center C = O1 + e(−sin φ, −cos φ) with
@@ -19,11 +19,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import sympy as sp
+from roller_gym.physics import FORMS, Scene, analysis
+from roller_gym.physics import equations as eq
 from sampling import SHAPES, accel_scale, sample
 from sympy.physics import mechanics as me
-
-from envs.physics import FORMS, Scene, analysis
-from envs.physics import equations as eq
 
 # -- the independent derivation ---------------------------------------------------------------
 

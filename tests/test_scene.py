@@ -7,9 +7,8 @@ import math
 
 import numpy as np
 import pytest
-
-from envs.physics import PRESETS, Scene, analysis, preset
-from envs.physics import equations as eq
+from roller_gym.physics import PRESETS, Scene, analysis, preset
+from roller_gym.physics import equations as eq
 
 FIELDS = ("m", "r", "R", "e", "k", "g", "mu", "damping")
 

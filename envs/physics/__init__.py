@@ -12,11 +12,11 @@ module                 what it holds
 =====================  ================================================================
 """
 
-from envs.physics import analysis
-from envs.physics.analysis import *  # noqa: F403  (its __all__: kinematics, contact, energy, ...)
-from envs.physics.forms import FORMS
-from envs.physics.integrators import METHODS, StepResult, predicted_substeps, step
-from envs.physics.scene import PRESETS, Scene, preset
+from roller_gym.physics import analysis
+from roller_gym.physics.analysis import *  # noqa: F403  (its __all__: kinematics, contact, energy, ...)
+from roller_gym.physics.forms import FORMS
+from roller_gym.physics.integrators import METHODS, StepResult, predicted_substeps, step
+from roller_gym.physics.scene import PRESETS, Scene, preset
 
 __all__ = [
     *analysis.__all__,

@@ -1,6 +1,6 @@
 """What else the physics answers: kinematics, contact, energy, equilibria, linearization.
 
-Every function takes a :class:`~envs.physics.scene.Scene` and states as floats or arrays
+Every function takes a :class:`~roller_gym.physics.scene.Scene` and states as floats or arrays
 (broadcast together, per-element scene parameters included), except :func:`equilibria`,
 which searches one scene at one torque.
 """
@@ -11,10 +11,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from roller_gym.physics import equations as eq
+from roller_gym.physics.scene import Scene
 from scipy.optimize import brentq
-
-from envs.physics import equations as eq
-from envs.physics.scene import Scene
 
 __all__ = [
     "Contact",

@@ -4,7 +4,7 @@ The paper (Buracu & Lecu, Proc. Romanian Academy A 6(1), 2005) writes the relati
 momentum theorem about the instant center I in four ways. Each function below evaluates
 one of them with the vectors of the scene (positions, velocities, accelerations in the
 plane) and solves it for φ''; they are independent of one another and of the closed form
-:func:`envs.physics.equations.accel`, which is what the simulation integrates (it is the
+:func:`roller_gym.physics.equations.accel`, which is what the simulation integrates (it is the
 fastest). The tests check that all five agree.
 
 =====================  =============================================================
@@ -26,9 +26,8 @@ moment about I of gravity, the drive τ and the axle's damping −cφ'.
 from __future__ import annotations
 
 import numpy as np
-
-from envs.physics import equations as eq
-from envs.physics.scene import Scene
+from roller_gym.physics import equations as eq
+from roller_gym.physics.scene import Scene
 
 __all__ = [
     "FORMS",
@@ -113,7 +112,8 @@ def accel_eq30(scene: Scene, phi, phi_dot, tau):
 
 
 def accel_closed_form(scene: Scene, phi, phi_dot, tau):
-    """The equation of motion of the paper's example (:func:`envs.physics.equations.accel`)."""
+    """The equation of motion of the paper's example
+    (:func:`roller_gym.physics.equations.accel`)."""
     return eq.accel(phi, phi_dot, tau, *scene.params)
 
 

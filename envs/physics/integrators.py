@@ -34,10 +34,10 @@ scene, and the implicit midpoint on the stiff presets. The count
 is first set from the speed at the start of the step; a step whose substeps reach a speed
 that asks for more is taken again with that many. An easy scene
 takes few, a stiff one as many as it needs (up to ``max_substeps``). With e = 0 the
-integrators use :func:`~envs.physics.equations.accel_concentric`, which skips the terms
+integrators use :func:`~roller_gym.physics.equations.accel_concentric`, which skips the terms
 that vanish.
 
-The kernels are the equations of :mod:`envs.physics.equations`, compiled by numba; one
+The kernels are the equations of :mod:`roller_gym.physics.equations`, compiled by numba; one
 kernel advances one roller, and the batch loop calls it per element, so a vector of
 rollers gives the same numbers as the rollers one at a time.
 """
@@ -49,11 +49,10 @@ from dataclasses import dataclass
 
 import numba
 import numpy as np
+from roller_gym.physics import equations as eq
+from roller_gym.physics.scene import Scene
 from scipy.integrate import solve_ivp
 from scipy.integrate._ivp import dop853_coefficients
-
-from envs.physics import equations as eq
-from envs.physics.scene import Scene
 
 __all__ = ["METHODS", "StepResult", "predicted_substeps", "step"]
 

@@ -22,7 +22,7 @@ Shapes, through the signed curvature κ = 1/R of the fixed surface:
 * the outside of a drum of radius −R, the roller on top of it: ``R < 0`` (κ < 0).
 
 Every field may also be a NumPy array (a batch of differently built rollers, for domain
-randomization); all functions of :mod:`envs.physics` broadcast over them.
+randomization); all functions of :mod:`roller_gym.physics` broadcast over them.
 """
 
 from __future__ import annotations
