@@ -39,7 +39,7 @@ from __future__ import annotations
 import numpy as np
 from roller_gym.physics import Scene, contact
 from roller_gym.roller_env import RollerEnv
-from roller_gym.task import Task, unstable_rest_positions
+from roller_gym.task import Task, per_scene, unstable_rest_positions
 from roller_gym.vector_env import RollerVectorEnv
 
 __all__ = ["BalanceTask", "RollerBalanceEnv", "RollerBalanceVectorEnv"]
@@ -73,13 +73,16 @@ class BalanceTask(Task):
             )
         return phi_b
 
-    def sample_target(self, rng: np.random.Generator, scene: Scene) -> float:
-        return self.default_target(scene)
+    start_rule = "near rest at the bottom, |phi| and |phi_dot| <= 0.1, rolling there"
 
-    def sample_state(
-        self, rng: np.random.Generator, scene: Scene, target: float
-    ) -> tuple[float, float]:
-        return float(rng.uniform(-0.1, 0.1)), float(rng.uniform(-0.1, 0.1))
+    def sample_targets(self, u: np.ndarray, scene: Scene) -> np.ndarray:
+        return per_scene(self.default_target, scene)
+
+    def start_candidates(
+        self, u_phi: np.ndarray, u_dot: np.ndarray, scene: Scene
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Near rest at the bottom: φ [rad] and φ' [rad/s] uniform in ±0.1."""
+        return 0.2 * u_phi - 0.1, 0.2 * u_dot - 0.1
 
     def error(self, phi, target, q):
         """The error to the nearer of ±φ_b [rad of φ]."""

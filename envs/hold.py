@@ -50,7 +50,7 @@ from typing import Any
 import numpy as np
 from roller_gym.physics import Scene
 from roller_gym.roller_env import RollerEnv
-from roller_gym.task import Task, hold_range, wrap_rate
+from roller_gym.task import Task, hold_range, per_scene, wrap_rate
 from roller_gym.vector_env import RollerVectorEnv
 
 __all__ = ["HoldTask", "RollerHoldEnv", "RollerHoldVectorEnv"]
@@ -62,9 +62,10 @@ class HoldTask(Task):
     observes_target = True
     default_max_torque = 1.0
 
-    def sample_target(self, rng: np.random.Generator, scene: Scene) -> float:
-        low, high = hold_range(scene, self.max_torque)
-        return float(rng.uniform(low, high))
+    def sample_targets(self, u: np.ndarray, scene: Scene) -> np.ndarray:
+        low = per_scene(lambda s: hold_range(s, self.max_torque)[0], scene)
+        high = per_scene(lambda s: hold_range(s, self.max_torque)[1], scene)
+        return low + (high - low) * u
 
     def target_from_option(self, value: Any, scene: Scene) -> float:
         try:

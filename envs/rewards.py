@@ -26,7 +26,8 @@ def xp(x):
 def near(x, margin, value_at_margin: float = 0.1):
     """exp(ln(value_at_margin)·(x/margin)²): 1 at x = 0, ``value_at_margin`` at |x| = margin."""
     scale = _LOG_VALUE_AT_MARGIN if value_at_margin == 0.1 else math.log(value_at_margin)
-    return xp(x).exp(scale * (x / margin) ** 2)
+    t = x / margin
+    return xp(x).exp(scale * (t * t))  # t * t: inf (term 0) where ** would overflow
 
 
 def product(*weighted_terms):

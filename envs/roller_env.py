@@ -14,50 +14,13 @@ from typing import Any, ClassVar
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
+from roller_gym import episode
 from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig
-from roller_gym.physics import Scene, contact, energy
-from roller_gym.physics import integrators as integ
+from roller_gym.physics import Scene
+from roller_gym.stepper_shim import Stepper
 from roller_gym.task import Task, psi_rate, wrap_rate
 
-__all__ = ["RollerEnv", "episode_start"]
-
-
-def episode_start(
-    config: EnvConfig, rng: np.random.Generator, options: Mapping[str, Any] | None
-) -> tuple[Scene, float, float, float]:
-    """(scene, φ* [rad], φ [rad], φ' [rad/s]) of a new episode, from ``rng`` and ``options``.
-
-    The draws are made in one order (scene, target, state) whatever the options, so that a
-    seed gives the same episode in the single and the vector environment; only the state's
-    draw is skipped when ``options["state"]`` gives it (the draw may be impossible there, e.g.
-    in a scene with too little friction for a random start).
-    """
-    options = dict(options or {})
-    unknown = set(options) - {"state", "target", "scene"}
-    if unknown:
-        raise ValueError(
-            f"reset options {sorted(unknown)} are not known; allowed: 'state', 'target', 'scene'"
-        )
-    scene = config.draw_scene(rng)
-    if options.get("scene") is not None:
-        scene = config.resolve_option_scene(options["scene"])
-        config.task.check_scene(scene)
-    target = config.task.sample_target(rng, scene)
-    if options.get("target") is not None:
-        target = config.task.target_from_option(options["target"], scene)
-    if options.get("state") is None:
-        phi, phi_dot = config.task.sample_state(rng, scene, target)
-    else:
-        try:
-            phi, phi_dot = (float(x) for x in options["state"])
-        except (TypeError, ValueError):
-            raise ValueError(
-                f"options['state']={options['state']!r} must be a pair (phi [rad], "
-                "phi_dot [rad/s]) of numbers"
-            ) from None
-        if not (math.isfinite(phi) and math.isfinite(phi_dot)):
-            raise ValueError(f"options['state']={options['state']!r} must be finite")
-    return scene, float(target), phi, phi_dot
+__all__ = ["RollerEnv"]
 
 
 class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
@@ -104,18 +67,19 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         self.action_space = spaces.Box(-1.0, 1.0, (1,), np.float32)
         size = self.task.observation_size
         self.observation_space = spaces.Box(-1.0, 1.0, (size,), np.float32)
-        self._set_scene(self.config.scene)
+        cfg = self.config
+        self._stepper = Stepper(cfg.scene, method=cfg.integrator, dt=cfg.dt,
+                                tol=cfg.tolerance, substeps=cfg.substeps or None)
+        self._set_scene(cfg.scene)
         self.target = self.task.default_target(self.scene)
         self.phi, self.phi_dot, self.torque = self.target, 0.0, 0.0
+        self._stream_seed: int | None = None  # set by the first reset
+        self._episode = 0
         self._renderer = None
 
     def _set_scene(self, scene: Scene) -> None:
         self.scene = scene
-        # The integrator's buffer: this scene and the settings, the state filled in per step.
-        self._buf = np.zeros(integ.BUFFER_SIZE)
-        self._buf[3:11] = self.config.scene_row(scene)
-        cfg = self.config
-        self._buf[11:15] = (cfg.dt, cfg.tolerance, cfg.method_code, cfg.substeps)
+        self._stepper.set_scene(scene)
         self._q = wrap_rate(scene)
         self._psi_rate = psi_rate(scene)
 
@@ -126,76 +90,48 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         """Start an episode. ``options``: ``"state"``: (φ [rad], φ' [rad/s]); ``"target"``:
         the task's target (see the task); ``"scene"``: a Scene or preset for this episode."""
         super().reset(seed=seed)
-        scene, self.target, self.phi, self.phi_dot = episode_start(
-            self.config, self.np_random, options
+        if seed is not None or self._stream_seed is None:
+            self._stream_seed = episode.random_seed() if seed is None else int(seed)
+            self._episode = 0
+        else:
+            self._episode += 1
+        start = episode.start_episodes(
+            self.config, self.config.scene, np.array([self._stream_seed], np.uint64),
+            np.array([self._episode], np.uint64), options,
         )
-        self._set_scene(scene)
-        self.torque = 0.0
-        c = contact(scene, self.phi, self.phi_dot, 0.0)
-        info = self._info(0.0, float(c.normal), float(c.friction),
-                          float(energy(scene, self.phi, self.phi_dot)), 0, bool(c.lifting),
-                          bool(c.slipping), False, float(c.liftoff_margin), float(c.slip_margin),
-                          self.task.error(self.phi, self.target, self._q))
+        scene = start.scene.item(0)
+        self._set_scene(self.config.scene if scene == self.config.scene else scene)
+        self.target = float(start.target[0])
+        self.phi, self.phi_dot, self.torque = float(start.phi[0]), float(start.phi_dot[0]), 0.0
+        at_start = episode.at_start(start.scene, start.phi, start.phi_dot)
+        out = episode.outcome(self.task, at_start, 0.0, start.target, self._q,
+                              self._psi_rate, 0.0)
         if self.render_mode == "human":
             self.render()
-        return self._observation(), info
+        first = {k: v[0] if isinstance(v, np.ndarray) else v for k, v in out.info.items()}
+        return self._observation(), _scalars(first)
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        if self._stream_seed is None:
+            raise RuntimeError("call reset() before step()")
         if type(action) is np.ndarray and action.shape == (1,) and math.isfinite(action[0]):
             a = min(1.0, max(-1.0, float(action[0])))  # the common case, without the checks' cost
         else:
             a = float(self.config.action_values(action, (1,))[0])
         tau = a * self.task.max_torque
-        buf = self._buf
-        if self.config.method_code == integ.METHODS["dop853"]:
-            r = integ.step(self.scene, self.phi, self.phi_dot, tau, self.config.dt,
-                           method="dop853", tol=self.config.tolerance)
-            buf[integ.OUT:integ.OUT + 10] = (r.phi, r.phi_dot, r.phi_ddot, r.substeps, r.finite,
-                               r.normal_force, r.friction_force, r.energy, r.liftoff_margin,
-                               r.slip_margin)
-        else:
-            buf[0], buf[1], buf[2] = self.phi, self.phi_dot, tau
-            integ.advance_into(buf)
-        phi, phi_dot, _, substeps, finite, normal, friction, energy, lift, slip = (
-            buf[integ.OUT:integ.OUT + 10].tolist()
-        )
-        self.phi, self.phi_dot, self.torque = phi, phi_dot, tau
-        lifting, slipping, nonfinite = lift <= 0.0, slip < 0.0, finite == 0.0
-        error = self.task.error(phi, self.target, self._q)
-        reward = float(self.task.reward_from_error(error, phi_dot, a))
-        info = self._info(tau, normal, friction, energy, substeps, lifting, slipping,
-                          nonfinite, lift, slip, error)
+        result = self._stepper.advance(self.phi, self.phi_dot, tau)
+        self.phi, self.phi_dot, self.torque = result.phi, result.phi_dot, tau
+        out = episode.outcome(self.task, result, a, self.target, self._q, self._psi_rate, tau)
         if self.render_mode == "human":
             self.render()
-        return self._observation(), reward, lifting or slipping or nonfinite, False, info
+        return self._observation(), float(out.reward), bool(out.terminated), False, \
+            _scalars(out.info)
 
     def _observation(self) -> np.ndarray:
         return np.array(
             self.task.observation_terms(self.phi, self.phi_dot, self.target, self._psi_rate),
             dtype=np.float32,
         )
-
-    def _info(self, tau, normal, friction, energy, substeps, lifting, slipping, nonfinite,
-              lift, slip, error) -> dict[str, Any]:
-        return {
-            "phi": self.phi,
-            "phi_dot": self.phi_dot,
-            "psi": self._psi_rate * self.phi,
-            "torque": tau,
-            "normal_force": normal,
-            "friction_force": friction,
-            "energy": energy,
-            "substeps": int(substeps),
-            "lifting": bool(lifting),
-            "slipping": bool(slipping),
-            "nonfinite": bool(nonfinite),
-            "liftoff_margin": lift,
-            "slip_margin": slip,
-            "target_phi": self.target,
-            "target_psi": self._psi_rate * self.target,
-            "position_error": float(error),
-            "is_success": bool(self.task.success_from_error(error, self.phi_dot)),
-        }
 
     # -- rendering ---------------------------------------------------------------------
     def render(self) -> np.ndarray | None:
@@ -212,7 +148,22 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         return self._renderer.draw(self.scene, self.phi, self.target, self.torque,
                                    self.task.max_torque, self.task.observes_target)
 
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        state["_renderer"] = None  # pygame surfaces do not pickle: draw again afterwards
+        return state
+
     def close(self) -> None:
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
+
+
+_NUMPY = {float: np.float64, int: np.int64, bool: np.bool_}
+_INFO_TYPES = tuple((key, _NUMPY[kind]) for key, (kind, _) in episode.INFO_KEYS.items())
+
+
+def _scalars(info: dict[str, Any]) -> dict[str, Any]:
+    """The info of one roller as NumPy scalars (``np.float64``, ``np.int64``, ``np.bool_``):
+    every value has a ``dtype``, as array-based clients (TorchRL) expect."""
+    return {key: kind(info[key]) for key, kind in _INFO_TYPES}

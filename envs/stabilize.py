@@ -62,8 +62,8 @@ class StabilizeTask(Task):
     name = "RollerStabilize"
     reward_threshold = 183.0  # LQR/swing-up return − 5% (docs/RESULTS.md)
 
-    def sample_target(self, rng: np.random.Generator, scene: Scene) -> float:
-        return 0.0
+    def sample_targets(self, u: np.ndarray, scene: Scene) -> np.ndarray:
+        return np.zeros(np.shape(u))
 
 
 class RollerStabilizeEnv(RollerEnv):

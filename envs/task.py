@@ -36,6 +36,7 @@ with w_v = 0.5 (being at rest) and w_u = 0.2 (using little torque; action in [�
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from typing import Any, ClassVar
@@ -44,8 +45,8 @@ import numpy as np
 from roller_gym import rewards
 from roller_gym.physics import Scene, contact, equations, equilibria, holding_torque
 
-__all__ = ["SPEED_SCALE", "Task", "hold_range", "psi_rate", "unstable_rest_positions",
-           "wrap_rate"]
+__all__ = ["SPEED_SCALE", "Task", "hold_range", "per_scene", "psi_rate",
+           "unstable_rest_positions", "wrap_rate"]
 
 #: The speed [rad/s] at which the observed tanh(φ'/SPEED_SCALE) reaches 0.76.
 SPEED_SCALE = 10.0
@@ -92,32 +93,44 @@ class Task:
     def observation_size(self) -> int:
         return 9 if self.observes_target else 5
 
-    # -- per episode (one environment at a time, with its own generator) ---------------
+    # -- per episode (arrays of rollers; the uniforms come from the episode core) ------
+    #: The start-state rule, as the error message states it when no start state is found.
+    start_rule: ClassVar[str] = (
+        "within psi = ±60°, |phi_dot| <= 1 rad/s, rolling under every torque within the "
+        "limit; lower max_torque or raise mu"
+    )
+
     def check_scene(self, scene: Scene) -> None:
         """Raise ValueError if the task cannot be posed in ``scene`` (default: any scene)."""
 
-    def sample_target(self, rng: np.random.Generator, scene: Scene) -> float:
-        """The rest position φ* [rad] the episode asks for."""
+    def sample_targets(self, u: np.ndarray, scene: Scene) -> np.ndarray:
+        """The rest positions φ* [rad] the episodes ask for, from uniforms ``u`` in [0, 1)
+        (one per roller of the batch ``scene``)."""
         raise NotImplementedError
 
-    def sample_state(
-        self, rng: np.random.Generator, scene: Scene, target: float
-    ) -> tuple[float, float]:
-        """The start state (φ [rad], φ' [rad/s]): around the bottom, up to ψ = ±60° and a
-        speed up to ±1 rad/s, redrawn until the roller rolls there (N > 0, |F| <= μN)
-        under any torque within the limit."""
-        q = wrap_rate(scene)
-        limit = math.radians(60.0) / abs(q)  # q < 0 on a drum; q = 1 on the floor
-        torques = np.array([-self.max_torque, 0.0, self.max_torque])
-        for _ in range(1000):
-            phi, phi_dot = rng.uniform(-limit, limit), rng.uniform(-1.0, 1.0)
-            c = contact(scene, phi, phi_dot, torques)
-            if not (np.any(c.lifting) or np.any(c.slipping)):
-                return float(phi), float(phi_dot)
-        raise ValueError(
-            f"no start state of {scene!r} within psi = ±60°, |phi_dot| <= 1 rad/s rolls "
-            f"under torques up to {self.max_torque} N·m; lower max_torque or raise mu"
-        )
+    def start_candidates(
+        self, u_phi: np.ndarray, u_dot: np.ndarray, scene: Scene
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Candidate start states (φ [rad], φ' [rad/s]) of shape (n, K) from uniforms of that
+        shape (``scene`` a batch of n): around the bottom, up to ψ = ±60°, and a speed up
+        to ±1 rad/s."""
+        q = np.abs(wrap_rate(scene))  # q < 0 on a drum; q = 1 on the floor
+        limit = (math.radians(60.0) / np.asarray(q, float)).reshape(-1, 1)
+        return limit * (2.0 * u_phi - 1.0), 2.0 * u_dot - 1.0
+
+    def start_accepted(self, phi: np.ndarray, phi_dot: np.ndarray, scene: Scene) -> np.ndarray:
+        """Whether the roller rolls at each candidate (N > 0, |F| <= μN) under any torque
+        within the limit (−max_torque, 0 and +max_torque)."""
+        rows = {f: np.asarray(getattr(scene, f), float).reshape(-1, 1)
+                for f in ("m", "r", "e", "k", "g", "mu", "damping")}
+        m, r, e, k, g, mu, c = (rows[f] for f in ("m", "r", "e", "k", "g", "mu", "damping"))
+        kappa = np.asarray(scene.kappa, float).reshape(-1, 1)
+        ok = np.ones(np.broadcast_shapes(phi.shape, m.shape), bool)
+        for tau in (-self.max_torque, 0.0, self.max_torque):
+            a = equations.accel(phi, phi_dot, tau, m, r, kappa, e, k, g, c)
+            normal, friction = equations.contact_forces(phi, phi_dot, a, m, r, kappa, e, g)
+            ok &= (normal > 0) & (np.abs(friction) <= mu * normal)
+        return ok
 
     def target_from_option(self, value: Any, scene: Scene) -> float:
         """φ* [rad] from ``reset(options={"target": value})``; tasks with a target override."""
@@ -161,6 +174,19 @@ class Task:
     def success_from_error(self, error, phi_dot):
         """:meth:`success` from the position error already computed."""
         return (abs(error) <= self.success_band) & (abs(phi_dot) <= self.success_speed)
+
+
+def per_scene(function, scene: Scene) -> np.ndarray:
+    """``function(scalar scene)`` for each roller of a batch scene, computed once per
+    distinct scene (float results, as an array of the batch's size)."""
+    n = scene.batch_size or 1
+    rows = np.stack([np.broadcast_to(np.asarray(getattr(scene, f.name), float), (n,))
+                     for f in dataclasses.fields(Scene)], axis=1)
+    unique, inverse = np.unique(rows, axis=0, return_inverse=True)
+    names = [f.name for f in dataclasses.fields(Scene)]
+    values = np.array([function(Scene(**dict(zip(names, row, strict=True))))
+                       for row in unique], dtype=float)
+    return values[np.asarray(inverse).reshape(-1)]
 
 
 def _cached_per_scene(function):

@@ -1,16 +1,25 @@
 """The native vector environment: N rollers advanced together by the batched physics.
 
 ``gymnasium.make_vec(ID, num_envs=N)`` builds it (registered as the tasks'
-``vector_entry_point``). It runs the same task code as the single environment, on arrays,
-and the same compiled integrator kernel per roller, so with the seeds ``seed + i`` it
-reproduces N single environments seeded ``seed + i``. Autoreset is next-step, as in
-Gymnasium's own vector environments: the step after an episode ends returns the first
-observation of the next, with reward 0 and both flags False.
+``vector_entry_point``). A step costs a fixed number of Python operations whatever N is:
+the actions are checked as one array, the batch stepper advances every roller in one
+compiled call, and reward, termination, info and the episode starts of autoreset are
+array operations of the episode core (:mod:`roller_gym.episode`), the same code the single
+environment runs. Sub-environment i, seeded ``seed + i``, reproduces the single environment
+seeded ``seed + i`` exactly.
+
+Autoreset (``autoreset_mode=``, Gymnasium's three modes):
+
+* ``NEXT_STEP`` (the default): the step after an episode ends returns the first
+  observation of the next, with reward 0, both flags False and the reset's info;
+* ``SAME_STEP``: the step that ends an episode returns the first observation of the next;
+  the last observation is in ``info["final_obs"]`` (an object array, None where no episode
+  ended) and the last info in ``info["final_info"]``, each with its ``_`` mask;
+* ``DISABLED``: no autoreset; call ``reset(options={"reset_mask": mask})`` for the ended ones.
 """
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
@@ -19,24 +28,36 @@ from gymnasium import spaces
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
+from roller_gym import episode
 from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig, resolve_scene
 from roller_gym.physics import Scene
-from roller_gym.physics import equations as eq
-from roller_gym.physics import integrators as integ
-from roller_gym.roller_env import episode_start
-from roller_gym.task import Task, psi_rate, wrap_rate
+from roller_gym.stepper_shim import BatchStepper
+from roller_gym.task import Task, wrap_rate
 
 __all__ = ["RollerVectorEnv"]
 
 
+def _autoreset_mode(value: AutoresetMode | str) -> AutoresetMode:
+    """An AutoresetMode from itself, its name (``"SAME_STEP"``, any case) or its value."""
+    for mode in AutoresetMode:
+        if value is mode or (isinstance(value, str) and value.upper() in (
+                mode.name, mode.value.upper())):
+            return mode
+    allowed = ", ".join(f"AutoresetMode.{m.name}" for m in AutoresetMode)
+    raise ValueError(f"autoreset_mode={value!r} is not allowed: pass one of {allowed} "
+                     "(or its name, e.g. 'next_step')")
+
+
 class RollerVectorEnv(VectorEnv):
-    """N rollers, each with its own scene, target and random generator.
+    """N rollers, each with its own scene, target and random stream.
 
     Args:
         num_envs: the number of sub-environments.
         scene: one Scene or preset name for all, or a sequence of them (one per
             sub-environment), or a batch Scene of ``num_envs`` rollers.
         max_episode_steps: truncation; default the task's.
+        autoreset_mode: ``AutoresetMode.NEXT_STEP`` (default), ``SAME_STEP`` or
+            ``DISABLED`` (or their names as strings), as in Gymnasium's vector envs.
         dt, max_torque, tolerance, integrator, substeps, randomize, render_mode: as in
             :class:`roller_gym.roller_env.RollerEnv`, for every sub-environment.
     """
@@ -60,9 +81,12 @@ class RollerVectorEnv(VectorEnv):
         randomize: Mapping[str, tuple[float, float]] | None = None,
         render_mode: str | None = None,
         max_episode_steps: int | None = None,
+        autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
     ) -> None:
-        if not (isinstance(num_envs, int) and num_envs >= 1):
+        if not (isinstance(num_envs, int | np.integer) and not isinstance(num_envs, bool)
+                and num_envs >= 1):
             raise ValueError(f"num_envs={num_envs!r} must be an integer >= 1")
+        num_envs = int(num_envs)
         per_env = self._per_env_scenes(scene, num_envs)
         self.config = EnvConfig.build(
             self.task_class, scene=None if per_env else scene, dt=dt, max_torque=max_torque,
@@ -73,40 +97,50 @@ class RollerVectorEnv(VectorEnv):
         if integrator == "dop853":
             raise ValueError("integrator='dop853' is a reference for the single environment; "
                              "the vector environment takes 'rk8', 'rk4', 'euler' or 'midpoint'")
-        scenes = [resolve_scene(s, self.config.task.default_scene) for s in per_env] or [
-            self.config.scene
-        ] * num_envs
-        for s in {id(s): s for s in scenes}.values():
-            self.config.task.check_scene(s)
-        # One configuration per sub-environment: the same settings, its own base scene.
-        self._configs = [
-            c if c.scene is s else dataclasses.replace(c, scene=s)
-            for c, s in zip([self.config] * num_envs, scenes, strict=True)
-        ]
-        self.task = self.config.task
+        self.autoreset_mode = _autoreset_mode(autoreset_mode)
+        self.metadata = {**type(self).metadata, "autoreset_mode": self.autoreset_mode}
+        task = self.task = self.config.task
+        if per_env:
+            resolved = [resolve_scene(s, task.default_scene) for s in per_env]
+            for s in {id(s): s for s in resolved}.values():
+                task.check_scene(s)
+            self._base = Scene.stack(resolved)
+        else:
+            self._base = self.config.scene
         self.num_envs = num_envs
         self.render_mode = render_mode
-        self.max_episode_steps = (
-            self.task.max_episode_steps if max_episode_steps is None else int(max_episode_steps)
-        )
+        if max_episode_steps is None:
+            max_episode_steps = task.max_episode_steps
+        if not (isinstance(max_episode_steps, int | np.integer)
+                and not isinstance(max_episode_steps, bool) and max_episode_steps >= 1):
+            raise ValueError(
+                f"max_episode_steps={max_episode_steps!r} must be an integer >= 1 (or None: "
+                f"the task's, {task.max_episode_steps})"
+            )
+        self.max_episode_steps = int(max_episode_steps)
         self.single_action_space = spaces.Box(-1.0, 1.0, (1,), np.float32)
         self.action_space = batch_space(self.single_action_space, num_envs)
-        size = self.task.observation_size
+        size = task.observation_size
         self.single_observation_space = spaces.Box(-1.0, 1.0, (size,), np.float32)
         self.observation_space = batch_space(self.single_observation_space, num_envs)
 
-        self.scenes = list(scenes)
-        self._rows = np.array([self.config.scene_row(s) for s in scenes])
-        self._q = np.array([wrap_rate(s) for s in scenes], dtype=float)
-        self._psi_rate = np.array([psi_rate(s) for s in scenes], dtype=float)
+        cfg = self.config
+        self._stepper = BatchStepper(num_envs, method=cfg.integrator, dt=cfg.dt,
+                                     tol=cfg.tolerance, substeps=cfg.substeps or None)
+        everyone = np.arange(num_envs)
+        self._scene = episode.take(self._base, everyone, num_envs)
+        self._stepper.set_scenes(self._scene)
+        self._q = np.asarray(wrap_rate(self._scene), float)
+        self._psi_rate = np.where(self._scene.kappa == 0, 0.0, self._q)
         self.phi = np.zeros(num_envs)
         self.phi_dot = np.zeros(num_envs)
-        self.target = np.array([self.task.default_target(s) for s in scenes], dtype=float)
+        self.target = episode.per_scene_target(task, self._scene)
         self.torque = np.zeros(num_envs)
         self.steps = np.zeros(num_envs, dtype=np.int64)
         self._done = np.zeros(num_envs, dtype=bool)
-        self._rngs: list[np.random.Generator] = []
-        self._raw = np.empty((10, num_envs))
+        self._seeds = np.zeros(num_envs, np.uint64)
+        self._episodes = np.zeros(num_envs, np.uint64)
+        self._seeded = False
         self._renderers: list[Any] | None = None
 
     @staticmethod
@@ -124,18 +158,31 @@ class RollerVectorEnv(VectorEnv):
             return list(scene)
         return []
 
-    def _start(self, i: int, options: Mapping[str, Any] | None) -> None:
-        """Start a new episode in sub-environment i (the same draws as RollerEnv.reset)."""
-        config = self._configs[i]
-        scene, target, phi, phi_dot = episode_start(config, self._rngs[i], options)
-        if scene is not self.scenes[i]:  # randomized or set by options: its numbers anew
-            self.scenes[i] = scene
-            self._rows[i] = config.scene_row(scene)
-            self._q[i] = wrap_rate(scene)
-            self._psi_rate[i] = psi_rate(scene)
-        self.target[i], self.phi[i], self.phi_dot[i] = target, phi, phi_dot
-        self.torque[i] = 0.0
-        self.steps[i] = 0
+    @property
+    def scenes(self) -> list[Scene]:
+        """Each sub-environment's scene of its current episode (scalar Scenes)."""
+        return [self._scene.item(i) for i in range(self.num_envs)]
+
+    # -- episode starts ------------------------------------------------------------------
+    def _start(self, idx: np.ndarray, options: Mapping[str, Any] | None) -> dict[str, Any]:
+        """Start new episodes in sub-environments ``idx``; returns their reset info."""
+        base = self._base if self._base.batch_size is None else episode.take(
+            self._base, idx, self.num_envs)
+        start = episode.start_episodes(self.config, base, self._seeds[idx],
+                                       self._episodes[idx], options)
+        if self.config.randomize or (options or {}).get("scene") is not None:
+            self._scene = episode.put(self._scene, idx, start.scene)
+            self._stepper.set_scenes(start.scene, idx)
+            q = np.asarray(wrap_rate(start.scene), float)
+            self._q[idx] = q
+            self._psi_rate[idx] = np.where(start.scene.kappa == 0, 0.0, q)
+        self.target[idx], self.phi[idx], self.phi_dot[idx] = (start.target, start.phi,
+                                                              start.phi_dot)
+        self.torque[idx] = 0.0
+        self.steps[idx] = 0
+        rest = episode.at_start(start.scene, start.phi, start.phi_dot)
+        return episode.outcome(self.task, rest, 0.0, start.target, self._q[idx],
+                               self._psi_rate[idx], 0.0).info
 
     def reset(
         self,
@@ -143,127 +190,107 @@ class RollerVectorEnv(VectorEnv):
         seed: int | Sequence[int | None] | None = None,
         options: dict[str, Any] | None = None,
     ) -> tuple[np.ndarray, dict[str, Any]]:
-        """Reset sub-environments (all, or those in ``options["reset_mask"]``).
+        """Reset sub-environments: all, or those of ``options["reset_mask"]`` (a boolean
+        array of ``num_envs``).
 
         ``seed``: an int gives sub-environment i the seed ``seed + i``; a list gives each its
-        own. ``options`` as in :meth:`roller_gym.roller_env.RollerEnv.reset`, for every reset
-        sub-environment.
+        own (None: a fresh one). ``options`` as in
+        :meth:`roller_gym.roller_env.RollerEnv.reset`, for every reset sub-environment.
         """
+        n = self.num_envs
         options = dict(options or {})
-        mask = options.pop("reset_mask", None)
-        mask = np.ones(self.num_envs, bool) if mask is None else np.asarray(mask, bool)
-        if seed is None:
-            seeds: Sequence[int | None] = [None] * self.num_envs
-        elif isinstance(seed, int | np.integer):
-            seeds = [int(seed) + i for i in range(self.num_envs)]
+        mask = episode.reset_mask(options.pop("reset_mask", None), n)
+        seeds = episode.vector_seeds(seed, n)
+        if seeds is None and not self._seeded:
+            seeds = [None] * n
+        if seeds is not None:
+            # Seeded rows start their streams anew; on the first reset every row gets one.
+            update = mask | (not self._seeded)
+            fresh = np.array([episode.random_seed() if s is None else s for s in seeds],
+                             dtype=np.uint64)
+            self._seeds[update] = fresh[update]
+            self._episodes[update] = 0
+            self._seeded = True
+            if isinstance(seed, int | np.integer):
+                self._np_random, self._np_random_seed = seeding.np_random(int(seed))
         else:
-            seeds = list(seed)
-            if len(seeds) != self.num_envs:
-                raise ValueError(f"seed has {len(seeds)} entries for num_envs={self.num_envs}")
-        if not self._rngs:
-            self._rngs = [seeding.np_random(s)[0] for s in seeds]
-        else:
-            for i, s in enumerate(seeds):
-                if s is not None:
-                    self._rngs[i] = seeding.np_random(s)[0]
-        if seed is not None:
-            self._np_random, self._np_random_seed = seeding.np_random(
-                seeds[0] if isinstance(seeds[0], int) else None
-            )
-        for i in np.flatnonzero(mask):
-            self._start(int(i), options)
-        self._done[mask] = False
-        return self._observation(), self._reset_info()
+            self._episodes[mask] += np.uint64(1)
+        idx = np.flatnonzero(mask)
+        rows = self._start(idx, options)
+        self._done[idx] = False
+        return self._observation(), self._masked_info(rows, idx)
 
+    # -- a step --------------------------------------------------------------------------
     def step(
         self, actions: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         a = self.config.action_values(actions, (self.num_envs, 1))[:, 0]
-        if not self._rngs:
+        if not self._seeded:
             raise RuntimeError("call reset() before step()")
         tau = a * self.task.max_torque
-        cfg = self.config
-        integ.advance_batch(self._rows, self.phi, self.phi_dot, tau, cfg.dt, cfg.method_code,
-                            cfg.tolerance, cfg.substeps, self._raw)
-        raw = self._raw
-        self.phi, self.phi_dot, self.torque = raw[0].copy(), raw[1].copy(), tau
-        finite = raw[4] != 0
-        lifting, slipping = raw[8] <= 0.0, raw[9] < 0.0
-        terminated = lifting | slipping | ~finite
+        result = self._stepper.advance(self.phi, self.phi_dot, tau)
+        out = episode.outcome(self.task, result, a, self.target, self._q, self._psi_rate, tau)
+        self.phi, self.phi_dot, self.torque = result.phi, result.phi_dot, tau
         self.steps += 1
+        reward = np.asarray(out.reward, dtype=np.float64)
+        terminated = np.asarray(out.terminated, dtype=bool)
         truncated = self.steps >= self.max_episode_steps
-        error = np.asarray(self.task.error(self.phi, self.target, self._q), dtype=float)
-        reward = np.asarray(self.task.reward_from_error(error, self.phi_dot, a), dtype=np.float64)
-        info = self._info(raw, lifting, slipping, ~finite, error)
+        info = out.info
+        everyone = np.ones(self.num_envs, dtype=bool)
+        info.update({f"_{k}": everyone for k in list(info)})
 
-        # Next-step autoreset: the sub-environments that ended last step start over now.
-        restarted = np.flatnonzero(self._done)
-        for i in restarted:
-            self._start(int(i), None)
-        if restarted.size:
-            reward[restarted] = 0.0
-            terminated[restarted] = False
-            truncated[restarted] = False
-            self._fill_reset_info(info, restarted)
-        self._done = terminated | truncated
+        if self.autoreset_mode == AutoresetMode.NEXT_STEP:
+            # The sub-environments that ended last step start over now.
+            restarted = np.flatnonzero(self._done)
+            if restarted.size:
+                self._restart(restarted, info)
+                reward[restarted] = 0.0
+                terminated[restarted] = False
+                truncated[restarted] = False
+            self._done = terminated | truncated
+        elif self.autoreset_mode == AutoresetMode.SAME_STEP:
+            ended = np.flatnonzero(terminated | truncated)
+            if ended.size:
+                final_obs = np.full(self.num_envs, None, dtype=object)
+                last = self._observation()
+                for i in ended:  # per ended episode: Gymnasium's layout is an object array
+                    final_obs[i] = last[i]
+                final_info = {k: (v.copy() if isinstance(v, np.ndarray) and not k.startswith("_")
+                                  else v) for k, v in info.items()}
+                ended_mask = np.zeros(self.num_envs, dtype=bool)
+                ended_mask[ended] = True
+                final_info.update({f"_{k}": ended_mask for k in episode.INFO_KEYS})
+                self._restart(ended, info)
+                info.update({"final_obs": final_obs, "_final_obs": ended_mask,
+                             "final_info": final_info, "_final_info": ended_mask})
         return self._observation(), reward, terminated, truncated, info
 
-    # -- observation and info --------------------------------------------------------
+    def _restart(self, idx: np.ndarray, info: dict[str, Any]) -> None:
+        """Autoreset: new episodes in ``idx``, their reset info written into ``info``."""
+        self._episodes[idx] += np.uint64(1)
+        rows = self._start(idx, None)
+        for key, value in rows.items():
+            info[key] = np.array(info[key], copy=True)
+            info[key][idx] = value
+
+    # -- observation and info ------------------------------------------------------------
     def _observation(self) -> np.ndarray:
         terms = self.task.observation_terms(self.phi, self.phi_dot, self.target, self._psi_rate)
         return np.stack(terms, axis=1).astype(np.float32)
 
-    def _info(self, raw: np.ndarray, lifting, slipping, nonfinite, error) -> dict[str, Any]:
-        info = {
-            "phi": self.phi.copy(),
-            "phi_dot": self.phi_dot.copy(),
-            "psi": self._psi_rate * self.phi,
-            "torque": self.torque.copy(),
-            "normal_force": raw[5].copy(),
-            "friction_force": raw[6].copy(),
-            "energy": raw[7].copy(),
-            "substeps": raw[3].astype(np.int64),
-            "lifting": lifting,
-            "slipping": slipping,
-            "nonfinite": nonfinite,
-            "liftoff_margin": raw[8].copy(),
-            "slip_margin": raw[9].copy(),
-            "target_phi": self.target.copy(),
-            "target_psi": self._psi_rate * self.target,
-            "position_error": error,
-            "is_success": np.asarray(self.task.success_from_error(error, self.phi_dot),
-                                     dtype=bool),
-        }
-        mask = np.ones(self.num_envs, dtype=bool)
-        info.update({f"_{k}": mask for k in list(info)})
+    def _masked_info(self, rows: dict[str, Any], idx: np.ndarray) -> dict[str, Any]:
+        """A vector info whose rows ``idx`` hold ``rows`` and whose masks mark only them."""
+        mask = np.zeros(self.num_envs, dtype=bool)
+        mask[idx] = True
+        info: dict[str, Any] = {}
+        for key, (kind, _) in episode.INFO_KEYS.items():
+            column = np.zeros(self.num_envs, dtype=kind)
+            column[idx] = rows[key]
+            info[key] = column
+            info[f"_{key}"] = mask
         return info
 
-    def _reset_info(self) -> dict[str, Any]:
-        n = self.num_envs
-        info = self._info(np.zeros((10, n)), np.zeros(n, bool), np.zeros(n, bool),
-                          np.zeros(n, bool), np.zeros(n))
-        self._fill_reset_info(info, np.arange(self.num_envs))
-        return info
-
-    def _fill_reset_info(self, info: dict[str, Any], idx: np.ndarray) -> None:
-        """The info entries of sub-environments that just started: their start state."""
-        m, r, kappa, e, k, g, c, mu = self._rows[idx].T
-        phi, phi_dot, target, q = self.phi[idx], self.phi_dot[idx], self.target[idx], self._q[idx]
-        a = eq.accel(phi, phi_dot, 0.0, m, r, kappa, e, k, g, c)
-        normal, friction = eq.contact_forces(phi, phi_dot, a, m, r, kappa, e, g)
-        lift, slip = normal / (m * g), (mu * normal - np.abs(friction)) / (m * g)
-        for key, value in (
-            ("phi", phi), ("phi_dot", phi_dot), ("psi", self._psi_rate[idx] * phi),
-            ("torque", 0.0), ("normal_force", normal), ("friction_force", friction),
-            ("energy", eq.energy(phi, phi_dot, m, r, kappa, e, k, g)), ("substeps", 0),
-            ("lifting", lift <= 0), ("slipping", slip < 0), ("nonfinite", False),
-            ("liftoff_margin", lift), ("slip_margin", slip), ("target_phi", target),
-            ("target_psi", self._psi_rate[idx] * target),
-            ("position_error", self.task.error(phi, target, q)),
-            ("is_success", self.task.success(phi, phi_dot, target, q)),
-        ):
-            info[key][idx] = value
-
+    # -- rendering -------------------------------------------------------------------------
     def render(self) -> tuple[np.ndarray, ...] | None:
         """One RGB frame per sub-environment (``render_mode="rgb_array"``)."""
         if self.render_mode is None:
@@ -273,8 +300,9 @@ class RollerVectorEnv(VectorEnv):
         if self._renderers is None:
             self._renderers = [Renderer("rgb_array", self.metadata["render_fps"])
                                for _ in range(self.num_envs)]
+        scenes = self.scenes
         return tuple(
-            r.draw(self.scenes[i], self.phi[i], self.target[i], self.torque[i],
+            r.draw(scenes[i], self.phi[i], self.target[i], self.torque[i],
                    self.task.max_torque, self.task.observes_target)
             for i, r in enumerate(self._renderers)
         )
@@ -283,3 +311,8 @@ class RollerVectorEnv(VectorEnv):
         for r in getattr(self, "_renderers", None) or []:  # also after a failed __init__
             r.close()
         self._renderers = None
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        state["_renderers"] = None  # pygame surfaces do not pickle: draw again afterwards
+        return state

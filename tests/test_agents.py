@@ -65,10 +65,10 @@ def test_decode_recovers_the_state_the_env_reports(env_id, scene):
 
 
 def test_decode_picks_the_turn_beyond_one_revolution_of_phi():
-    """In the paper's scene ψ = φ/4: φ = 4 rad and φ = 4 − 2π share cos φ and sin φ, and only
-    (cos ψ, sin ψ) tells them apart."""
-    env = gym.make("roller_gym/RollerStabilize-v0")
-    for phi in (4.0, 4.0 - 2 * np.pi, -3.9, 7.5):
+    """With R = 10 r, ψ = φ/9: φ = 4 rad and φ = 4 − 2π share cos φ and sin φ, and only
+    (cos ψ, sin ψ) tells them apart; φ = 7.5 and −8 rad lie beyond one turn of φ."""
+    env = gym.make("roller_gym/RollerStabilize-v0", scene=roller_gym.Scene(R=1.0))
+    for phi in (4.0, 4.0 - 2 * np.pi, -3.9, 7.5, -8.0):
         obs, _ = env.reset(options={"state": (phi, -2.0)})
         s = decode_observation(obs, env.unwrapped.scene)
         assert s.phi[0] == pytest.approx(phi, abs=1e-5)

@@ -339,7 +339,7 @@ def test_info_forces_and_energy_follow_physics(env_id, scene_name):
         check_info_physics(env, info, tau)
         assert info["energy"] - before["energy"] == pytest.approx(
             tau * (info["phi"] - before["phi"]), abs=1e-8)
-        assert isinstance(info["substeps"], int) and info["substeps"] >= 1
+        assert isinstance(info["substeps"], np.int64) and info["substeps"] >= 1
         n, f = info["normal_force"], info["friction_force"]
         if n <= 0:
             assert info["lifting"]
@@ -385,15 +385,29 @@ def test_terminated_when_the_roller_slips():
 
 
 def test_terminated_when_the_roller_lifts_off():
-    """A disc (e = 0) on top of a drum of radius 0.5 m, fast: N/m = g − r²/(|R| + r) φ'²
-    < 0 by PHYSICS.md, so the roller leaves the drum."""
-    scene = Scene(R=-0.5, e=0.0, k=0.07)
+    """A disc (e = 0) on top of a drum of radius 0.5 m: N/m = g cos ψ − r²/(|R| + r) φ'² by
+    PHYSICS.md. At φ' = 23 rad/s it still rolls on top (N > 0); driven faster, it leaves
+    the drum during the step (μ large, so it cannot slip first)."""
+    scene = Scene(R=-0.5, e=0.0, k=0.07, mu=100.0)
     env = gym.make("roller_gym/RollerStabilize-v0", scene=scene)
-    _, info = env.reset(seed=0, options={"state": (0.0, 30.0)})
+    _, info = env.reset(seed=0, options={"state": (0.0, 23.0)})
+    assert model(scene, 0.0, 23.0, 0.0)["normal"] > 0
+    assert not info["lifting"] and info["normal_force"] > 0
+    _, _, terminated, truncated, info = env.step(act(1.0))
+    assert terminated and not truncated and info["lifting"] and not info["nonfinite"]
+    assert info["liftoff_margin"] <= 0
+
+
+def test_reset_refuses_a_start_state_that_does_not_roll():
+    """At φ' = 30 rad/s on top of the drum N < 0 (PHYSICS.md): no episode can start there."""
+    scene = Scene(R=-0.5, e=0.0, k=0.07)
     assert model(scene, 0.0, 30.0, 0.0)["normal"] < 0
-    assert info["lifting"] and info["normal_force"] < 0
-    _, _, terminated, truncated, info = env.step(act(0.0))
-    assert terminated and not truncated and info["lifting"]
+    env = gym.make("roller_gym/RollerStabilize-v0", scene=scene)
+    with pytest.raises(ValueError, match=r"options\['state'\]=\(0.0, 30.0\).*does not roll"):
+        env.reset(seed=0, options={"state": (0.0, 30.0)})
+    # (4π, 0) on the paper scene: ψ = π, the top of the cylinder, at rest.
+    with pytest.raises(ValueError, match="does not roll"):
+        gym.make("roller_gym/RollerStabilize-v0").reset(options={"state": (4 * math.pi, 0.0)})
 
 
 @pytest.mark.parametrize("env_id", IDS)

@@ -1,0 +1,366 @@
+"""The episode core, written once for the single and the vector environment.
+
+It holds what happens between the integrator and Gymnasium, on arrays of rollers (the
+single environment passes arrays of one at reset, and floats on its fast step path):
+
+* **Random streams.** Every random draw of an episode start is a counter-based uniform:
+  ``uniform(seed, episode, draw)``, a pure function of the sub-environment's seed, the
+  number of the episode since that seed was set, and the draw's fixed index. So sub-
+  environment i of a vector env seeded ``s`` (seed ``s + i``) makes exactly the draws
+  of a single env seeded ``s + i``, and a whole batch of episode starts is a handful of
+  array operations: no generator object per sub-environment.
+* **Episode starts** (:func:`start_episodes`): the scene (domain randomization), the
+  target and the start state (a rejection draw, vectorized), with reset options.
+* **The step's outcome** (:func:`outcome`): reward, termination and success from a
+  :class:`~roller_gym.physics.integrators.StepResult`, and the info (:data:`INFO_KEYS`).
+
+The generator is SplitMix64's mixing function applied to a counter that combines the
+three numbers (as in counter-based generators such as Philox or Squares): each
+``(seed, episode, draw)`` gives an independent 53-bit uniform in [0, 1).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, fields
+from typing import Any
+
+import numpy as np
+from roller_gym.physics import Scene
+from roller_gym.physics import equations as eq
+
+__all__ = [
+    "INFO_KEYS",
+    "Outcome",
+    "random_seed",
+    "scene_rows",
+    "start_episodes",
+    "take",
+    "uniform",
+]
+
+_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
+_M1 = np.uint64(0xBF58476D1CE4E5B9)
+_M2 = np.uint64(0x94D049BB133111EB)
+#: Draw indices: the randomized scene fields, the target, then the start-state candidates.
+_SCENE_DRAW, _TARGET_DRAW, _STATE_DRAW = 0, 16, 32
+#: Start-state candidates drawn per round, and the most rounds before giving up.
+CANDIDATES, ROUNDS = 4, 256
+_FIELDS = tuple(f.name for f in fields(Scene))
+
+
+def _mix(x: np.ndarray) -> np.ndarray:
+    """SplitMix64's finalizer on uint64 (wrapping arithmetic)."""
+    x = (x ^ (x >> np.uint64(30))) * _M1
+    x = (x ^ (x >> np.uint64(27))) * _M2
+    return x ^ (x >> np.uint64(31))
+
+
+def uniform(seed: np.ndarray, episode: np.ndarray, draw: np.ndarray | int) -> np.ndarray:
+    """Uniforms in [0, 1): one per element of the broadcast (seed, episode, draw)."""
+    with np.errstate(over="ignore"):
+        s = _mix(np.asarray(seed, dtype=np.uint64) + _GOLDEN)
+        x = _mix(s + np.asarray(episode, dtype=np.uint64) * _GOLDEN)
+        x = _mix(x + (np.asarray(draw, dtype=np.uint64) + np.uint64(1)) * _M1)
+    return (x >> np.uint64(11)).astype(np.float64) * 2.0**-53
+
+
+def random_seed() -> int:
+    """A fresh seed from the operating system's entropy (for ``reset()`` with no seed)."""
+    return int(np.random.SeedSequence().generate_state(1, np.uint64)[0] >> np.uint64(1))
+
+
+def take(scene: Scene, index: np.ndarray, size: int) -> Scene:
+    """Rollers ``index`` of a scene broadcast to ``size`` rollers, as a batch Scene."""
+    return Scene(**{f: np.broadcast_to(np.asarray(getattr(scene, f), float), (size,))[index]
+                    for f in _FIELDS})
+
+
+def scene_rows(scene: Scene, size: int) -> dict[str, np.ndarray]:
+    """The scene's fields as arrays of ``size`` (a scalar scene is broadcast)."""
+    return {f: np.broadcast_to(np.asarray(getattr(scene, f), float), (size,)) for f in _FIELDS}
+
+
+def put(scene: Scene, index: np.ndarray, rows: Scene) -> Scene:
+    """A copy of the batch ``scene`` whose rollers ``index`` are those of ``rows``."""
+    out = {}
+    for f in _FIELDS:
+        column = np.array(getattr(scene, f), dtype=float, copy=True)
+        column[index] = getattr(rows, f)
+        out[f] = column
+    return Scene(**out)
+
+
+def per_scene_target(task: Any, scene: Scene) -> np.ndarray:
+    """The task's default target φ* [rad] of each roller (before the first reset)."""
+    from roller_gym.task import per_scene
+
+    return per_scene(task.default_target, scene)
+
+
+def vector_seeds(seed: Any, n: int) -> list[int | None] | None:
+    """The seeds of n sub-environments from ``reset(seed=...)``: an int s gives s + i, a
+    sequence gives one each (None: a fresh one); None gives None (no reseeding).
+
+    Raises:
+        ValueError: a seed is not a non-negative integer (or None), or the sequence's
+            length is not n.
+    """
+    def valid(s: Any) -> bool:
+        return s is None or (isinstance(s, int | np.integer) and not isinstance(s, bool)
+                             and s >= 0)
+
+    if seed is None:
+        return None
+    if isinstance(seed, int | np.integer) and valid(seed):
+        return [int(seed) + i for i in range(n)]
+    if isinstance(seed, list | tuple | np.ndarray) and all(valid(s) for s in seed):
+        if len(seed) != n:
+            raise ValueError(f"seed has {len(seed)} entries for num_envs={n}; it needs {n}")
+        return [None if s is None else int(s) for s in seed]
+    raise ValueError(
+        f"seed={seed!r} must be None, a non-negative integer, or a sequence of {n} of them"
+    )
+
+
+def reset_mask(value: Any, n: int) -> np.ndarray:
+    """``options["reset_mask"]`` as a boolean array of n (None: every sub-environment).
+
+    Raises:
+        ValueError: not a boolean array (or sequence of bools) of length n, or no True.
+    """
+    if value is None:
+        return np.ones(n, dtype=bool)
+    mask = np.asarray(value)
+    if mask.dtype != np.bool_ or mask.shape != (n,) or not mask.any():
+        raise ValueError(
+            f"options['reset_mask']={value!r} must be a boolean array of shape ({n},) with at "
+            "least one True"
+        )
+    return mask
+
+
+@dataclass
+class Starts:
+    """Episode starts of some rollers: their scene (a batch), target and state (arrays)."""
+
+    scene: Scene
+    target: np.ndarray
+    phi: np.ndarray
+    phi_dot: np.ndarray
+
+
+def start_episodes(
+    config: Any,
+    base: Scene,
+    seed: np.ndarray,
+    episode: np.ndarray,
+    options: Mapping[str, Any] | None,
+) -> Starts:
+    """The starts of ``len(seed)`` episodes (scene, target, state), drawn from the streams.
+
+    Args:
+        config: the environment's :class:`~roller_gym.config.EnvConfig` (task, randomize).
+        base: the base scene of those rollers (scalar, or a batch of ``len(seed)``).
+        seed: the rollers' stream seeds (uint64).
+        episode: the number of each roller's episode since its seed was set.
+        options: reset options: ``"state"`` (φ [rad], φ' [rad/s]), ``"target"`` (the
+            task's target, see the task), ``"scene"`` (a Scene or preset for these
+            episodes). Draws keep their indices whatever the options, so a seed gives the
+            same episode in the single and the vector environment.
+    """
+    n = len(seed)
+    options = dict(options or {})
+    unknown = set(options) - {"state", "target", "scene"}
+    if unknown:
+        raise ValueError(
+            f"reset options {sorted(unknown)} are not known; allowed: 'state', 'target', 'scene'"
+        )
+    task = config.task
+    if options.get("scene") is not None:
+        scene = config.resolve_option_scene(options["scene"])
+        task.check_scene(scene)
+        scene = take(scene, np.zeros(n, int), 1)
+    elif config.randomize:
+        fields_ = scene_rows(base, n)
+        drawn = {
+            name: low + (high - low) * uniform(seed, episode, _SCENE_DRAW + j)
+            for j, (name, (low, high)) in enumerate(sorted(config.randomize.items()))
+        }
+        scene = Scene(**{**fields_, **drawn})
+    else:
+        scene = take(base, np.arange(n) if base.batch_size else np.zeros(n, int),
+                     base.batch_size or 1)
+    target = task.sample_targets(uniform(seed, episode, _TARGET_DRAW), scene)
+    if options.get("target") is not None:
+        target = np.array([task.target_from_option(options["target"], scene.item(i))
+                           for i in range(n)], dtype=float)
+    if options.get("state") is not None:
+        phi, phi_dot = state_option(options["state"], scene, n)
+    else:
+        phi, phi_dot = _draw_states(task, scene, target, seed, episode)
+    return Starts(scene, np.asarray(target, float), phi, phi_dot)
+
+
+def _draw_states(task: Any, scene: Scene, target: np.ndarray, seed: np.ndarray,
+                 episode: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The task's start states: the first of its candidates that it accepts, per roller."""
+    n = len(seed)
+    phi, phi_dot = np.zeros(n), np.zeros(n)
+    todo = np.arange(n)
+    draws = _STATE_DRAW + 2 * np.arange(CANDIDATES)
+    for round_ in range(ROUNDS):
+        sub = take(scene, todo, n)
+        d = draws + 2 * CANDIDATES * round_
+        u_phi = uniform(seed[todo, None], episode[todo, None], d)
+        u_dot = uniform(seed[todo, None], episode[todo, None], d + 1)
+        c_phi, c_dot = task.start_candidates(u_phi, u_dot, sub)
+        ok = task.start_accepted(c_phi, c_dot, sub)
+        found = ok.any(axis=1)
+        first = np.argmax(ok, axis=1)
+        rows = np.flatnonzero(found)
+        phi[todo[rows]] = c_phi[rows, first[rows]]
+        phi_dot[todo[rows]] = c_dot[rows, first[rows]]
+        todo = todo[~found]
+        if todo.size == 0:
+            return phi, phi_dot
+    raise ValueError(
+        f"no start state found for {todo.size} episode(s) after {ROUNDS * CANDIDATES} "
+        f"candidates in {take(scene, todo[:1], n)!r}: {task.start_rule}"
+    )
+
+
+# -- the step's outcome ----------------------------------------------------------------
+#: The info keys of every step and reset, with their types and units.
+INFO_KEYS: dict[str, tuple[type, str]] = {
+    "phi": (float, "φ [rad]"),
+    "phi_dot": (float, "φ' [rad/s]"),
+    "psi": (float, "ψ [rad], where the roller is on the surface"),
+    "torque": (float, "τ [N·m] applied over the step (0 at reset)"),
+    "normal_force": (float, "N [N] at the end of the step (NaN where the step failed)"),
+    "friction_force": (float, "F [N] at the end of the step (NaN where the step failed)"),
+    "energy": (float, "E [J] at the end of the step (NaN where the step failed)"),
+    "substeps": (int, "integrator substeps taken (0 at reset)"),
+    "lifting": (bool, "the roller left the surface (N <= 0) during the step"),
+    "slipping": (bool, "the friction needed exceeded μN during the step"),
+    "nonfinite": (bool, "the step could not stay finite: the state is the one before it"),
+    "liftoff_margin": (float, "smallest N/(m g) during the step [-] (NaN: failed step)"),
+    "slip_margin": (float, "smallest (μN − |F|)/(m g) during the step [-] (NaN: failed)"),
+    "target_phi": (float, "the target φ* [rad]"),
+    "target_psi": (float, "the target ψ* [rad]"),
+    "position_error": (float, "the task's position error [rad of φ]"),
+    "is_success": (bool, "inside the task's success band at rest"),
+}
+
+
+@dataclass
+class Outcome:
+    """Reward, flags and info of a step (floats for one roller, arrays for a batch)."""
+
+    reward: Any
+    terminated: Any
+    info: dict[str, Any]
+
+
+def outcome(task: Any, result: Any, action: Any, target: Any, q: Any, psi_rate: Any,
+            tau: Any) -> Outcome:
+    """What a step means for the task: the termination rule, the reward, the info.
+
+    ``result`` is the integrator's StepResult (floats or arrays); the step terminates on
+    lift-off, slip or a step that could not stay finite, each flagged in the info; a failed
+    step earns no reward.
+    """
+    finite = result.finite
+    lifting = result.liftoff_margin <= 0.0
+    slipping = result.slip_margin < 0.0
+    nonfinite = ~finite if isinstance(finite, np.ndarray) else not finite
+    error = task.error(result.phi, target, q)
+    reward = task.reward_from_error(error, result.phi_dot, action)
+    if isinstance(finite, np.ndarray):
+        reward = np.where(finite, reward, 0.0)
+        terminated = lifting | slipping | nonfinite
+    else:
+        reward = reward if finite else 0.0
+        terminated = lifting or slipping or nonfinite
+    info = {
+        "phi": result.phi,
+        "phi_dot": result.phi_dot,
+        "psi": psi_rate * result.phi,
+        "torque": tau,
+        "normal_force": result.normal_force,
+        "friction_force": result.friction_force,
+        "energy": result.energy,
+        "substeps": result.substeps,
+        "lifting": lifting,
+        "slipping": slipping,
+        "nonfinite": nonfinite,
+        "liftoff_margin": result.liftoff_margin,
+        "slip_margin": result.slip_margin,
+        "target_phi": target,
+        "target_psi": psi_rate * target,
+        "position_error": error,
+        "is_success": task.success_from_error(error, result.phi_dot),
+    }
+    return Outcome(reward, terminated, info)
+
+
+@dataclass(frozen=True)
+class RestState:
+    """The StepResult-like state of rollers at the start of an episode (no step taken)."""
+
+    phi: Any
+    phi_dot: Any
+    phi_ddot: Any
+    substeps: Any
+    finite: Any
+    normal_force: Any
+    friction_force: Any
+    energy: Any
+    liftoff_margin: Any
+    slip_margin: Any
+
+
+def at_start(scene: Scene, phi: np.ndarray, phi_dot: np.ndarray) -> RestState:
+    """The contact forces, energy and margins of start states under zero torque."""
+    m, r, kappa, e, k, g, c = scene.params
+    mu = scene.mu
+    a = eq.accel(phi, phi_dot, 0.0, m, r, kappa, e, k, g, c)
+    normal, friction = eq.contact_forces(phi, phi_dot, a, m, r, kappa, e, g)
+    weight = m * g
+    n = len(phi)
+    return RestState(
+        phi, phi_dot, a, np.zeros(n, np.int64), np.ones(n, bool), normal, friction,
+        eq.energy(phi, phi_dot, m, r, kappa, e, k, g), normal / weight,
+        (mu * normal - np.abs(friction)) / weight,
+    )
+
+
+def state_option(value: Any, scene: Scene, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(φ, φ') arrays of n from ``reset(options={"state": (φ [rad], φ' [rad/s])})``.
+
+    Raises:
+        ValueError: not a pair of finite real numbers, or a state at which the roller does
+            not roll under zero torque (N <= 0 or |F| > μN): such an episode could not start.
+    """
+    pair = tuple(value) if isinstance(value, tuple | list | np.ndarray) else None
+    if (pair is None or len(pair) != 2
+            or not all(isinstance(x, int | float | np.integer | np.floating)
+                       and not isinstance(x, bool | np.bool_) for x in pair)
+            or not all(math.isfinite(x) for x in pair)):
+        raise ValueError(
+            f"options['state']={value!r} must be a pair (phi [rad], phi_dot [rad/s]) of "
+            "finite real numbers"
+        )
+    phi, phi_dot = np.full(n, float(pair[0])), np.full(n, float(pair[1]))
+    with np.errstate(all="ignore"):
+        start = at_start(scene, phi, phi_dot)
+        rolls = (start.liftoff_margin > 0) & (start.slip_margin >= 0)
+    if not rolls.all():
+        raise ValueError(
+            f"options['state']={value!r}: the roller does not roll there under zero torque "
+            f"(N/(m g) = {float(np.min(start.liftoff_margin)):.3g}, "
+            f"(μN − |F|)/(m g) = {float(np.min(start.slip_margin)):.3g}; both must be "
+            "> 0 and >= 0): choose a state on the surface with less speed"
+        )
+    return phi, phi_dot
