@@ -96,7 +96,7 @@ def test_same_step_mode_reports_the_final_observation_and_info():
 
 
 def test_bad_autoreset_mode_is_refused_with_the_allowed_ones():
-    with pytest.raises(ValueError, match="autoreset_mode='sometimes'.*NEXT_STEP"):
+    with pytest.raises(ValueError, match=r"autoreset_mode='sometimes'.*NEXT_STEP"):
         gym.make_vec(IDS[0], num_envs=2, autoreset_mode="sometimes")
 
 
