@@ -1,0 +1,83 @@
+"""The SB3 ``VecEnv`` over the native batch against SB3's own ``DummyVecEnv`` of single
+environments (``make_vec_env``): the same episodes with the same seeds, and SB3's wrappers
+and algorithms on top of it."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytest.importorskip("stable_baselines3")
+
+import roller_gym
+from roller_gym.sb3 import RollerVecEnv
+from stable_baselines3 import PPO, SAC
+from stable_baselines3.common.env_util import make_vec_env
+from stable_baselines3.common.vec_env import (
+    VecCheckNan,
+    VecMonitor,
+    VecNormalize,
+)
+
+IDS = list(roller_gym.ENV_IDS)
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_same_episodes_as_dummy_vec_env(env_id):
+    """Seeds 3 + i, random actions, episodes of 6 steps over 20 steps: observations,
+    rewards, dones, the terminal observations, TimeLimit.truncated and the physics info."""
+    n = 3
+    ours = RollerVecEnv(env_id, n_envs=n, seed=3, max_episode_steps=6)
+    ref = make_vec_env(env_id, n_envs=n, seed=3, env_kwargs={"max_episode_steps": 6})
+    np.testing.assert_array_equal(ours.reset(), ref.reset())
+    for i in range(n):
+        assert ours.reset_infos[i]["phi"] == pytest.approx(ref.reset_infos[i]["phi"], abs=0)
+    actions = np.random.default_rng(0).uniform(-1, 1, (20, n, 1)).astype(np.float32)
+    ended = 0
+    for a in actions:
+        obs, rew, done, info = ours.step(a)
+        obs_r, rew_r, done_r, info_r = ref.step(a)
+        np.testing.assert_array_equal(obs, obs_r)
+        np.testing.assert_allclose(rew, rew_r, rtol=1e-6)
+        np.testing.assert_array_equal(done, done_r)
+        for mine, theirs in zip(info, info_r, strict=True):
+            assert mine["TimeLimit.truncated"] == theirs["TimeLimit.truncated"]
+            for key in ("phi", "phi_dot", "energy", "substeps", "is_success", "lifting"):
+                assert mine[key] == pytest.approx(theirs[key], rel=1e-12, abs=1e-12), key
+            if "terminal_observation" in theirs:
+                ended += 1
+                np.testing.assert_array_equal(mine["terminal_observation"],
+                                              theirs["terminal_observation"])
+            else:
+                assert "terminal_observation" not in mine
+    assert ended >= n * 3
+
+
+def test_sb3_wrappers_and_algorithms_run_on_it():
+    """PPO under VecNormalize(VecMonitor(VecCheckNan(...))) and SAC: the monitor's episode
+    returns equal the sums of the rewards the env returned, and training moves the policy."""
+    env = VecCheckNan(RollerVecEnv(IDS[0], n_envs=4, seed=0, max_episode_steps=16),
+                      raise_exception=True)
+    monitored = VecMonitor(env)
+    sums, returns = np.zeros(4), []
+    monitored.reset()
+    rng = np.random.default_rng(0)
+    for _ in range(40):
+        _, rew, done, info = monitored.step(rng.uniform(-1, 1, (4, 1)).astype(np.float32))
+        sums += rew
+        for i in np.flatnonzero(done):
+            assert info[i]["episode"]["r"] == pytest.approx(sums[i], abs=1e-4)
+            assert info[i]["episode"]["l"] == 16
+            returns.append(sums[i])
+            sums[i] = 0.0
+    assert len(returns) == 8
+    venv = VecNormalize(monitored)
+    model = PPO("MlpPolicy", venv, n_steps=32, batch_size=64, n_epochs=1, seed=0, device="cpu")
+    before = [p.detach().clone() for p in model.policy.parameters()]
+    model.learn(256)
+    assert any(not np.allclose(b.numpy(), p.detach().numpy())
+               for b, p in zip(before, model.policy.parameters(), strict=True))
+    sac = SAC("MlpPolicy", RollerVecEnv(IDS[1], n_envs=2, seed=1), learning_starts=32,
+              batch_size=32, seed=0, device="cpu")
+    sac.learn(64)
+    assert sac.num_timesteps == 64
