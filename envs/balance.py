@@ -76,7 +76,7 @@ class BalanceTask(Task):
     start_rule = "near rest at the bottom, |phi| and |phi_dot| <= 0.1, rolling there"
 
     def sample_targets(self, u: np.ndarray, scene: Scene) -> np.ndarray:
-        return per_scene(self.default_target, scene)
+        return np.broadcast_to(per_scene(self.default_target, scene), np.shape(u))
 
     def start_candidates(
         self, u_phi: np.ndarray, u_dot: np.ndarray, scene: Scene

@@ -72,7 +72,10 @@ def random_seed() -> int:
 
 
 def take(scene: Scene, index: np.ndarray, size: int) -> Scene:
-    """Rollers ``index`` of a scene broadcast to ``size`` rollers, as a batch Scene."""
+    """Rollers ``index`` of a scene of ``size`` rollers: a batch Scene, or the scalar scene
+    itself when every roller shares it (every function of the physics broadcasts)."""
+    if scene.batch_size is None:
+        return scene
     return Scene(**{f: np.broadcast_to(np.asarray(getattr(scene, f), float), (size,))[index]
                     for f in _FIELDS})
 
@@ -82,21 +85,21 @@ def scene_rows(scene: Scene, size: int) -> dict[str, np.ndarray]:
     return {f: np.broadcast_to(np.asarray(getattr(scene, f), float), (size,)) for f in _FIELDS}
 
 
-def put(scene: Scene, index: np.ndarray, rows: Scene) -> Scene:
-    """A copy of the batch ``scene`` whose rollers ``index`` are those of ``rows``."""
+def put(scene: Scene, index: np.ndarray, rows: Scene, size: int) -> Scene:
+    """A copy of ``scene`` (of ``size`` rollers) whose rollers ``index`` are ``rows``."""
     out = {}
     for f in _FIELDS:
-        column = np.array(getattr(scene, f), dtype=float, copy=True)
+        column = np.array(np.broadcast_to(np.asarray(getattr(scene, f), float), (size,)))
         column[index] = getattr(rows, f)
         out[f] = column
     return Scene(**out)
 
 
-def per_scene_target(task: Any, scene: Scene) -> np.ndarray:
+def per_scene_target(task: Any, scene: Scene, size: int) -> np.ndarray:
     """The task's default target φ* [rad] of each roller (before the first reset)."""
     from roller_gym.task import per_scene
 
-    return per_scene(task.default_target, scene)
+    return np.broadcast_to(per_scene(task.default_target, scene), (size,)).copy()
 
 
 def vector_seeds(seed: Any, n: int) -> list[int | None] | None:
@@ -181,7 +184,6 @@ def start_episodes(
     if options.get("scene") is not None:
         scene = config.resolve_option_scene(options["scene"])
         task.check_scene(scene)
-        scene = take(scene, np.zeros(n, int), 1)
     elif config.randomize:
         fields_ = scene_rows(base, n)
         drawn = {
@@ -190,8 +192,7 @@ def start_episodes(
         }
         scene = Scene(**{**fields_, **drawn})
     else:
-        scene = take(base, np.arange(n) if base.batch_size else np.zeros(n, int),
-                     base.batch_size or 1)
+        scene = base
     target = task.sample_targets(uniform(seed, episode, _TARGET_DRAW), scene)
     if options.get("target") is not None:
         target = np.array([task.target_from_option(options["target"], scene.item(i))
@@ -200,7 +201,7 @@ def start_episodes(
         phi, phi_dot = state_option(options["state"], scene, n)
     else:
         phi, phi_dot = _draw_states(task, scene, target, seed, episode)
-    return Starts(scene, np.asarray(target, float), phi, phi_dot)
+    return Starts(scene, np.broadcast_to(np.asarray(target, float), (n,)).copy(), phi, phi_dot)
 
 
 def _draw_states(task: Any, scene: Scene, target: np.ndarray, seed: np.ndarray,
@@ -329,10 +330,11 @@ def at_start(scene: Scene, phi: np.ndarray, phi_dot: np.ndarray) -> RestState:
     normal, friction = eq.contact_forces(phi, phi_dot, a, m, r, kappa, e, g)
     weight = m * g
     n = len(phi)
+    energy = eq.energy(phi, phi_dot, m, r, kappa, e, k, g)
     return RestState(
         phi, phi_dot, a, np.zeros(n, np.int64), np.ones(n, bool), normal, friction,
-        eq.energy(phi, phi_dot, m, r, kappa, e, k, g), normal / weight,
-        (mu * normal - np.abs(friction)) / weight,
+        energy, np.broadcast_to(normal / weight, (n,)),
+        np.broadcast_to((mu * normal - np.abs(friction)) / weight, (n,)),
     )
 
 

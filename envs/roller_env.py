@@ -99,8 +99,7 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
             self.config, self.config.scene, np.array([self._stream_seed], np.uint64),
             np.array([self._episode], np.uint64), options,
         )
-        scene = start.scene.item(0)
-        self._set_scene(self.config.scene if scene == self.config.scene else scene)
+        self._set_scene(start.scene if start.scene.batch_size is None else start.scene.item(0))
         self.target = float(start.target[0])
         self.phi, self.phi_dot, self.torque = float(start.phi[0]), float(start.phi_dot[0]), 0.0
         at_start = episode.at_start(start.scene, start.phi, start.phi_dot)

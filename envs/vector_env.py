@@ -127,14 +127,13 @@ class RollerVectorEnv(VectorEnv):
         cfg = self.config
         self._stepper = BatchStepper(num_envs, method=cfg.integrator, dt=cfg.dt,
                                      tol=cfg.tolerance, substeps=cfg.substeps or None)
-        everyone = np.arange(num_envs)
-        self._scene = episode.take(self._base, everyone, num_envs)
+        self._scene = self._base  # a scalar Scene while every sub-environment shares it
         self._stepper.set_scenes(self._scene)
-        self._q = np.asarray(wrap_rate(self._scene), float)
-        self._psi_rate = np.where(self._scene.kappa == 0, 0.0, self._q)
+        self._q = np.broadcast_to(np.asarray(wrap_rate(self._scene), float), (num_envs,)).copy()
+        self._psi_rate = np.where(np.asarray(self._scene.kappa) == 0, 0.0, self._q)
         self.phi = np.zeros(num_envs)
         self.phi_dot = np.zeros(num_envs)
-        self.target = episode.per_scene_target(task, self._scene)
+        self.target = episode.per_scene_target(task, self._scene, num_envs)
         self.torque = np.zeros(num_envs)
         self.steps = np.zeros(num_envs, dtype=np.int64)
         self._done = np.zeros(num_envs, dtype=bool)
@@ -161,6 +160,8 @@ class RollerVectorEnv(VectorEnv):
     @property
     def scenes(self) -> list[Scene]:
         """Each sub-environment's scene of its current episode (scalar Scenes)."""
+        if self._scene.batch_size is None:
+            return [self._scene] * self.num_envs
         return [self._scene.item(i) for i in range(self.num_envs)]
 
     # -- episode starts ------------------------------------------------------------------
@@ -171,11 +172,11 @@ class RollerVectorEnv(VectorEnv):
         start = episode.start_episodes(self.config, base, self._seeds[idx],
                                        self._episodes[idx], options)
         if self.config.randomize or (options or {}).get("scene") is not None:
-            self._scene = episode.put(self._scene, idx, start.scene)
+            self._scene = episode.put(self._scene, idx, start.scene, self.num_envs)
             self._stepper.set_scenes(start.scene, idx)
             q = np.asarray(wrap_rate(start.scene), float)
             self._q[idx] = q
-            self._psi_rate[idx] = np.where(start.scene.kappa == 0, 0.0, q)
+            self._psi_rate[idx] = np.where(np.asarray(start.scene.kappa) == 0, 0.0, q)
         self.target[idx], self.phi[idx], self.phi_dot[idx] = (start.target, start.phi,
                                                               start.phi_dot)
         self.torque[idx] = 0.0
