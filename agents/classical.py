@@ -18,13 +18,13 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from roller_gym import rewards
 from roller_gym.agents.observation import decode_observation
 from roller_gym.physics import Scene, energy, holding_torque, linearize
-from roller_gym.task import wrap_rate
+from roller_gym.task import Task, wrap_rate
 from scipy.linalg import expm, solve_discrete_are
 
-__all__ = ["LQR", "Controller", "EnergySwingUp", "RandomPolicy", "ZeroTorque", "controller_for"]
+__all__ = ["CONTROLLERS", "LQR", "Controller", "EnergySwingUp", "RandomPolicy", "ZeroTorque",
+           "controller_for"]
 
 
 class Controller:
@@ -100,6 +100,8 @@ class LQR(Controller):
     computed once per target and cached (RollerHold draws a target per episode).
 
     Args:
+        task: the task (``env.unwrapped.task``): its observation is decoded by field name,
+            and its error measure is the one the LQR drives to zero.
         scene: the scalar scene (``env.unwrapped.config.scene``).
         max_torque: the torque [N·m] of an action of ±1.
         dt: the control step [s].
@@ -112,6 +114,7 @@ class LQR(Controller):
 
     def __init__(
         self,
+        task: Task,
         scene: Scene,
         max_torque: float,
         dt: float,
@@ -122,6 +125,7 @@ class LQR(Controller):
     ) -> None:
         if scene.batch_size is not None:
             raise ValueError("LQR takes a scalar scene")
+        self.task = task
         self.scene, self.max_torque, self.dt = scene, float(max_torque), float(dt)
         self.target = None if target is None else float(target)
         self.Q = np.diag([1.0 / position_scale**2, 1.0 / speed_scale**2])
@@ -140,7 +144,7 @@ class LQR(Controller):
         scene, max_torque, dt = _task_settings(env)
         base = env.unwrapped
         target = None if base.task.observes_target else base.task.default_target(scene)
-        return cls(scene, max_torque, dt, target=target, **weights)
+        return cls(base.task, scene, max_torque, dt, target=target, **weights)
 
     def gains(self, target: float) -> tuple[float, np.ndarray, np.ndarray]:
         """(τ* [N·m], K (1, 2), P (2, 2)) about the rest position ``target`` [rad]."""
@@ -159,8 +163,8 @@ class LQR(Controller):
         return self._cache[key]
 
     def error(self, phi: np.ndarray, target: np.ndarray) -> np.ndarray:
-        """The position error [rad] as the task measures it: wrap(q (φ − φ*))/q."""
-        return rewards.wrap_angle(self.q * (phi - target)) / self.q
+        """The position error [rad] to the rest position ``target``, as the task measures it."""
+        return self.task.error_to(phi, target, self.q)
 
     def torque(self, phi: np.ndarray, phi_dot: np.ndarray, target: np.ndarray) -> np.ndarray:
         """The unsaturated torque τ* − K x [N·m] for states and targets of shape (n,)."""
@@ -173,7 +177,7 @@ class LQR(Controller):
         return out
 
     def act(self, observation: np.ndarray) -> np.ndarray:
-        s = decode_observation(observation, self.scene)
+        s = decode_observation(observation, self.scene, self.task)
         if self.target is not None:
             target = np.full_like(s.phi, self.target)
         elif s.target_phi is not None:
@@ -207,6 +211,7 @@ class EnergySwingUp(Controller):
 
     def __init__(
         self,
+        task: Task,
         scene: Scene,
         max_torque: float,
         dt: float,
@@ -221,7 +226,7 @@ class EnergySwingUp(Controller):
         self.energy_target = float(energy(scene, self.target, 0.0))
         self.energy_gain = float(energy_gain)
         self.capture_angle, self.capture_speed = float(capture_angle), float(capture_speed)
-        self.lqr = LQR(scene, max_torque, dt, target=self.target, **weights)
+        self.lqr = LQR(task, scene, max_torque, dt, target=self.target, **weights)
 
     @classmethod
     def from_env(cls, env: gym.Env | Any, **kwargs: float) -> EnergySwingUp:
@@ -232,11 +237,11 @@ class EnergySwingUp(Controller):
             **kwargs: the other arguments of the class.
         """
         scene, max_torque, dt = _task_settings(env)
-        target = env.unwrapped.task.default_target(scene)
-        return cls(scene, max_torque, dt, target, **kwargs)
+        task = env.unwrapped.task
+        return cls(task, scene, max_torque, dt, task.default_target(scene), **kwargs)
 
     def act(self, observation: np.ndarray) -> np.ndarray:
-        s = decode_observation(observation, self.scene)
+        s = decode_observation(observation, self.scene, self.lqr.task)
         up = self.lqr.error(s.phi, self.target)
         down = self.lqr.error(s.phi, -self.target)
         target = np.where(np.abs(up) <= np.abs(down), self.target, -self.target)
@@ -250,15 +255,22 @@ class EnergySwingUp(Controller):
         return np.clip(tau / self.max_torque, -1.0, 1.0)[:, None]
 
 
+#: The classical controllers by the name a task gives in ``Task.classical``, with the
+#: label the results tables use.
+CONTROLLERS: dict[str, tuple[type[Controller], str]] = {
+    "lqr": (LQR, "LQR"),
+    "swing_up": (EnergySwingUp, "energy swing-up + LQR"),
+}
+
+
 def controller_for(env: gym.Env | Any, **kwargs: float) -> Controller:
-    """The classical controller of a roller task: LQR (Stabilize, Hold) or EnergySwingUp
-    (Balance), built from the environment's scene, torque limit and control step.
+    """The classical controller of a roller task (the one its ``Task.classical`` names),
+    built from the environment's task, scene, torque limit and control step.
 
     Args:
-        env: a RollerStabilize, RollerHold or RollerBalance environment (wrappers allowed).
+        env: a roller-gym environment (wrappers allowed).
         **kwargs: the controller's weights and gains (see :class:`LQR`,
             :class:`EnergySwingUp`).
     """
-    if env.unwrapped.task.name == "RollerBalance":
-        return EnergySwingUp.from_env(env, **kwargs)
-    return LQR.from_env(env, **kwargs)
+    controller, _ = CONTROLLERS[env.unwrapped.task.classical]
+    return controller.from_env(env, **kwargs)

@@ -1,9 +1,10 @@
-"""The state of the roller recovered from an observation (see ``envs/task.py``).
+"""The state of the roller recovered from an observation, read by field name.
 
-The observation holds (cos ψ, sin ψ, cos φ, sin φ, tanh(φ'/10 rad/s)) and, in tasks with a
-target, (cos ψ*, sin ψ*, cos φ*, sin φ*). With the wrap rate q = rκ/(1 − rκ) (ψ = qφ),
+A task's observation lists named fields (:data:`roller_gym.task.OBSERVATION_FIELDS`):
+cos ψ, sin ψ, cos φ, sin φ, tanh(φ'/10 rad/s) and, in tasks with a target, cos ψ*, sin ψ*,
+cos φ*, sin φ*. With the wrap rate q = rκ/(1 − rκ) (ψ = qφ),
 
-* φ' = 10 · atanh(obs[4]) [rad/s];
+* φ' = 10 · atanh(speed) [rad/s];
 * φ: ψ/q gives a coarse φ over one turn of ψ either way, and (cos φ, sin φ) the exact
   φ mod 2π; the coarse value picks the turn: φ = φ_mod + 2π·round((φ_coarse − φ_mod)/2π).
   On the floor ψ stays 0 and φ is known modulo 2π only (as in the task's error).
@@ -17,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from roller_gym.physics import Scene
-from roller_gym.task import SPEED_SCALE, psi_rate
+from roller_gym.task import SPEED_SCALE, Task, psi_rate
 
 __all__ = ["DecodedState", "decode_angle", "decode_observation"]
 
@@ -59,27 +60,37 @@ class DecodedState:
     target_phi: np.ndarray | None
 
 
-def decode_observation(observation: np.ndarray, scene: Scene) -> DecodedState:
-    """Recover (φ, φ', φ*) from observations of a task played in ``scene``.
+def decode_observation(observation: np.ndarray, scene: Scene,
+                       task: type[Task] | Task) -> DecodedState:
+    """Recover (φ, φ', φ*) from observations of ``task`` played in ``scene``.
 
     Args:
-        observation: one observation (shape (5,) or (9,)) or a batch (shape (n, 5) or
-            (n, 9)).
+        observation: one observation (shape (d,)) or a batch (shape (n, d)).
         scene: the scalar scene the observations come from (it sets the wrap rate q).
+        task: the task (its class or instance), whose ``observation`` names the columns.
 
     Returns:
         A :class:`DecodedState` of arrays of shape (n,) (n = 1 for a single observation).
     """
     obs = np.asarray(observation, dtype=np.float64)
     obs = obs.reshape(1, -1) if obs.ndim == 1 else obs
-    if obs.ndim != 2 or obs.shape[1] not in (5, 9):
+    size = len(task.observation)
+    if obs.ndim != 2 or obs.shape[1] != size:
         raise ValueError(
-            f"observation of shape {np.shape(observation)} is not (5,), (9,), (n, 5) or (n, 9)"
+            f"observation of shape {np.shape(observation)} is not ({size},) or (n, {size}), "
+            f"the observation of {task.name}"
         )
+
+    def column(field: str) -> np.ndarray:
+        return obs[:, task.index(field)]
+
     rate = psi_rate(scene)
-    phi = decode_angle(obs[:, 0], obs[:, 1], obs[:, 2], obs[:, 3], rate)
-    phi_dot = SPEED_SCALE * np.arctanh(np.clip(obs[:, 4], -_TANH_LIMIT, _TANH_LIMIT))
+    phi = decode_angle(column("cos_psi"), column("sin_psi"), column("cos_phi"),
+                       column("sin_phi"), rate)
+    speed = np.clip(column("speed"), -_TANH_LIMIT, _TANH_LIMIT)
+    phi_dot = SPEED_SCALE * np.arctanh(speed)
     target = None
-    if obs.shape[1] == 9:
-        target = decode_angle(obs[:, 5], obs[:, 6], obs[:, 7], obs[:, 8], rate)
+    if "cos_psi_target" in task.observation:
+        target = decode_angle(column("cos_psi_target"), column("sin_psi_target"),
+                              column("cos_phi_target"), column("sin_phi_target"), rate)
     return DecodedState(phi, phi_dot, target)

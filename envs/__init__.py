@@ -18,35 +18,40 @@ A change to a task's dynamics, reward, observation or spaces registers it under 
 version (``-v1``), as Gymnasium does.
 
 The physics, which knows nothing of Gymnasium, is :mod:`roller_gym.physics`; the tasks
-are :mod:`roller_gym.stabilize`, :mod:`roller_gym.hold` and :mod:`roller_gym.balance`;
-the sample agents are :mod:`roller_gym.agents`.
+are in the registry :data:`roller_gym.task.TASKS` (one module each:
+:mod:`roller_gym.stabilize`, :mod:`roller_gym.hold`, :mod:`roller_gym.balance`), and every
+task runs in the same two environments, :class:`roller_gym.roller_env.RollerEnv` and
+:class:`roller_gym.vector_env.RollerVectorEnv`; the sample agents are
+:mod:`roller_gym.agents`.
 """
 
+import importlib
+
 from gymnasium.envs.registration import register, registry
-from roller_gym.balance import BalanceTask
-from roller_gym.hold import HoldTask
 from roller_gym.physics import PRESETS, Scene, preset
-from roller_gym.stabilize import StabilizeTask
+from roller_gym.task import NAMESPACE, TASKS
 
-__all__ = ["ENV_IDS", "NAMESPACE", "PRESETS", "Scene", "file_name", "preset"]
+#: The modules of the tasks, in the order they are listed; importing one registers its task.
+TASK_MODULES = ("stabilize", "hold", "balance")
+for _module in TASK_MODULES:
+    importlib.import_module(f"roller_gym.{_module}")
 
-#: The Gymnasium namespace of every task: ``roller_gym/<Task>-v<N>``.
-NAMESPACE = "roller_gym"
-#: The registered task IDs.
-ENV_IDS = tuple(f"{NAMESPACE}/{t.name}-v0" for t in (StabilizeTask, HoldTask, BalanceTask))
+__all__ = ["ENV_IDS", "NAMESPACE", "PRESETS", "TASKS", "TASK_MODULES", "Scene", "file_name",
+           "preset"]
 
-for _module, _task in (("stabilize", StabilizeTask), ("hold", HoldTask),
-                       ("balance", BalanceTask)):
-    _id = f"{NAMESPACE}/{_task.name}-v0"
-    if _id not in registry:
+#: The registered task IDs, one per task of the registry.
+ENV_IDS = tuple(cls.env_id() for cls in TASKS.values())
+
+for _task in TASKS.values():
+    if _task.env_id() not in registry:
         register(
-            id=_id,
-            entry_point=f"roller_gym.{_module}:{_task.name}Env",
-            vector_entry_point=f"roller_gym.{_module}:{_task.name}VectorEnv",
+            id=_task.env_id(),
+            entry_point="roller_gym.roller_env:RollerEnv",
+            vector_entry_point="roller_gym.vector_env:RollerVectorEnv",
             max_episode_steps=_task.max_episode_steps,
             reward_threshold=_task.reward_threshold,
+            kwargs={"task": _task.name},
         )
-
 
 def file_name(env_id: str) -> str:
     """A task ID as a file or folder name: the namespace dropped (``RollerHold-v0``)."""

@@ -38,19 +38,20 @@ from __future__ import annotations
 
 import numpy as np
 from roller_gym.physics import Scene, contact
-from roller_gym.roller_env import RollerEnv
-from roller_gym.task import Task, per_scene, unstable_rest_positions
-from roller_gym.vector_env import RollerVectorEnv
+from roller_gym.task import Task, per_scene, register, unstable_rest_positions
 
-__all__ = ["BalanceTask", "RollerBalanceEnv", "RollerBalanceVectorEnv"]
+__all__ = ["BalanceTask"]
 
 
+@register
 class BalanceTask(Task):
     name = "RollerBalance"
     default_scene = "balance"
     default_max_torque = 0.4
     max_episode_steps = 400
     reward_threshold = 350.0  # LQR/swing-up return − 5% (docs/RESULTS.md)
+    classical = "swing_up"
+    symmetric_target = True
     position_margin = 3.0
     success_band = 0.1
     success_speed = 0.2
@@ -83,22 +84,3 @@ class BalanceTask(Task):
     ) -> tuple[np.ndarray, np.ndarray]:
         """Near rest at the bottom: φ [rad] and φ' [rad/s] uniform in ±0.1."""
         return 0.2 * u_phi - 0.1, 0.2 * u_dot - 0.1
-
-    def error(self, phi, target, q):
-        """The error to the nearer of ±φ_b [rad of φ]."""
-        up = super().error(phi, target, q)
-        down = super().error(phi, -target, q)
-        if type(up) is float:
-            return up if abs(up) <= abs(down) else down
-        return np.where(np.abs(up) <= np.abs(down), up, down)
-
-
-class RollerBalanceEnv(RollerEnv):
-    __doc__ = __doc__
-    task_class = BalanceTask
-
-
-class RollerBalanceVectorEnv(RollerVectorEnv):
-    """The native vector environment of roller_gym/RollerBalance-v0 (``gymnasium.make_vec``)."""
-
-    task_class = BalanceTask

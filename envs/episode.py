@@ -275,15 +275,8 @@ def outcome(task: Any, result: Any, action: Any, target: Any, q: Any, psi_rate: 
     finite = result.finite
     lifting = result.liftoff_margin <= 0.0
     slipping = result.slip_margin < 0.0
-    nonfinite = ~finite if isinstance(finite, np.ndarray) else not finite
-    error = task.error(result.phi, target, q)
-    reward = task.reward_from_error(error, result.phi_dot, action)
-    if isinstance(finite, np.ndarray):
-        reward = np.where(finite, reward, 0.0)
-        terminated = lifting | slipping | nonfinite
-    else:
-        reward = reward if finite else 0.0
-        terminated = lifting or slipping or nonfinite
+    array = isinstance(finite, np.ndarray)
+    nonfinite = ~finite if array else not finite
     info = {
         "phi": result.phi,
         "phi_dot": result.phi_dot,
@@ -300,9 +293,17 @@ def outcome(task: Any, result: Any, action: Any, target: Any, q: Any, psi_rate: 
         "slip_margin": result.slip_margin,
         "target_phi": target,
         "target_psi": psi_rate * target,
-        "position_error": error,
-        "is_success": task.success_from_error(error, result.phi_dot),
+        "position_error": task.error(result.phi, target, q),
     }
+    step = {**info, "action": action}
+    reward = task.reward(step)
+    info["is_success"] = task.success(step)
+    if array:
+        reward = np.where(finite, reward, 0.0)
+        terminated = lifting | slipping | nonfinite
+    else:
+        reward = reward if finite else 0.0
+        terminated = lifting or slipping or nonfinite
     return Outcome(reward, terminated, info)
 
 

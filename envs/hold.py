@@ -49,17 +49,17 @@ from typing import Any
 
 import numpy as np
 from roller_gym.physics import Scene
-from roller_gym.roller_env import RollerEnv
-from roller_gym.task import Task, hold_range, per_scene, wrap_rate
-from roller_gym.vector_env import RollerVectorEnv
+from roller_gym.task import Task, hold_range, per_scene, register, wrap_rate
 
-__all__ = ["HoldTask", "RollerHoldEnv", "RollerHoldVectorEnv"]
+__all__ = ["HoldTask"]
 
 
+@register
 class HoldTask(Task):
     name = "RollerHold"
     reward_threshold = 172.0  # LQR/swing-up return − 5% (docs/RESULTS.md)
-    observes_target = True
+    observation = ("cos_psi", "sin_psi", "cos_phi", "sin_phi", "speed", "cos_psi_target",
+                   "sin_psi_target", "cos_phi_target", "sin_phi_target")
     default_max_torque = 1.0
 
     def sample_targets(self, u: np.ndarray, scene: Scene) -> np.ndarray:
@@ -83,13 +83,3 @@ class HoldTask(Task):
             )
         return phi
 
-
-class RollerHoldEnv(RollerEnv):
-    __doc__ = __doc__
-    task_class = HoldTask
-
-
-class RollerHoldVectorEnv(RollerVectorEnv):
-    """The native vector environment of roller_gym/RollerHold-v0 (``gymnasium.make_vec``)."""
-
-    task_class = HoldTask

@@ -18,7 +18,7 @@ from roller_gym import episode
 from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig
 from roller_gym.physics import Scene
 from roller_gym.stepper_shim import Stepper
-from roller_gym.task import Task, psi_rate, wrap_rate
+from roller_gym.task import Task, get_task, psi_rate, wrap_rate
 
 __all__ = ["RollerEnv"]
 
@@ -27,6 +27,8 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
     """A roller driven by a torque, rolling without slipping on a fixed surface.
 
     Args:
+        task: the task: a name of the registry (``"RollerHold"``, see
+            :data:`roller_gym.task.TASKS`), its ID, or its class.
         scene: an :class:`roller_gym.Scene` or a preset's name (``roller_gym.PRESETS``);
             default: the task's preset.
         dt: the control step [s]; the torque is constant over it.
@@ -44,10 +46,10 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array"], "render_fps": 20}
-    task_class: ClassVar[type[Task]]
 
     def __init__(
         self,
+        task: str | type[Task] = "RollerStabilize",
         scene: Scene | str | None = None,
         dt: float = DEFAULT_DT,
         max_torque: float | None = None,
@@ -58,7 +60,7 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         render_mode: str | None = None,
     ) -> None:
         self.config = EnvConfig.build(
-            self.task_class, scene=scene, dt=dt, max_torque=max_torque, tolerance=tolerance,
+            get_task(task), scene=scene, dt=dt, max_torque=max_torque, tolerance=tolerance,
             integrator=integrator, substeps=substeps, randomize=randomize,
             render_mode=render_mode, render_modes=self.metadata["render_modes"],
         )

@@ -51,13 +51,12 @@ from __future__ import annotations
 
 import numpy as np
 from roller_gym.physics import Scene
-from roller_gym.roller_env import RollerEnv
-from roller_gym.task import Task
-from roller_gym.vector_env import RollerVectorEnv
+from roller_gym.task import Task, register
 
-__all__ = ["RollerStabilizeEnv", "RollerStabilizeVectorEnv", "StabilizeTask"]
+__all__ = ["StabilizeTask"]
 
 
+@register
 class StabilizeTask(Task):
     name = "RollerStabilize"
     reward_threshold = 183.0  # LQR/swing-up return − 5% (docs/RESULTS.md)
@@ -65,13 +64,3 @@ class StabilizeTask(Task):
     def sample_targets(self, u: np.ndarray, scene: Scene) -> np.ndarray:
         return np.zeros(np.shape(u))
 
-
-class RollerStabilizeEnv(RollerEnv):
-    __doc__ = __doc__
-    task_class = StabilizeTask
-
-
-class RollerStabilizeVectorEnv(RollerVectorEnv):
-    """The native vector environment of roller_gym/RollerStabilize-v0 (``gymnasium.make_vec``)."""
-
-    task_class = StabilizeTask

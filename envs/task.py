@@ -2,8 +2,11 @@
 
 A task knows the physics (:mod:`roller_gym.physics`) but neither Gymnasium nor pygame. Its
 per-step methods take floats (one environment) or arrays (the vector environment) and are
-written once for both. The tasks themselves are in ``stabilize.py``, ``hold.py`` and
-``balance.py``.
+written once for both. Each task is one class in its own module (``stabilize.py``,
+``hold.py``, ``balance.py``), added to the registry :data:`TASKS` by the decorator
+:func:`register`, as dm_control's suite does; registration with Gymnasium, the agents,
+the scripts and the tests iterate over the registry. A new task is one class here and its
+hyperparameters.
 
 **The position error.** The target is a rest position φ* [rad]. The error is measured
 along the configuration, one turn of ψ either way: with the wrap rate q = rκ/(1 − rκ)
@@ -13,19 +16,13 @@ along the configuration, one turn of ψ either way: with the wrap rate q = rκ/(
 
 so the contact point is r·|error| metres of rolling away from its target.
 
-**The observation** (float32, every entry in [−1, 1]):
+**The observation** (float32, every entry in [−1, 1]) is a tuple of named fields, each
+declared once in :data:`OBSERVATION_FIELDS`; a task lists the ones it observes, in order,
+in ``Task.observation``, and agents read them by name (:meth:`Task.index`).
 
-=====  ==================================================  =====
-index  entry                                               unit
-=====  ==================================================  =====
-0, 1   cos ψ, sin ψ: where the roller is on the surface    1
-2, 3   cos φ, sin φ: how it is turned                       1
-4      tanh(φ' / speed_scale), speed_scale = 10 rad/s       1
-5, 6   cos ψ*, sin ψ* (tasks with a target only)            1
-7, 8   cos φ*, sin φ* (tasks with a target only)            1
-=====  ==================================================  =====
-
-**The reward** is a product of bounded terms (:mod:`roller_gym.rewards`), in [0, 1] per step:
+**The reward** sees the step's named physics (the info's keys, :data:`roller_gym.episode.
+INFO_KEYS`, and the ``action``). By default it is a product of bounded terms
+(:mod:`roller_gym.rewards`), in [0, 1] per step:
 
     reward = near(error, position_margin)
              · (1 − w_v + w_v · near(φ', speed_margin))
@@ -39,17 +36,61 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import numpy as np
 from roller_gym import rewards
 from roller_gym.physics import Scene, contact, equations, equilibria, holding_torque
 
-__all__ = ["SPEED_SCALE", "Task", "hold_range", "per_scene", "psi_rate",
-           "unstable_rest_positions", "wrap_rate"]
+__all__ = ["NAMESPACE", "OBSERVATION_FIELDS", "SPEED_SCALE", "TASKS", "Task", "get_task",
+           "hold_range", "per_scene", "psi_rate", "register", "unstable_rest_positions",
+           "wrap_rate"]
 
+#: The Gymnasium namespace of every task: ``roller_gym/<Task>-v<version>``.
+NAMESPACE = "roller_gym"
 #: The speed [rad/s] at which the observed tanh(φ'/SPEED_SCALE) reaches 0.76.
 SPEED_SCALE = 10.0
+
+#: Every observation field a task may list: name -> (its formula, its unit).
+OBSERVATION_FIELDS: dict[str, tuple[str, str]] = {
+    "cos_psi": ("cos ψ: where the roller is on the surface", "1"),
+    "sin_psi": ("sin ψ", "1"),
+    "cos_phi": ("cos φ: how the roller is turned", "1"),
+    "sin_phi": ("sin φ", "1"),
+    "speed": ("tanh(φ' / 10 rad/s): the angular speed, squashed", "1"),
+    "cos_psi_target": ("cos ψ*: where the target is on the surface", "1"),
+    "sin_psi_target": ("sin ψ*", "1"),
+    "cos_phi_target": ("cos φ*: the roller's rotation at the target", "1"),
+    "sin_phi_target": ("sin φ*", "1"),
+}
+
+#: The registry: task name -> task class (see :func:`register`).
+TASKS: dict[str, type[Task]] = {}
+
+
+def register(cls: type[Task]) -> type[Task]:
+    """Class decorator: add a task to :data:`TASKS` (``import roller_gym`` then registers
+    ``roller_gym/<name>-v<version>`` with Gymnasium)."""
+    if cls.name in TASKS:
+        raise ValueError(f"a task named {cls.name!r} is registered already")
+    unknown = set(cls.observation) - set(OBSERVATION_FIELDS)
+    if unknown:
+        raise ValueError(f"{cls.name}.observation names unknown fields {sorted(unknown)}; "
+                         f"known: {', '.join(OBSERVATION_FIELDS)}")
+    TASKS[cls.name] = cls
+    return cls
+
+
+def get_task(task: str | type[Task]) -> type[Task]:
+    """The task class from its name (``"RollerHold"``), its ID or the class itself."""
+    if isinstance(task, type) and issubclass(task, Task):
+        return task
+    name = task.split("/")[-1].split("-v")[0] if isinstance(task, str) else None
+    if name not in TASKS:
+        raise ValueError(f"task={task!r} is not a registered task; allowed: "
+                         f"{', '.join(TASKS)}")
+    return TASKS[name]
 
 
 def wrap_rate(scene: Scene):
@@ -68,14 +109,22 @@ class Task:
     """The base of the tasks. Subclasses set the class variables and ``sample_target``."""
 
     name: ClassVar[str]
+    #: The version in the task's ID; a change to its dynamics, reward or spaces bumps it.
+    version: ClassVar[int] = 0
+    #: The observation's fields, in order (names of :data:`OBSERVATION_FIELDS`).
+    observation: ClassVar[tuple[str, ...]] = ("cos_psi", "sin_psi", "cos_phi", "sin_phi",
+                                              "speed")
+    #: The classical controller that solves the task: ``"lqr"`` or ``"swing_up"``
+    #: (:func:`roller_gym.agents.controller_for`), and its label in tables.
+    classical: ClassVar[str] = "lqr"
+    #: Whether the target's mirror image −φ* counts as well (the error is to the nearer).
+    symmetric_target: ClassVar[bool] = False
     #: The preset the task's scene defaults to.
     default_scene: ClassVar[str] = "paper"
     #: The torque [N·m] an action of ±1 asks for, by default.
     default_max_torque: ClassVar[float] = 0.5
     max_episode_steps: ClassVar[int] = 200
     reward_threshold: ClassVar[float]
-    #: Whether the observation carries the target (entries 5 to 8).
-    observes_target: ClassVar[bool] = False
     position_margin: ClassVar[float] = 2.0  # rad of φ
     speed_margin: ClassVar[float] = 5.0  # rad/s
     speed_weight: ClassVar[float] = 0.5
@@ -89,9 +138,28 @@ class Task:
         if not (math.isfinite(self.max_torque) and self.max_torque > 0):
             raise ValueError(f"max_torque={max_torque!r} [N·m] must be finite and > 0")
 
+    @classmethod
+    def env_id(cls) -> str:
+        """The task's Gymnasium ID, ``roller_gym/<name>-v<version>``."""
+        return f"{NAMESPACE}/{cls.name}-v{cls.version}"
+
     @property
     def observation_size(self) -> int:
-        return 9 if self.observes_target else 5
+        return len(self.observation)
+
+    @property
+    def observes_target(self) -> bool:
+        """Whether the observation carries the target."""
+        return "cos_psi_target" in self.observation
+
+    @classmethod
+    def index(cls, field: str) -> int:
+        """The position of an observation field (a name of :data:`OBSERVATION_FIELDS`)."""
+        try:
+            return cls.observation.index(field)
+        except ValueError:
+            raise ValueError(f"{cls.name} does not observe {field!r}; it observes "
+                             f"{', '.join(cls.observation)}") from None
 
     # -- per episode (arrays of rollers; the uniforms come from the episode core) ------
     #: The start-state rule, as the error message states it when no start state is found.
@@ -142,38 +210,54 @@ class Task:
 
     # -- per step (floats or arrays) ---------------------------------------------------
     def error(self, phi, target, q):
-        """The position error [rad of φ] (see the module docs); q from :func:`wrap_rate`."""
+        """The task's position error [rad of φ]: :meth:`error_to` the target or, with
+        ``symmetric_target``, to the nearer of ±φ*."""
+        error = self.error_to(phi, target, q)
+        if not self.symmetric_target:
+            return error
+        mirror = self.error_to(phi, -target, q)
+        if type(error) is float:
+            return error if abs(error) <= abs(mirror) else mirror
+        return np.where(np.abs(error) <= np.abs(mirror), error, mirror)
+
+    @staticmethod
+    def error_to(phi, target, q):
+        """The error [rad of φ] to one rest position (see the module docs): wrap(q (φ − φ*))/q,
+        q from :func:`wrap_rate`."""
         return rewards.wrap_angle(q * (phi - target)) / q
 
     def observation_terms(self, phi, phi_dot, target, psi_rate):
-        """The observation's entries as a tuple; ``psi_rate`` = rκ/(1 − rκ) (0 on the floor)."""
+        """The observation's entries, in the order of ``observation`` (floats or arrays);
+        ``psi_rate`` = rκ/(1 − rκ) (0 on the floor)."""
+        terms = self.observation_dict(phi, phi_dot, target, psi_rate)
+        return tuple(terms[name] for name in self.observation)
+
+    def observation_dict(self, phi, phi_dot, target, psi_rate) -> dict[str, Any]:
+        """The observed fields by name (the formulas of :data:`OBSERVATION_FIELDS`)."""
         psi = psi_rate * phi
         f = rewards.xp(psi)
-        terms = (f.cos(psi), f.sin(psi), f.cos(phi), f.sin(phi), f.tanh(phi_dot / SPEED_SCALE))
+        out = {"cos_psi": f.cos(psi), "sin_psi": f.sin(psi), "cos_phi": f.cos(phi),
+               "sin_phi": f.sin(phi), "speed": f.tanh(phi_dot / SPEED_SCALE)}
         if self.observes_target:
             psi_t = psi_rate * target
             f = rewards.xp(psi_t)
-            terms += (f.cos(psi_t), f.sin(psi_t), f.cos(target), f.sin(target))
-        return terms
+            out.update(cos_psi_target=f.cos(psi_t), sin_psi_target=f.sin(psi_t),
+                       cos_phi_target=f.cos(target), sin_phi_target=f.sin(target))
+        return out
 
-    def reward(self, phi, phi_dot, action, target, q):
-        """The reward in [0, 1] (formula in the module docs)."""
-        return self.reward_from_error(self.error(phi, target, q), phi_dot, action)
-
-    def success(self, phi, phi_dot, target, q):
-        """Inside the tolerance band at rest."""
-        return self.success_from_error(self.error(phi, target, q), phi_dot)
-
-    def reward_from_error(self, error, phi_dot, action):
-        """:meth:`reward` from the position error already computed."""
-        return rewards.near(error, self.position_margin) * rewards.product(
-            (rewards.near(phi_dot, self.speed_margin), self.speed_weight),
-            (rewards.near(action, 1.0), self.control_weight),
+    def reward(self, step: Mapping[str, Any]):
+        """The reward in [0, 1] (formula in the module docs) from the step's named physics:
+        the info's keys (``position_error``, ``phi_dot``, ``torque``, ``energy``, the
+        forces and margins, …) and ``action``."""
+        return rewards.near(step["position_error"], self.position_margin) * rewards.product(
+            (rewards.near(step["phi_dot"], self.speed_margin), self.speed_weight),
+            (rewards.near(step["action"], 1.0), self.control_weight),
         )
 
-    def success_from_error(self, error, phi_dot):
-        """:meth:`success` from the position error already computed."""
-        return (abs(error) <= self.success_band) & (abs(phi_dot) <= self.success_speed)
+    def success(self, step: Mapping[str, Any]):
+        """Inside the tolerance band at rest (from the same named physics)."""
+        return ((abs(step["position_error"]) <= self.success_band)
+                & (abs(step["phi_dot"]) <= self.success_speed))
 
 
 def per_scene(function, scene: Scene) -> np.ndarray:

@@ -32,7 +32,7 @@ from roller_gym import episode
 from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig, resolve_scene
 from roller_gym.physics import Scene
 from roller_gym.stepper_shim import BatchStepper
-from roller_gym.task import Task, wrap_rate
+from roller_gym.task import Task, get_task, wrap_rate
 
 __all__ = ["RollerVectorEnv"]
 
@@ -53,6 +53,7 @@ class RollerVectorEnv(VectorEnv):
 
     Args:
         num_envs: the number of sub-environments.
+        task: the task (a name of the registry, its ID, or its class).
         scene: one Scene or preset name for all, or a sequence of them (one per
             sub-environment), or a batch Scene of ``num_envs`` rollers.
         max_episode_steps: truncation; default the task's.
@@ -67,11 +68,10 @@ class RollerVectorEnv(VectorEnv):
         "render_fps": 20,
         "autoreset_mode": AutoresetMode.NEXT_STEP,
     }
-    task_class: ClassVar[type[Task]]
-
     def __init__(
         self,
         num_envs: int = 1,
+        task: str | type[Task] = "RollerStabilize",
         scene: Scene | str | Sequence[Scene | str] | None = None,
         dt: float = DEFAULT_DT,
         max_torque: float | None = None,
@@ -89,7 +89,7 @@ class RollerVectorEnv(VectorEnv):
         num_envs = int(num_envs)
         per_env = self._per_env_scenes(scene, num_envs)
         self.config = EnvConfig.build(
-            self.task_class, scene=None if per_env else scene, dt=dt, max_torque=max_torque,
+            get_task(task), scene=None if per_env else scene, dt=dt, max_torque=max_torque,
             tolerance=tolerance, integrator=integrator, substeps=substeps,
             randomize=randomize, render_mode=render_mode,
             render_modes=self.metadata["render_modes"],

@@ -50,7 +50,7 @@ def test_decode_recovers_the_state_the_env_reports(env_id, scene):
     for seed in range(5):
         obs, info = env.reset(seed=seed)
         for _ in range(60):
-            s = decode_observation(obs, env.unwrapped.scene)
+            s = decode_observation(obs, env.unwrapped.scene, env.unwrapped.task)
             assert s.phi[0] == pytest.approx(info["phi"], abs=1e-5)
             assert s.phi_dot[0] == pytest.approx(info["phi_dot"], rel=1e-5, abs=1e-5)
             if env.unwrapped.task.observes_target:
@@ -70,7 +70,7 @@ def test_decode_picks_the_turn_beyond_one_revolution_of_phi():
     env = gym.make("roller_gym/RollerStabilize-v0", scene=roller_gym.Scene(R=1.0))
     for phi in (4.0, 4.0 - 2 * np.pi, -3.9, 7.5, -8.0):
         obs, _ = env.reset(options={"state": (phi, -2.0)})
-        s = decode_observation(obs, env.unwrapped.scene)
+        s = decode_observation(obs, env.unwrapped.scene, env.unwrapped.task)
         assert s.phi[0] == pytest.approx(phi, abs=1e-5)
         assert s.phi_dot[0] == pytest.approx(-2.0, rel=1e-5)
 
@@ -78,7 +78,7 @@ def test_decode_picks_the_turn_beyond_one_revolution_of_phi():
 def test_decode_on_the_floor_gives_phi_modulo_one_turn():
     env = gym.make("roller_gym/RollerStabilize-v0", scene="floor")
     obs, _ = env.reset(options={"state": (5.0, 0.5)})
-    s = decode_observation(obs, env.unwrapped.scene)
+    s = decode_observation(obs, env.unwrapped.scene, env.unwrapped.task)
     assert _wrapped_difference(s.phi[0], 5.0) < 1e-5
     assert -np.pi <= s.phi[0] < np.pi
 
@@ -86,12 +86,12 @@ def test_decode_on_the_floor_gives_phi_modulo_one_turn():
 def test_decode_takes_batches_and_rejects_wrong_shapes():
     env = gym.make("roller_gym/RollerHold-v0")
     observations = np.stack([env.reset(seed=s)[0] for s in range(4)])
-    batch = decode_observation(observations, env.unwrapped.scene)
-    single = [decode_observation(o, env.unwrapped.scene) for o in observations]
+    batch = decode_observation(observations, env.unwrapped.scene, env.unwrapped.task)
+    single = [decode_observation(o, env.unwrapped.scene, env.unwrapped.task) for o in observations]
     np.testing.assert_allclose(batch.phi, [s.phi[0] for s in single])
     np.testing.assert_allclose(batch.target_phi, [s.target_phi[0] for s in single])
     with pytest.raises(ValueError, match="shape"):
-        decode_observation(np.zeros(7), env.unwrapped.scene)
+        decode_observation(np.zeros(7), env.unwrapped.scene, env.unwrapped.task)
 
 
 # -- the classical controllers -------------------------------------------------------------
