@@ -111,11 +111,9 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def _set_scene(self, scene: Scene) -> None:
         self.scene = scene
-        # The integrator's buffer: this scene and the settings, the state filled in per step.
-        self._buf = np.zeros(integ.BUFFER_SIZE)
-        self._buf[3:11] = self.config.scene_row(scene)
         cfg = self.config
-        self._buf[11:15] = (cfg.dt, cfg.tolerance, cfg.method_code, cfg.substeps)
+        self._stepper = integ.Stepper(scene, method=cfg.integrator, dt=cfg.dt,
+                                      tol=cfg.tolerance, substeps=cfg.substeps or None)
         self._q = wrap_rate(scene)
         self._psi_rate = psi_rate(scene)
 
@@ -146,21 +144,11 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         else:
             a = float(self.config.action_values(action, (1,))[0])
         tau = a * self.task.max_torque
-        buf = self._buf
-        if self.config.method_code == integ.METHODS["dop853"]:
-            r = integ.step(self.scene, self.phi, self.phi_dot, tau, self.config.dt,
-                           method="dop853", tol=self.config.tolerance)
-            buf[integ.OUT:integ.OUT + 10] = (r.phi, r.phi_dot, r.phi_ddot, r.substeps, r.finite,
-                               r.normal_force, r.friction_force, r.energy, r.liftoff_margin,
-                               r.slip_margin)
-        else:
-            buf[0], buf[1], buf[2] = self.phi, self.phi_dot, tau
-            integ.advance_into(buf)
-        phi, phi_dot, _, substeps, finite, normal, friction, energy, lift, slip = (
-            buf[integ.OUT:integ.OUT + 10].tolist()
+        phi, phi_dot, _, substeps, finite, normal, friction, energy, lift, slip, _, _ = (
+            self._stepper.advance(self.phi, self.phi_dot, tau)
         )
         self.phi, self.phi_dot, self.torque = phi, phi_dot, tau
-        lifting, slipping, nonfinite = lift <= 0.0, slip < 0.0, finite == 0.0
+        lifting, slipping, nonfinite = lift <= 0.0, slip < 0.0, not finite
         error = self.task.error(phi, self.target, self._q)
         reward = float(self.task.reward_from_error(error, phi_dot, a))
         info = self._info(tau, normal, friction, energy, substeps, lifting, slipping,

@@ -107,6 +107,10 @@ class RollerVectorEnv(VectorEnv):
         self._done = np.zeros(num_envs, dtype=bool)
         self._rngs: list[np.random.Generator] = []
         self._raw = np.empty((10, num_envs))
+        cfg = self.config
+        self._stepper = integ.BatchStepper(num_envs, method=cfg.integrator, dt=cfg.dt,
+                                           tol=cfg.tolerance, substeps=cfg.substeps or None)
+        self._stepper.scene_table()[:] = self._rows.T
         self._renderers: list[Any] | None = None
 
     @staticmethod
@@ -131,6 +135,7 @@ class RollerVectorEnv(VectorEnv):
         if scene is not self.scenes[i]:  # randomized or set by options: its numbers anew
             self.scenes[i] = scene
             self._rows[i] = config.scene_row(scene)
+            self._stepper.scene_table()[:, i] = self._rows[i]
             self._q[i] = wrap_rate(scene)
             self._psi_rate[i] = psi_rate(scene)
         self.target[i], self.phi[i], self.phi_dot[i] = target, phi, phi_dot
@@ -182,10 +187,10 @@ class RollerVectorEnv(VectorEnv):
         if not self._rngs:
             raise RuntimeError("call reset() before step()")
         tau = a * self.task.max_torque
-        cfg = self.config
-        integ.advance_batch(self._rows, self.phi, self.phi_dot, tau, cfg.dt, cfg.method_code,
-                            cfg.tolerance, cfg.substeps, self._raw)
+        res = self._stepper.advance(self.phi, self.phi_dot, tau)
         raw = self._raw
+        for j, name in enumerate(integ.STEP_FIELDS[:10]):
+            raw[j] = getattr(res, name)
         self.phi, self.phi_dot, self.torque = raw[0].copy(), raw[1].copy(), tau
         finite = raw[4] != 0
         lifting, slipping = raw[8] <= 0.0, raw[9] < 0.0
