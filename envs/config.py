@@ -111,10 +111,6 @@ class EnvConfig:
         return cls(task, scene, float(dt), float(tolerance), integrator, substeps or 0,
                    ranges, render_mode)
 
-    @property
-    def method_code(self) -> int:
-        return METHODS[self.integrator]
-
     def draw_scene(self, rng: np.random.Generator) -> Scene:
         """The scene of a new episode: the base scene, with the randomized fields drawn."""
         if not self.randomize:

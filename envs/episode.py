@@ -248,6 +248,9 @@ INFO_KEYS: dict[str, tuple[type, str]] = {
     "nonfinite": (bool, "the step could not stay finite: the state is the one before it"),
     "liftoff_margin": (float, "smallest N/(m g) during the step [-] (NaN: failed step)"),
     "slip_margin": (float, "smallest (μN − |F|)/(m g) during the step [-] (NaN: failed)"),
+    "error_estimate": (float, "the integrator's estimate of the step's state error (NaN for "
+                              "fixed-substep schemes; 0 at reset)"),
+    "tol_met": (bool, "the step met the integrator's tolerance (False: out of float64's reach)"),
     "target_phi": (float, "the target φ* [rad]"),
     "target_psi": (float, "the target ψ* [rad]"),
     "position_error": (float, "the task's position error [rad of φ]"),
@@ -291,6 +294,8 @@ def outcome(task: Any, result: Any, action: Any, target: Any, q: Any, psi_rate: 
         "nonfinite": nonfinite,
         "liftoff_margin": result.liftoff_margin,
         "slip_margin": result.slip_margin,
+        "error_estimate": result.error_estimate,
+        "tol_met": result.tol_met,
         "target_phi": target,
         "target_psi": psi_rate * target,
         "position_error": task.error(result.phi, target, q),
@@ -321,6 +326,8 @@ class RestState:
     energy: Any
     liftoff_margin: Any
     slip_margin: Any
+    error_estimate: Any = 0.0
+    tol_met: Any = True
 
 
 def at_start(scene: Scene, phi: np.ndarray, phi_dot: np.ndarray) -> RestState:

@@ -8,6 +8,7 @@ reset, step, info and rendering.
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 from collections.abc import Mapping
 from typing import Any, ClassVar
 
@@ -17,10 +18,13 @@ from gymnasium import spaces
 from roller_gym import episode
 from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig
 from roller_gym.physics import Scene
-from roller_gym.stepper_shim import Stepper
+from roller_gym.physics.integrators import STEP_FIELDS, Stepper
 from roller_gym.task import Task, get_task, psi_rate, wrap_rate
 
 __all__ = ["RollerEnv"]
+
+#: One roller's step result as named floats (the fields of the integrators' StepResult).
+StepFloats = namedtuple("StepFloats", STEP_FIELDS)
 
 
 class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
@@ -120,7 +124,7 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         else:
             a = float(self.config.action_values(action, (1,))[0])
         tau = a * self.task.max_torque
-        result = self._stepper.advance(self.phi, self.phi_dot, tau)
+        result = StepFloats._make(self._stepper.advance(self.phi, self.phi_dot, tau))
         self.phi, self.phi_dot, self.torque = result.phi, result.phi_dot, tau
         out = episode.outcome(self.task, result, a, self.target, self._q, self._psi_rate, tau)
         if self.render_mode == "human":

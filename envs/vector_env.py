@@ -31,7 +31,7 @@ from gymnasium.vector.utils import batch_space
 from roller_gym import episode
 from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig, resolve_scene
 from roller_gym.physics import Scene
-from roller_gym.stepper_shim import BatchStepper
+from roller_gym.physics.integrators import STEP_FIELDS, BatchStepper, StepResult
 from roller_gym.task import Task, get_task, wrap_rate
 
 __all__ = ["RollerVectorEnv"]
@@ -229,7 +229,10 @@ class RollerVectorEnv(VectorEnv):
         if not self._seeded:
             raise RuntimeError("call reset() before step()")
         tau = a * self.task.max_torque
-        result = self._stepper.advance(self.phi, self.phi_dot, tau)
+        # The stepper's arrays are its own buffers: copies, so that what this step returns
+        # stays as it is after the next.
+        raw = self._stepper.advance(self.phi, self.phi_dot, tau)
+        result = StepResult(*(np.array(getattr(raw, f)) for f in STEP_FIELDS))
         out = episode.outcome(self.task, result, a, self.target, self._q, self._psi_rate, tau)
         self.phi, self.phi_dot, self.torque = result.phi, result.phi_dot, tau
         self.steps += 1

@@ -187,7 +187,7 @@ def test_a_failed_step_is_not_reported_as_lift_off_or_slip():
     margins; lifting and slipping False; no reward; terminated, flagged as nonfinite."""
     task = roller_gym.stabilize.StabilizeTask()
     nan = float("nan")
-    failed = episode.RestState(0.3, 0.1, nan, 12, False, nan, nan, nan, nan, nan)
+    failed = episode.RestState(0.3, 0.1, nan, 12, False, nan, nan, nan, nan, nan, nan, False)
     out = episode.outcome(task, failed, 0.5, 0.0, 0.25, 0.25, 0.25)
     assert out.reward == 0.0 and out.terminated
     assert out.info["nonfinite"] and not out.info["lifting"] and not out.info["slipping"]

@@ -1,51 +1,65 @@
-"""Integration over one control step of constant torque, with automatic substepping.
+"""Integration over one control step of constant torque.
 
-==============  =====  ====================================================================
-method          order  what it is for
-==============  =====  ====================================================================
-``"rk4"``       4      the default: classical Runge–Kutta on (φ, φ')
-``"euler"``     1      semi-implicit (symplectic) Euler, the scheme of Gymnasium's Pendulum:
-                       kept to show its error (J_I depends on φ, so it is not symplectic
-                       here and drifts in energy)
-``"midpoint"``  2      implicit midpoint on the canonical pair (φ, p = J_I φ'), solved by
-                       Newton's method: symplectic, so its energy error stays bounded over
-                       long horizons at zero torque
-``"rk8"``       8      the Dormand–Prince 8 tableau at fixed substeps: the fastest at tight
-                       tolerances (few substeps), the environments' default
-``"dop853"``    8      scipy's adaptive Dormand–Prince 8(5,3): the reference
-==============  =====  ====================================================================
+**Schemes.** One table, :data:`SCHEMES`, one row per scheme:
 
-**Substeps.** Unless a fixed count is given, the number of substeps per control step is
-predicted from the scene's fastest time scale, so that the state error per control step stays
-near ``tol``: with λ the sum of
+==============  =====  ========  ==================================================================
+name            order  control   what it is for
+==============  =====  ========  ==================================================================
+``"rk8"``       8      adaptive  the default everywhere: Dormand–Prince 8(5,3) (scipy's DOP853
+                                 tableau), compiled, with its embedded 5th- and 3rd-order error
+                                 estimators and a step-size controller per roller
+``"rk4"``       4      adaptive  classical Runge–Kutta with the embedded 3rd-order estimate
+                                 h/6 (k4 − k5) (k5 = f at the new state, reused as the next k1)
+``"euler"``     1      fixed     semi-implicit (symplectic) Euler, the scheme of Gymnasium's
+                                 Pendulum: kept to show its error (J_I depends on φ, so it is
+                                 not symplectic here and drifts in energy)
+``"midpoint"``  2      fixed     implicit midpoint on the canonical pair (φ, p = J_I φ'), solved
+                                 by Newton's method: symplectic, its energy error stays bounded
+                                 over long horizons at zero torque
+``"dop853"``    8      adaptive  scipy's ``solve_ivp(method="DOP853")``: the reference (slow)
+==============  =====  ========  ==================================================================
 
-* ω_max = sqrt(max V'' / min J_I), the linearized frequency at the smallest J_I
-  (J_min = m(k² + (r − e)²), V''_max = m g (r²|κ|/s + e)),
-* the rate at which θ sweeps the roller's geometry at the speed v reached in the step,
-  (v/s)(1 + sqrt(re/(k² + (r − e)²))) (the second term: J_I changes over a width
-  sqrt((k² + (r − e)²)/(re)) of θ about θ = 0),
-* the damping rate c/J_min,
+**Error control (rk8, rk4).** Each roller's control step is a sequence of substeps whose sizes
+follow its own trajectory: a substep of size h is accepted when its estimated local error
+(max over |Δφ| [rad] and |Δφ'| [rad/s], estimated as scipy's DOP853 does) is at most
+``tol · h / dt``, so that the errors of the accepted substeps add up to at most ``tol`` over
+the control step. The next size is ``h · clip(0.9 (tol h/dt / err)^(1/8), 0.2, 10)``
+(exponent 1/4 for rk4; no growth right after a rejection). The first size of a control step
+is the prediction of :func:`predicted_substeps` (from the scene's fastest time scale), which
+only starts the controller.
 
-a method of order p takes n = ceil((C (λ dt)^(p+1) / tol)^(1/p)) substeps, and at least
-λ dt / h_max, so that each substep stays inside the method's stability region. A step that
-would need more than ``MAX_SUBSTEPS`` takes that many and may miss ``tol`` (its
-``substeps`` says so): semi-implicit Euler reaches the cap below tol ≈ 1e-6 on the default
-scene, and the implicit midpoint on the stiff presets. The count
-is first set from the speed at the start of the step; a step whose substeps reach a speed
-that asks for more is taken again with that many. An easy scene
-takes few, a stiff one as many as it needs (up to ``max_substeps``). With e = 0 the
-integrators use :func:`~roller_gym.physics.equations.accel_concentric`, which skips the terms
-that vanish.
+**Unreachable tolerances** are reported per step, never looped on: a substep is never smaller
+than ``dt / MAX_SUBSTEPS``, nor than the size below which float64 rounding over the substeps
+alone would exceed ``tol`` (``ROUNDOFF_FACTOR · ε · max(|φ|, |φ'|) · dt / tol``). A substep
+at that floor is accepted even if its error estimate exceeds ``tol · h / dt``, and the step
+reports ``tol_met=False``; :class:`Stepper` and :class:`BatchStepper` then warn once.
+``error_estimate`` is the sum of the accepted substeps' error estimates.
 
-The kernels are the equations of :mod:`roller_gym.physics.equations`, compiled by numba; one
-kernel advances one roller, and the batch loop calls it per element, so a vector of
-rollers gives the same numbers as the rollers one at a time.
+**Fixed-substep schemes (euler, midpoint)** and rk8/rk4 with ``substeps=n`` take n equal
+substeps; for euler and midpoint n is, unless given, predicted from the scene's fastest time
+scale and the speed at the start (taken again with more if the speed reached asks for more).
+
+**Failure.** Where a step cannot stay finite, ``finite`` is False, φ and φ' are the state
+before the step, and ``phi_ddot``, ``normal_force``, ``friction_force``, ``energy``, both
+margins and ``error_estimate`` are NaN (so ``liftoff_margin <= 0`` is False: a failed step is
+never reported as a lift-off).
+
+**Margins.** The lift-off and slip margins are the smallest met at the start of every
+accepted substep and at the end of the step.
+
+**Layout.** The kernels work on one float64 table per batch, ``io`` of shape
+``(len(ROWS), n)``: one row per name of :data:`ROWS` (the scene's :data:`SCENE_FIELDS`, the
+inputs :data:`INPUT_FIELDS`, the outputs :data:`STEP_FIELDS`), one column per roller, so a
+roller's numbers never depend on the other columns: the scalar stepper is the batch kernel on
+one column and gives bit for bit what the batch gives for that roller.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass, fields
 
 import numba
 import numpy as np
@@ -54,78 +68,168 @@ from roller_gym.physics.scene import Scene
 from scipy.integrate import solve_ivp
 from scipy.integrate._ivp import dop853_coefficients
 
-__all__ = ["METHODS", "StepResult", "predicted_substeps", "step"]
-
-#: The integration methods and their codes in the compiled kernels.
-METHODS = {"rk4": 0, "euler": 1, "midpoint": 2, "dop853": 3, "rk8": 4}
-#: The order of each method, by code.
-_ORDER = (4, 1, 2, 8, 8)
-#: The constant C of the substep rule per method, calibrated against DOP853 on the presets
-#: so that the error per control step stays below the tolerance (tests/test_integrators.py).
-SUBSTEP_CONSTANT = (0.02, 2.0, 0.3, 0.0, 1e-6)
-#: The largest λh each explicit method is allowed per substep (inside its stability region
-#: with room to spare); the implicit midpoint is A-stable and needs none.
-STABLE_STEP = (1.0, 0.5, math.inf, 0.0, 1.0)
-#: How sharply each method feels the dip of J_I at θ = 0: the exponent of
-#: re/(k² + (r − e)²) in the sweep rate (the 8th-order tableau needs the dip resolved finer).
-SWEEP_EXPONENT = (0.5, 0.5, 0.5, 0.0, 0.75)
-# The Dormand–Prince 8(5,3) tableau (scipy's), used at fixed substeps by "rk8".
-_A8 = np.ascontiguousarray(dop853_coefficients.A[:12, :12])
-_B8 = np.ascontiguousarray(dop853_coefficients.B)
-#: The most substeps one control step may take.
-MAX_SUBSTEPS = 200_000
+__all__ = [
+    "INPUT_FIELDS",
+    "METHODS",
+    "ROWS",
+    "SCENE_FIELDS",
+    "SCHEMES",
+    "STEP_FIELDS",
+    "BatchStepper",
+    "Scheme",
+    "StepResult",
+    "Stepper",
+    "predicted_substeps",
+    "scene_arrays",
+    "step",
+]
 
 _jit = numba.njit(cache=True, fastmath=False, nogil=True)
-_accel = eq.accel
-_accel_concentric = eq.accel_concentric
-_inertia = eq.inertia
-_dinertia = eq.dinertia
-_d2inertia = eq.d2inertia
-_dpotential = eq.dpotential
-_d2potential = eq.d2potential
+
+# -- the layout, declared once ----------------------------------------------------------------
+
+#: The per-roller scene numbers the kernels take, in the order of their rows.
+SCENE_FIELDS = ("m", "r", "kappa", "e", "k", "g", "damping", "mu")
+#: The per-roller inputs of a step: φ [rad], φ' [rad/s] at its start, τ [N·m].
+INPUT_FIELDS = ("phi_in", "phi_dot_in", "tau")
+
+
+@dataclass(frozen=True)
+class StepResult:
+    """The outcome of one control step, at its end unless said otherwise.
+
+    Attributes:
+        phi: φ [rad].
+        phi_dot: φ' [rad/s].
+        phi_ddot: φ'' [rad/s²] under the step's torque (NaN where not finite).
+        substeps: accepted substeps (for ``"dop853"``, its accepted steps).
+        finite: False where the step could not stay finite; there φ and φ' are the state
+            before the step, unchanged, and every other float field is NaN.
+        normal_force: N [N] (positive: pressing; see ``equations.contact_forces``).
+        friction_force: F [N].
+        energy: E [J].
+        liftoff_margin: the smallest N/(m g) met during the step (<= 0: lift-off).
+        slip_margin: the smallest (μN − |F|)/(m g) met during the step (< 0: slip).
+        error_estimate: the sum of the accepted substeps' estimated errors
+            (max of |Δφ| [rad], |Δφ'| [rad/s]); NaN for fixed schemes and DOP853.
+        tol_met: False where a substep had to be accepted at the smallest allowed size with
+            an error estimate above its share of ``tol`` (the tolerance is out of reach).
+    """
+
+    phi: np.ndarray | float
+    phi_dot: np.ndarray | float
+    phi_ddot: np.ndarray | float
+    substeps: np.ndarray | int
+    finite: np.ndarray | bool
+    normal_force: np.ndarray | float
+    friction_force: np.ndarray | float
+    energy: np.ndarray | float
+    liftoff_margin: np.ndarray | float
+    slip_margin: np.ndarray | float
+    error_estimate: np.ndarray | float
+    tol_met: np.ndarray | bool
+
+    @property
+    def lifting(self) -> np.ndarray | bool:
+        """True where the roller left the surface (N <= 0) during the step."""
+        return self.liftoff_margin <= 0
+
+    @property
+    def slipping(self) -> np.ndarray | bool:
+        """True where the friction needed exceeded μN during the step."""
+        return self.slip_margin < 0
+
+
+#: The fields of a step's outcome, in the order of :class:`StepResult`.
+STEP_FIELDS = tuple(f.name for f in fields(StepResult))
+#: The type of each field of one roller's result (the kernels store all as float64).
+_KIND = {name: {"substeps": int, "finite": bool, "tol_met": bool}.get(name, float)
+         for name in STEP_FIELDS}
+#: The rows of a kernel's ``io`` table.
+ROWS = SCENE_FIELDS + INPUT_FIELDS + STEP_FIELDS
+_ROW = {name: i for i, name in enumerate(ROWS)}
+# Row numbers as compile-time constants of the kernels.
+(_M, _RR, _KAPPA, _E, _K, _G, _C, _MU) = (_ROW[f] for f in SCENE_FIELDS)
+(_PHI_IN, _W_IN, _TAU) = (_ROW[f] for f in INPUT_FIELDS)
+(_PHI, _W, _ACC, _NSUB, _FINITE, _NORMAL, _FRICTION, _ENERGY, _LIFT, _SLIP, _ERR,
+ _TOL_MET) = (_ROW[f] for f in STEP_FIELDS)
+_OUT = _PHI  # the outputs are the last rows, in STEP_FIELDS order
+assert ROWS[_OUT:] == STEP_FIELDS
+
+
+def scene_arrays(scene: Scene, n: int | None = None) -> np.ndarray:
+    """The kernels' per-roller scene numbers: shape ``(len(SCENE_FIELDS), n)``, float64.
+
+    A scalar scene is broadcast to ``n`` rollers (1 if ``n`` is None); a batch scene gives its
+    rollers (``n`` must then be None or its size).
+    """
+    values = dict(zip(("m", "r", "kappa", "e", "k", "g", "damping"), scene.params, strict=True))
+    values["mu"] = scene.mu
+    size = scene.batch_size
+    if n is None:
+        n = size or 1
+    elif size is not None and size != n:
+        raise ValueError(f"n={n} does not match the scene's batch size {size}")
+    out = np.empty((len(SCENE_FIELDS), n))
+    for i, name in enumerate(SCENE_FIELDS):
+        out[i] = np.broadcast_to(np.asarray(values[name], dtype=float).reshape(-1), (n,))
+    return out
+
+
+# -- the substep rule (the first step-size guess of the adaptive schemes) ------------------------
+
+#: The most substeps one control step may take (the smallest substep is dt / MAX_SUBSTEPS).
+MAX_SUBSTEPS = 100_000
+#: Substeps of size h are never smaller than ROUNDOFF_FACTOR · ε · max(|φ|, |φ'|) · dt / tol:
+#: below it, float64 rounding over the dt/h substeps alone could exceed tol.
+ROUNDOFF_FACTOR = 8.0
+_EPS = float(np.finfo(float).eps)
 
 
 @_jit
-def _rhs(phi, w, tau, m, r, kappa, e, k, g, c):
-    if e == 0.0:
-        return _accel_concentric(phi, w, tau, m, r, kappa, k, g, c)
-    return _accel(phi, w, tau, m, r, kappa, e, k, g, c)
-
-
-@_jit
-def _substeps(speed, m, r, kappa, e, k, g, c, dt, tol, method):
+def _substeps(speed, m, r, kappa, e, k, g, c, dt, tol, order, constant, stable, sweep_exponent):
+    """The predicted substeps (see :func:`predicted_substeps`)."""
     s = 1.0 - r * kappa
     j_min = m * (k * k + (r - e) * (r - e))
     omega = math.sqrt(m * g * (r * r * abs(kappa) / s + e) / j_min)
-    sweep = speed / s * (1.0 + (r * e / (k * k + (r - e) * (r - e))) ** SWEEP_EXPONENT[method])
+    sweep = speed / s * (1.0 + (r * e / (k * k + (r - e) * (r - e))) ** sweep_exponent)
     lam = (omega + sweep + c / j_min) * dt
-    order = _ORDER[method]
-    n = (SUBSTEP_CONSTANT[method] * lam ** (order + 1) / tol) ** (1.0 / order)
-    n = max(n, lam / STABLE_STEP[method])
+    n = (constant * lam ** (order + 1) / tol) ** (1.0 / order)
+    n = max(n, lam / stable)
     if not n < MAX_SUBSTEPS:  # also inf or nan at an absurd speed: the most, not int overflow
         return MAX_SUBSTEPS
     return max(1, math.ceil(n))
 
 
+# -- substep functions --------------------------------------------------------------------------
+
+
 @_jit
-def _midpoint(phi, w, tau, m, r, kappa, e, k, g, c, h):
+def _euler_substep(phi, w, tau, m, r, kappa, e, k, g, c, h):
+    """Semi-implicit Euler: φ' first, then φ with the new φ'."""
+    w = w + h * eq.accel(phi, w, tau, m, r, kappa, e, k, g, c)
+    return phi + h * w, w
+
+
+@_jit
+def _midpoint_substep(phi, w, tau, m, r, kappa, e, k, g, c, h):
     """One implicit-midpoint step on (φ, p = J_I φ'); Newton's method on the midpoint."""
-    p0 = _inertia(phi, m, r, kappa, e, k) * w
+    p0 = eq.inertia(phi, m, r, kappa, e, k) * w
     pm_phi, pm_p = phi + 0.5 * h * w, p0  # initial guess
     converged = False
     for _ in range(50):
-        j = _inertia(pm_phi, m, r, kappa, e, k)
-        jp = _dinertia(pm_phi, m, r, kappa, e)
-        jpp = _d2inertia(pm_phi, m, r, kappa, e)
+        j = eq.inertia(pm_phi, m, r, kappa, e, k)
+        jp = eq.dinertia(pm_phi, m, r, kappa, e)
+        jpp = eq.d2inertia(pm_phi, m, r, kappa, e)
         f1 = pm_p / j
-        f2 = pm_p * pm_p * jp / (2.0 * j * j) - _dpotential(pm_phi, m, r, kappa, e, g)
+        f2 = pm_p * pm_p * jp / (2.0 * j * j) - eq.dpotential(pm_phi, m, r, kappa, e, g)
         f2 += tau - c * pm_p / j
         g1 = pm_phi - phi - 0.5 * h * f1
         g2 = pm_p - p0 - 0.5 * h * f2
         d11 = 1.0 + 0.5 * h * pm_p * jp / (j * j)
         d12 = -0.5 * h / j
         df2 = pm_p * pm_p * (jpp / (2.0 * j * j) - jp * jp / (j * j * j))
-        df2 += -_d2potential(pm_phi, m, r, kappa, e, g) + c * pm_p * jp / (j * j)
+        df2 += -eq.d2potential(pm_phi, m, r, kappa, e, g) + c * pm_p * jp / (j * j)
         d21 = -0.5 * h * df2
         d22 = 1.0 - 0.5 * h * (pm_p * jp / (j * j) - c / j)
         det = d11 * d22 - d12 * d21
@@ -139,177 +243,532 @@ def _midpoint(phi, w, tau, m, r, kappa, e, k, g, c, h):
     if not converged:  # no midpoint solution found from here: non-finite, so the step splits
         return math.nan, math.nan
     phi1 = 2.0 * pm_phi - phi
-    return phi1, (2.0 * pm_p - p0) / _inertia(phi1, m, r, kappa, e, k)
+    return phi1, (2.0 * pm_p - p0) / eq.inertia(phi1, m, r, kappa, e, k)
 
 
-@_jit
-def _measure(phi, w, a, m, r, kappa, e, g, mu):
+def _tableau(a: np.ndarray, b: np.ndarray, e3: np.ndarray, e5: np.ndarray) -> np.ndarray:
+    """An explicit Runge–Kutta pair as one array of shape (s + 3, s + 1): rows 0..s−1 the
+    matrix A, row s the weights b, rows s + 1 and s + 2 the error weights E3 and E5 over the s
+    stages and the stage f(y_new) (E3 = 0: a single estimator E5)."""
+    s = b.shape[0]
+    out = np.zeros((s + 3, s + 1))
+    out[:s, :s] = a[:s, :s]
+    out[s, :s] = b
+    out[s + 1] = e3
+    out[s + 2] = e5
+    return out
+
+
+_N8 = dop853_coefficients.N_STAGES
+_DOP853 = _tableau(dop853_coefficients.A, dop853_coefficients.B, dop853_coefficients.E3,
+                   dop853_coefficients.E5)
+_RK4 = _tableau(
+    np.array([[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 1.0, 0]]),
+    np.array([1 / 6, 1 / 3, 1 / 3, 1 / 6]),
+    np.zeros(5),
+    np.array([0, 0, 0, 1 / 6, -1 / 6]),  # RK4 − the embedded 3rd-order (1/6, 1/3, 1/3, 0, 1/6)
+)
+
+
+@numba.extending.register_jitable
+def _margins(phi, w, a, m, r, kappa, e, g, mu):
     """(N/(m g), (μN − |F|)/(m g)): the lift-off and slip margins at a state."""
     normal, friction = eq.contact_forces(phi, w, a, m, r, kappa, e, g)
     return normal / (m * g), (mu * normal - abs(friction)) / (m * g)
 
 
-@_jit
-def _advance(phi0, w0, tau, m, r, kappa, e, k, g, c, mu, dt, method, tol, fixed, kp, kw):
-    """Advance one roller over dt at constant τ.
-
-    Returns ``(φ, φ', φ'', substeps, finite, N, F, E, liftoff, slip)`` at the end of the
-    step, where ``liftoff`` and ``slip`` are the smallest margins met at the start of any
-    substep and at the end (see :func:`_measure`). With ``fixed`` = 0 the substeps follow
-    from the speed at the start; if the step reaches a speed that asks for more, it is
-    taken again with as many as that speed asks for, and if it does not stay finite, again
-    with twice as many (up to MAX_SUBSTEPS). ``kp``, ``kw``: scratch arrays of 12 for "rk8".
-    """
-    n = fixed if fixed > 0 else _substeps(abs(w0), m, r, kappa, e, k, g, c, dt, tol, method)
-    lift, slip = np.inf, np.inf
-    for _attempt in range(12):
-        h = dt / n
-        phi, w, top = phi0, w0, abs(w0)
-        lift, slip = np.inf, np.inf
-        for _ in range(n):
-            a1 = _rhs(phi, w, tau, m, r, kappa, e, k, g, c)
-            lift_i, slip_i = _measure(phi, w, a1, m, r, kappa, e, g, mu)
-            lift, slip = min(lift, lift_i), min(slip, slip_i)
-            if method == 0:
-                w1 = w + 0.5 * h * a1
-                a2 = _rhs(phi + 0.5 * h * w, w1, tau, m, r, kappa, e, k, g, c)
-                w2 = w + 0.5 * h * a2
-                a3 = _rhs(phi + 0.5 * h * w1, w2, tau, m, r, kappa, e, k, g, c)
-                w3 = w + h * a3
-                a4 = _rhs(phi + h * w2, w3, tau, m, r, kappa, e, k, g, c)
-                phi = phi + h * (w + h * (a1 + a2 + a3) / 6.0)
-                w = w + h * (a1 + 2.0 * a2 + 2.0 * a3 + a4) / 6.0
-            elif method == 4:
-                kp[0], kw[0] = w, a1
-                for i in range(1, 12):
-                    dp, dw = 0.0, 0.0
-                    for j in range(i):
-                        dp += _A8[i, j] * kp[j]
-                        dw += _A8[i, j] * kw[j]
-                    kp[i] = w + h * dw
-                    kw[i] = _rhs(phi + h * dp, kp[i], tau, m, r, kappa, e, k, g, c)
-                dp, dw = 0.0, 0.0
-                for i in range(12):
-                    dp += _B8[i] * kp[i]
-                    dw += _B8[i] * kw[i]
-                phi, w = phi + h * dp, w + h * dw
-            elif method == 1:
-                w = w + h * a1
-                phi = phi + h * w
-            else:
-                phi, w = _midpoint(phi, w, tau, m, r, kappa, e, k, g, c, h)
-            if not (math.isfinite(phi) and math.isfinite(w)):
-                break
-            top = max(top, abs(w))
-        finite = math.isfinite(phi) and math.isfinite(w)
-        if fixed > 0 or (not finite and n >= MAX_SUBSTEPS):
-            break
-        needed = _substeps(top, m, r, kappa, e, k, g, c, dt, tol, method) if finite else 2 * n
-        if needed <= n:
-            break
-        n = min(needed, MAX_SUBSTEPS)
-    if not (math.isfinite(phi) and math.isfinite(w)):
-        return phi0, w0, 0.0, n, False, 0.0, 0.0, 0.0, 0.0, 0.0
-    a = _rhs(phi, w, tau, m, r, kappa, e, k, g, c)
+@numba.extending.register_jitable
+def _finish(io, col, ok, phi, w, tau, nsub, lift, slip, err, tol_met):
+    """Write one roller's outputs: the end state's fields, or the failure's (see module docs)."""
+    m, r, kappa, e = io[_M, col], io[_RR, col], io[_KAPPA, col], io[_E, col]
+    k, g, c, mu = io[_K, col], io[_G, col], io[_C, col], io[_MU, col]
+    a = eq.accel(phi, w, tau, m, r, kappa, e, k, g, c)
     normal, friction = eq.contact_forces(phi, w, a, m, r, kappa, e, g)
     energy = eq.energy(phi, w, m, r, kappa, e, k, g)
-    ok = math.isfinite(a) and math.isfinite(energy)
-    lift = min(lift, normal / (m * g))
-    slip = min(slip, (mu * normal - abs(friction)) / (m * g))
-    if not ok:
-        return phi0, w0, 0.0, n, False, 0.0, 0.0, 0.0, 0.0, 0.0
-    return phi, w, a, n, True, normal, friction, energy, lift, slip
+    lift_end, slip_end = normal / (m * g), (mu * normal - abs(friction)) / (m * g)
+    ok = ok and math.isfinite(a) and math.isfinite(energy) and math.isfinite(phi)
+    ok = ok and math.isfinite(w)
+    io[_NSUB, col] = nsub
+    if ok:
+        io[_PHI, col], io[_W, col], io[_ACC, col] = phi, w, a
+        io[_FINITE, col] = 1.0
+        io[_NORMAL, col], io[_FRICTION, col], io[_ENERGY, col] = normal, friction, energy
+        io[_LIFT, col], io[_SLIP, col] = min(lift, lift_end), min(slip, slip_end)
+        io[_ERR, col], io[_TOL_MET, col] = err, 1.0 if tol_met else 0.0
+    else:
+        io[_PHI, col], io[_W, col] = io[_PHI_IN, col], io[_W_IN, col]
+        io[_FINITE, col], io[_TOL_MET, col] = 0.0, 0.0
+        for row in (_ACC, _NORMAL, _FRICTION, _ENERGY, _LIFT, _SLIP, _ERR):
+            io[row, col] = math.nan
 
 
-#: The fields of a step's outcome, in the order the kernels return them.
-_FIELDS = ("phi", "phi_dot", "phi_ddot", "substeps", "finite", "normal_force",
-           "friction_force", "energy", "liftoff_margin", "slip_margin")
-_DTYPES = (float, float, float, int, bool, float, float, float, float, float)
+# -- the adaptive kernel: explicit Runge–Kutta pairs, rollers in lockstep ------------------------
+
+#: Rollers advanced together (in lockstep, each with its own step size) by one task.
+CHUNK = 64
+_SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0
+#: Attempts (accepted or rejected substeps) after which a roller still running is failed.
+_MAX_ATTEMPTS = 4 * MAX_SUBSTEPS
 
 
 @_jit
-def _advance_range(lo, hi, phi, w, tau, P, dt, method, tol, fixed, out):
-    """Advance rollers lo to hi − 1 of a batch, writing their results into ``out``."""
-    kp, kw = np.empty(12), np.empty(12)
-    for i in range(lo, hi):
-        res = _advance(phi[i], w[i], tau[i], P[i, 0], P[i, 1], P[i, 2], P[i, 3], P[i, 4],
-                       P[i, 5], P[i, 6], P[i, 7], dt, method, tol, fixed, kp, kw)
-        (out[0, i], out[1, i], out[2, i], out[3, i], out[4, i], out[5, i], out[6, i], out[7, i],
-         out[8, i], out[9, i]) = res
+def _rk_chunk(io, lo, hi, tab, cfg):
+    """Advance rollers (columns) lo..hi−1 of ``io`` over one control step.
+
+    ``tab``: the pair (see :func:`_tableau`); ``cfg``: ``(dt, tol, fixed substeps or 0,
+    halvings of the controller's root, order, constant, stable step, sweep exponent)``.
+    """
+    n = hi - lo
+    s = tab.shape[0] - 3
+    dt, tol, nfixed, halvings = cfg[0], cfg[1], int(cfg[2]), int(cfg[3])
+    fixed = nfixed > 0
+    kp = np.empty((s + 1, n))  # stage velocities φ'
+    kw = np.empty((s + 1, n))  # stage accelerations φ''
+    acc_p, acc_w = np.empty(n), np.empty(n)
+    e5p, e5w, e3p, e3w = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    par = np.empty((len(SCENE_FIELDS), n))
+    tau = np.empty(n)
+    phi, w, hh, hdes, t = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    last = np.empty(n, dtype=np.bool_)
+    phin, wn = np.empty(n), np.empty(n)
+    lift, slip, err_sum = np.empty(n), np.empty(n), np.empty(n)
+    count = np.zeros(n, dtype=np.int64)
+    status = np.zeros(n, dtype=np.int64)  # 0 running, 1 done, 2 failed
+    rejected = np.zeros(n, dtype=np.bool_)
+    missed = np.zeros(n, dtype=np.bool_)
+    for i in range(n):
+        col = lo + i
+        for f in range(len(SCENE_FIELDS)):
+            par[f, i] = io[f, col]
+        tau[i] = io[_TAU, col]
+        phi[i], w[i] = io[_PHI_IN, col], io[_W_IN, col]
+        kp[0, i] = w[i]
+        kw[0, i] = eq.accel(phi[i], w[i], tau[i], par[0, i], par[1, i], par[2, i], par[3, i],
+                            par[4, i], par[5, i], par[6, i])
+        t[i], lift[i], slip[i], err_sum[i] = 0.0, np.inf, np.inf, 0.0
+        if fixed:
+            hdes[i] = dt / nfixed
+        else:
+            guess = _substeps(abs(w[i]), par[0, i], par[1, i], par[2, i], par[3, i], par[4, i],
+                              par[5, i], par[6, i], dt, tol, cfg[4], cfg[5], cfg[6], cfg[7])
+            hdes[i] = dt / guess
+    m, r, kappa, e, k, g, c, mu = par[0], par[1], par[2], par[3], par[4], par[5], par[6], par[7]
+    for _attempt in range(_MAX_ATTEMPTS):
+        running = 0
+        for i in range(n):
+            running += status[i] == 0
+        if running == 0:
+            break
+        # this attempt's sizes, and the margins at the start of the substep
+        for i in range(n):
+            if fixed:
+                h = hdes[i]
+                last[i] = count[i] + 1 >= nfixed
+            else:
+                rest = dt - t[i]
+                h = min(hdes[i], rest)
+                last[i] = hdes[i] >= rest
+            hh[i] = h if status[i] == 0 else 0.0
+            li, si = _margins(phi[i], w[i], kw[0, i], m[i], r[i], kappa[i], e[i], g[i], mu[i])
+            lift[i], slip[i] = min(lift[i], li), min(slip[i], si)
+        # the stages
+        for st in range(1, s + 1):
+            for i in range(n):
+                acc_p[i], acc_w[i] = 0.0, 0.0
+            for j in range(st):
+                a = tab[st, j]
+                if a != 0.0:
+                    for i in range(n):
+                        acc_p[i] += a * kp[j, i]
+                        acc_w[i] += a * kw[j, i]
+            for i in range(n):
+                wi = w[i] + hh[i] * acc_w[i]
+                pi = phi[i] + hh[i] * acc_p[i]
+                kp[st, i] = wi
+                kw[st, i] = eq.accel(pi, wi, tau[i], m[i], r[i], kappa[i], e[i], k[i], g[i], c[i])
+                if st == s:  # the weights b: the new state, and f there (the last stage)
+                    phin[i], wn[i] = pi, wi
+        # the error estimates (scipy's DOP853 form; E3 = 0 gives |h E5·K|)
+        for i in range(n):
+            e5p[i], e5w[i], e3p[i], e3w[i] = 0.0, 0.0, 0.0, 0.0
+        for j in range(s + 1):
+            a3, a5 = tab[s + 1, j], tab[s + 2, j]
+            for i in range(n):
+                e3p[i] += a3 * kp[j, i]
+                e3w[i] += a3 * kw[j, i]
+                e5p[i] += a5 * kp[j, i]
+                e5w[i] += a5 * kw[j, i]
+        # accept or reject, and the next size, per roller
+        for i in range(n):
+            if status[i] != 0:
+                continue
+            h = hh[i]
+            dp = e5p[i] * e5p[i] + 0.01 * e3p[i] * e3p[i]
+            dw = e5w[i] * e5w[i] + 0.01 * e3w[i] * e3w[i]
+            errp = h * e5p[i] * e5p[i] / math.sqrt(dp) if dp > 0.0 else 0.0
+            errw = h * e5w[i] * e5w[i] / math.sqrt(dw) if dw > 0.0 else 0.0
+            err = max(errp, errw)
+            fin = (math.isfinite(phin[i]) and math.isfinite(wn[i])
+                   and math.isfinite(kw[s, i]) and math.isfinite(err))
+            floor = max(dt / MAX_SUBSTEPS,
+                        ROUNDOFF_FACTOR * _EPS * max(abs(phi[i]), abs(w[i])) * dt / tol)
+            ratio = err * dt / (tol * h) if h > 0.0 else 0.0
+            ok = fin and ratio <= 1.0
+            forced = h <= floor
+            if fixed:
+                accept, fail = fin, not fin
+            else:
+                accept = ok or (forced and fin)
+                fail = forced and not fin
+            if accept:
+                phi[i], w[i] = phin[i], wn[i]
+                kp[0, i], kw[0, i] = kp[s, i], kw[s, i]
+                t[i] = dt if last[i] else t[i] + h
+                count[i] += 1
+                err_sum[i] += err
+                if not ok:
+                    missed[i] = True
+                if last[i]:
+                    status[i] = 1
+            elif fail:
+                status[i] = 2
+            if not fixed:
+                if not fin:
+                    factor = _MIN_FACTOR
+                elif ratio == 0.0:
+                    factor = _MAX_FACTOR
+                else:
+                    q = ratio
+                    for _ in range(halvings):
+                        q = math.sqrt(q)
+                    factor = min(_MAX_FACTOR, max(_MIN_FACTOR, _SAFETY / q))
+                if rejected[i]:
+                    factor = min(factor, 1.0)
+                rejected[i] = not accept
+                hdes[i] = max(h * factor, floor)
+    for i in range(n):
+        _finish(io, lo + i, status[i] == 1, phi[i], w[i], tau[i], count[i], lift[i], slip[i],
+                err_sum[i], not missed[i])
 
 
-#: Rollers per task handed to a core in a parallel batch.
-_CHUNK = 256
+@_jit
+def _rk_serial(io, tab, cfg):
+    n = io.shape[1]
+    for lo in range(0, n, CHUNK):
+        _rk_chunk(io, lo, min(lo + CHUNK, n), tab, cfg)
 
 
 @numba.njit(cache=True, parallel=True, nogil=True)
-def _advance_batch_parallel(phi, w, tau, P, dt, method, tol, fixed, out):
-    n = phi.shape[0]
-    for chunk in numba.prange((n + _CHUNK - 1) // _CHUNK):
-        lo = chunk * _CHUNK
-        _advance_range(lo, min(lo + _CHUNK, n), phi, w, tau, P, dt, method, tol, fixed, out)
+def _rk_parallel(io, tab, cfg):
+    n = io.shape[1]
+    for chunk in numba.prange((n + CHUNK - 1) // CHUNK):
+        lo = chunk * CHUNK
+        _rk_chunk(io, lo, min(lo + CHUNK, n), tab, cfg)
 
 
 #: Batches at least this large are advanced on all cores.
 PARALLEL_THRESHOLD = 2048
 
 
+# -- the fixed-substep kernel ------------------------------------------------------------------
+
+
+def _make_fixed_kernel(substep: Callable) -> Callable:
+    """The kernel of a fixed-substep scheme: each roller on its own, n equal substeps."""
+
+    @numba.njit(nogil=True)
+    def kernel(io, tab, cfg):
+        dt, tol, nfixed = cfg[0], cfg[1], int(cfg[2])
+        for col in range(io.shape[1]):
+            m, r, kappa, e = io[_M, col], io[_RR, col], io[_KAPPA, col], io[_E, col]
+            k, g, c, mu = io[_K, col], io[_G, col], io[_C, col], io[_MU, col]
+            phi0, w0, tau = io[_PHI_IN, col], io[_W_IN, col], io[_TAU, col]
+            n = nfixed if nfixed > 0 else _substeps(abs(w0), m, r, kappa, e, k, g, c, dt, tol,
+                                                   cfg[4], cfg[5], cfg[6], cfg[7])
+            phi, w = phi0, w0
+            lift, slip = np.inf, np.inf
+            for _attempt in range(20):
+                h = dt / n
+                phi, w, top = phi0, w0, abs(w0)
+                lift, slip = np.inf, np.inf
+                for _ in range(n):
+                    a = eq.accel(phi, w, tau, m, r, kappa, e, k, g, c)
+                    li, si = _margins(phi, w, a, m, r, kappa, e, g, mu)
+                    lift, slip = min(lift, li), min(slip, si)
+                    phi, w = substep(phi, w, tau, m, r, kappa, e, k, g, c, h)
+                    if not (math.isfinite(phi) and math.isfinite(w)):
+                        break
+                    top = max(top, abs(w))
+                finite = math.isfinite(phi) and math.isfinite(w)
+                if nfixed > 0 or (not finite and n >= MAX_SUBSTEPS):
+                    break
+                needed = (_substeps(top, m, r, kappa, e, k, g, c, dt, tol, cfg[4], cfg[5],
+                                    cfg[6], cfg[7]) if finite else 2 * n)
+                if needed <= n:
+                    break
+                n = min(needed, MAX_SUBSTEPS)
+            _finish(io, col, True, phi, w, tau, n, lift, slip, math.nan, True)
+
+    return kernel
+
+
+# -- the reference --------------------------------------------------------------------------------
+
+
+def _dop853_kernel(io: np.ndarray, tab: None, cfg: np.ndarray) -> None:
+    """scipy's DOP853 on the whole batch as one system (margins at the start and the end)."""
+    dt, tol = float(cfg[0]), float(cfg[1])
+    n = io.shape[1]
+    m, r, kappa, e, k, g, c, mu = (io[_ROW[f]] for f in SCENE_FIELDS)
+    phi, w, tau = io[_PHI_IN], io[_W_IN], io[_TAU]
+
+    def rhs(_t, y):
+        return np.concatenate((y[n:], eq.accel(y[:n], y[n:], tau, m, r, kappa, e, k, g, c)))
+
+    with np.errstate(all="ignore"):
+        sol = solve_ivp(rhs, (0.0, dt), np.concatenate((phi, w)), method="DOP853", rtol=tol,
+                        atol=tol)
+        y = sol.y[:, -1] if sol.success else np.full(2 * n, np.nan)
+        a0 = eq.accel(phi, w, tau, m, r, kappa, e, k, g, c)
+        normal, friction = eq.contact_forces(phi, w, a0, m, r, kappa, e, g)
+        lift, slip = normal / (m * g), (mu * normal - np.abs(friction)) / (m * g)
+    for col in range(n):
+        _finish_py(io, col, bool(sol.success), float(y[col]), float(y[n + col]),
+                   float(tau[col]), sol.t.size - 1, float(lift[col]), float(slip[col]),
+                   math.nan, True)
+
+
+_finish_py = _finish  # register_jitable leaves it a Python function too
+
+
+# -- the table of schemes ---------------------------------------------------------------------
+
+
 @dataclass(frozen=True)
-class StepResult:
-    """The outcome of one control step, at its end unless said otherwise.
+class Scheme:
+    """One integration scheme: a row of :data:`SCHEMES`.
 
     Attributes:
-        phi: φ [rad].
-        phi_dot: φ' [rad/s].
-        phi_ddot: φ'' [rad/s²] under the step's torque.
-        substeps: substeps taken (for ``"dop853"``, accepted steps).
-        finite: False where the step could not stay finite; there φ and φ' are the state
-            before the step, unchanged, and the other fields 0.
-        normal_force: N [N] (positive: pressing; see ``equations.contact_forces``).
-        friction_force: F [N].
-        energy: E [J].
-        liftoff_margin: the smallest N/(m g) met during the step (<= 0: lift-off).
-        slip_margin: the smallest (μN − |F|)/(m g) met during the step (< 0: slip).
+        name: its name, the ``method`` argument.
+        order: its order of accuracy.
+        stable_step: the largest λh per substep (λ the fastest rate), inside its stability
+            region with room to spare (``math.inf``: A-stable).
+        adaptive: True if its substeps follow an error estimate (see the module docs).
+        substep: its substep function (for the Runge–Kutta pairs, the shared pair kernel).
+        tableau: for an explicit Runge–Kutta pair, its coefficients (see ``_tableau``).
+        constant: C of the substep prediction n = (C (λ dt)^(p+1) / tol)^(1/p), calibrated
+            on the presets (for the adaptive schemes only the first step-size guess).
+        sweep_exponent: the exponent of re/(k² + (r − e)²) in the prediction's sweep rate.
+        halvings: the adaptive controller takes the 2^halvings-th root of the error ratio.
     """
 
-    phi: np.ndarray | float
-    phi_dot: np.ndarray | float
-    phi_ddot: np.ndarray | float
-    substeps: np.ndarray | int
-    finite: np.ndarray | bool
-    normal_force: np.ndarray | float
-    friction_force: np.ndarray | float
-    energy: np.ndarray | float
-    liftoff_margin: np.ndarray | float
-    slip_margin: np.ndarray | float
+    name: str
+    order: int
+    stable_step: float
+    adaptive: bool
+    substep: Callable | None
+    tableau: np.ndarray | None = None
+    constant: float = 0.0
+    sweep_exponent: float = 0.5
+    halvings: int = 0
 
-    @property
-    def lifting(self) -> np.ndarray | bool:
-        """True where the roller left the surface (N <= 0) during the step."""
-        return self.liftoff_margin <= 0
-
-    @property
-    def slipping(self) -> np.ndarray | bool:
-        """True where the friction needed exceeded μN during the step."""
-        return self.slip_margin < 0
+    def kernels(self) -> tuple[Callable, Callable]:
+        """(serial, parallel) kernels ``f(io, tableau, cfg)`` of this scheme."""
+        return _kernels(self)
 
 
-def _method_code(method: str) -> int:
+_SCHEME_LIST = (
+    Scheme("rk8", 8, 1.0, True, _rk_chunk, _DOP853, constant=1e-6, sweep_exponent=0.75,
+           halvings=3),
+    Scheme("rk4", 4, 1.0, True, _rk_chunk, _RK4, constant=0.02, halvings=2),
+    Scheme("euler", 1, 0.5, False, _euler_substep, constant=2.0),
+    Scheme("midpoint", 2, math.inf, False, _midpoint_substep, constant=0.3),
+    Scheme("dop853", 8, math.inf, True, None),
+)
+#: The schemes by name.
+SCHEMES: dict[str, Scheme] = {s.name: s for s in _SCHEME_LIST}
+#: The names of the schemes (the ``method`` arguments).
+METHODS = tuple(SCHEMES)
+DEFAULT_METHOD = "rk8"
+
+_KERNELS: dict[str, tuple[Callable, Callable]] = {}
+
+
+def _kernels(scheme: Scheme) -> tuple[Callable, Callable]:
+    """The factory: one compiled kernel per scheme (serial, parallel), made once."""
+    if scheme.name not in _KERNELS:
+        if scheme.substep is None:
+            pair = (_dop853_kernel, _dop853_kernel)
+        elif scheme.tableau is not None:
+            pair = (_rk_serial, _rk_parallel)
+        else:
+            kernel = _make_fixed_kernel(scheme.substep)
+            pair = (kernel, kernel)
+        _KERNELS[scheme.name] = pair
+    return _KERNELS[scheme.name]
+
+
+def scheme(method: str) -> Scheme:
+    """The row of :data:`SCHEMES` called ``method``."""
     try:
-        return METHODS[method]
-    except KeyError:
-        raise ValueError(
-            f"unknown integrator {method!r}; allowed: {', '.join(METHODS)}"
-        ) from None
+        return SCHEMES[method]
+    except (KeyError, TypeError):
+        raise ValueError(f"unknown integrator {method!r}; allowed: {', '.join(METHODS)}") from None
 
 
 def _check_step_args(dt: float, tol: float, substeps: int | None) -> None:
-    if not (math.isfinite(dt) and dt > 0):
+    if not (isinstance(dt, int | float | np.floating) and math.isfinite(dt) and dt > 0):
         raise ValueError(f"dt={dt!r} [s] must be finite and > 0")
-    if not (math.isfinite(tol) and tol > 0):
+    if not (isinstance(tol, int | float | np.floating) and math.isfinite(tol) and tol > 0):
         raise ValueError(f"tol={tol!r} must be finite and > 0")
-    if substeps is not None and not (isinstance(substeps, int | np.integer) and substeps >= 1):
-        raise ValueError(f"substeps={substeps!r} must be None (automatic) or an integer >= 1")
+    if substeps is not None and not (
+        isinstance(substeps, int | np.integer) and 1 <= substeps <= MAX_SUBSTEPS
+    ):
+        raise ValueError(
+            f"substeps={substeps!r} must be None (automatic) or an integer in [1, {MAX_SUBSTEPS}]"
+        )
+
+
+# -- the steppers -----------------------------------------------------------------------------
+
+
+class _Base:
+    def __init__(self, num: int, method: str, dt: float, tol: float,
+                 substeps: int | None) -> None:
+        _check_step_args(dt, tol, substeps)
+        self.scheme = scheme(method)
+        if substeps is not None and self.scheme.substep is None:
+            raise ValueError(f"substeps={substeps!r}: method={method!r} chooses its own steps")
+        self.method, self.dt, self.tol, self.substeps = method, float(dt), float(tol), substeps
+        self._serial, self._parallel = self.scheme.kernels()
+        self._tab = self.scheme.tableau if self.scheme.tableau is not None else np.zeros((1, 1))
+        sch = self.scheme
+        self._cfg = np.array([dt, tol, substeps or 0, sch.halvings, sch.order, sch.constant,
+                              sch.stable_step, sch.sweep_exponent], dtype=float)
+        self._io = np.zeros((len(ROWS), num))
+        self._warned = False
+
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__)
+        for name in ("_serial", "_parallel", "_kernel", "_flat"):  # made again on unpickling
+            state.pop(name, None)
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._serial, self._parallel = self.scheme.kernels()
+        self._link()
+
+    def _link(self) -> None:
+        """Views and kernel choices that refer to the buffers (again after unpickling)."""
+
+    def _warn(self) -> None:
+        if self.substeps is not None:  # fixed substeps: tol_met informs, no warning
+            return
+        if not self._warned:
+            self._warned = True
+            warnings.warn(
+                f"tol={self.tol!r} is out of reach of float64 for some step (method "
+                f"{self.method!r}, dt={self.dt!r}): those steps report tol_met=False; a looser "
+                "tol avoids this", RuntimeWarning, stacklevel=3)
+
+
+class Stepper(_Base):
+    """Advances one roller by one control step per call, at the lowest latency.
+
+    Args:
+        scene: a scalar :class:`Scene`.
+        method: a name of :data:`SCHEMES` (default ``"rk8"``).
+        dt: the control step [s].
+        tol: the state error allowed per control step (φ in rad, φ' in rad/s).
+        substeps: a fixed count of equal substeps instead of the error control.
+    """
+
+    def __init__(self, scene: Scene, *, method: str = DEFAULT_METHOD, dt: float, tol: float,
+                 substeps: int | None = None) -> None:
+        super().__init__(1, method, dt, tol, substeps)
+        self._link()
+        self.set_scene(scene)
+
+    def _link(self) -> None:
+        self._flat = self._io.reshape(-1)  # a view: row i is element i
+
+    def set_scene(self, scene: Scene) -> None:
+        """Use ``scene`` (scalar) from the next step on."""
+        if scene.batch_size is not None:
+            raise ValueError(f"scene has a batch of {scene.batch_size} rollers; Stepper takes "
+                             "a scalar Scene (use BatchStepper for a batch)")
+        self._io[: len(SCENE_FIELDS)] = scene_arrays(scene)
+
+    def advance(self, phi: float, phi_dot: float, tau: float) -> tuple:
+        """One control step from (φ [rad], φ' [rad/s]) at torque τ [N·m]: the fields of
+        :class:`StepResult` in :data:`STEP_FIELDS` order, as Python float, int and bool."""
+        flat = self._flat
+        flat[_PHI_IN], flat[_W_IN], flat[_TAU] = phi, phi_dot, tau
+        self._serial(self._io, self._tab, self._cfg)
+        (p, w, a, nsub, finite, normal, friction, energy, lift, slip, err,
+         met) = flat[_OUT:].tolist()
+        if met == 0.0 and finite != 0.0:
+            self._warn()
+        return (p, w, a, int(nsub), finite != 0.0, normal, friction, energy, lift, slip, err,
+                met != 0.0)
+
+
+class BatchStepper(_Base):
+    """Advances N rollers by one control step per call (structure of arrays, all cores).
+
+    Args:
+        num: the number of rollers.
+        method, dt, tol, substeps: as for :class:`Stepper`.
+
+    Set the rollers' scenes with :meth:`set_scenes` before the first :meth:`advance`.
+    """
+
+    def __init__(self, num: int, *, method: str = DEFAULT_METHOD, dt: float, tol: float,
+                 substeps: int | None = None) -> None:
+        if not (isinstance(num, int | np.integer) and num >= 1):
+            raise ValueError(f"num={num!r} must be an integer >= 1")
+        super().__init__(int(num), method, dt, tol, substeps)
+        self.num = int(num)
+        self._io[: len(SCENE_FIELDS)] = np.nan  # no scene yet
+        self._substeps = np.zeros(self.num, dtype=np.int64)
+        self._finite = np.zeros(self.num, dtype=bool)
+        self._tol_met = np.zeros(self.num, dtype=bool)
+        self._link()
+
+    def _link(self) -> None:
+        self._kernel = self._parallel if self.num >= PARALLEL_THRESHOLD else self._serial
+
+    def set_scenes(self, scene: Scene, index=None) -> None:
+        """Put ``scene`` (scalar: broadcast; batch: one roller each) into rows ``index``
+        (an index, slice, mask or index array of the rollers; all if None)."""
+        rows = np.arange(self.num)[slice(None) if index is None else index]
+        size = scene.batch_size
+        if size is not None and size != np.size(rows):
+            raise ValueError(f"scene has {size} rollers for {np.size(rows)} rows of index")
+        self._io[: len(SCENE_FIELDS), rows] = scene_arrays(scene, np.size(rows)).reshape(
+            len(SCENE_FIELDS), *np.shape(rows))
+
+    def scene_table(self) -> np.ndarray:
+        """The rollers' scene numbers, shape ``(len(SCENE_FIELDS), num)`` (a view)."""
+        return self._io[: len(SCENE_FIELDS)]
+
+    def advance(self, phi: np.ndarray, phi_dot: np.ndarray, tau: np.ndarray) -> StepResult:
+        """One control step of every roller; arrays of ``num``. The result's arrays are views
+        of the stepper's own buffers, valid until the next call."""
+        io = self._io
+        io[_PHI_IN], io[_W_IN], io[_TAU] = phi, phi_dot, tau
+        if np.isnan(io[_M]).any():
+            raise ValueError("some rollers have no scene: call set_scenes first")
+        self._kernel(io, self._tab, self._cfg)
+        np.copyto(self._substeps, io[_NSUB], casting="unsafe")
+        np.not_equal(io[_FINITE], 0.0, out=self._finite)
+        np.not_equal(io[_TOL_MET], 0.0, out=self._tol_met)
+        if not (self._tol_met | ~self._finite).all():
+            self._warn()
+        return StepResult(io[_PHI], io[_W], io[_ACC], self._substeps, self._finite,
+                          io[_NORMAL], io[_FRICTION], io[_ENERGY], io[_LIFT], io[_SLIP],
+                          io[_ERR], self._tol_met)
 
 
 def step(
@@ -319,7 +778,7 @@ def step(
     tau: float | np.ndarray,
     dt: float,
     *,
-    method: str = "rk4",
+    method: str = DEFAULT_METHOD,
     tol: float = 1e-9,
     substeps: int | None = None,
 ) -> StepResult:
@@ -331,135 +790,53 @@ def step(
         phi_dot: φ' [rad/s].
         tau: the drive torque [N·m], constant over the step.
         dt: the control step [s].
-        method: one of :data:`METHODS`.
-        tol: the target state error per control step (φ in rad, φ' in rad/s); sets the
-            substeps (or, for ``"dop853"``, its rtol and atol).
-        substeps: a fixed number of substeps instead of the automatic rule.
+        method: a name of :data:`SCHEMES`.
+        tol: the state error allowed per control step (φ in rad, φ' in rad/s); for
+            ``"dop853"`` its rtol and atol.
+        substeps: a fixed number of equal substeps instead of the error control.
 
     Returns:
         A :class:`StepResult`; arrays of the broadcast shape, or scalars for scalar input.
     """
     _check_step_args(dt, tol, substeps)
-    code = _method_code(method)
     params = (*scene.params, scene.mu)
     scalar = all(np.ndim(x) == 0 for x in (phi, phi_dot, tau, *params))
-    arrays = np.broadcast_arrays(
-        *(np.asarray(x, dtype=float) for x in (phi, phi_dot, tau, *params))
-    )
+    arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (phi, phi_dot, tau,
+                                                                         *params)))
     shape = arrays[0].shape
-    flat = [np.ascontiguousarray(a.reshape(-1)) for a in arrays]
-    if code == METHODS["dop853"]:
-        out = _dop853(flat[0], flat[1], flat[2], np.stack(flat[3:], axis=1), dt, tol)
-    else:
-        P = np.ascontiguousarray(np.stack(flat[3:], axis=1))
-        n = flat[0].shape[0]
-        raw = np.empty((10, n))
-        advance_batch(P, flat[0], flat[1], flat[2], dt, code, tol, substeps or 0, raw)
-        out = [raw[j].astype(t) for j, t in enumerate(_DTYPES)]
+    n = max(1, int(np.prod(shape)))
+    stepper = BatchStepper(n, method=method, dt=dt, tol=tol, substeps=substeps)
+    stepper._io[: len(SCENE_FIELDS)] = [a.reshape(-1) for a in arrays[3:]]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        out = stepper.advance(*(a.reshape(-1) for a in arrays[:3]))
     if scalar:
-        return StepResult(*(t(o[0]) for o, t in zip(out, _DTYPES, strict=True)))
-    return StepResult(*(o.reshape(shape) for o in out))
-
-
-def advance_batch(
-    rows: np.ndarray, phi: np.ndarray, phi_dot: np.ndarray, tau: np.ndarray, dt: float,
-    method: int, tol: float, substeps: int, out: np.ndarray,
-) -> None:
-    """The fast path of :func:`step` for a batch, arguments already checked.
-
-    ``rows`` is (n, 8): ``(*Scene.params, mu)`` per roller; ``phi``, ``phi_dot``, ``tau``
-    are float arrays of n; ``method`` a code of :data:`METHODS` other than DOP853;
-    ``substeps`` 0 for automatic. Writes the fields of :class:`StepResult`, in its order,
-    into the rows of ``out`` (10, n).
-    """
-    n = phi.shape[0]
-    if n >= PARALLEL_THRESHOLD:
-        _advance_batch_parallel(phi, phi_dot, tau, rows, dt, method, tol, substeps, out)
-    else:
-        _advance_range(0, n, phi, phi_dot, tau, rows, dt, method, tol, substeps, out)
-
-
-#: Layout of the buffer of :func:`advance_into`: inputs, then the outputs from OUT on.
-BUFFER_INPUTS = ("phi", "phi_dot", "tau", "m", "r", "kappa", "e", "k", "g", "c", "mu", "dt",
-                 "tol", "method", "substeps")
-OUT = len(BUFFER_INPUTS)
-BUFFER_SIZE = OUT + 34
-
-
-@_jit
-def advance_into(buf: np.ndarray) -> None:
-    """One roller's step with every argument and result in one float array (the fastest call).
-
-    ``buf[:OUT]`` holds :data:`BUFFER_INPUTS` (``method`` a code of :data:`METHODS` other than
-    DOP853, ``substeps`` 0 for automatic); the fields of :class:`StepResult`, in its order,
-    are written to ``buf[OUT:OUT + 10]``; ``buf[OUT + 10:BUFFER_SIZE]`` is scratch.
-    """
-    res = _advance(buf[0], buf[1], buf[2], buf[3], buf[4], buf[5], buf[6], buf[7], buf[8],
-                   buf[9], buf[10], buf[11], int(buf[13]), buf[12], int(buf[14]),
-                   buf[OUT + 10:OUT + 22], buf[OUT + 22:OUT + 34])
-    (buf[OUT], buf[OUT + 1], buf[OUT + 2], buf[OUT + 3], buf[OUT + 4], buf[OUT + 5],
-     buf[OUT + 6], buf[OUT + 7], buf[OUT + 8], buf[OUT + 9]) = res
-
-
-def step_one(
-    params: tuple[float, ...],
-    phi: float,
-    phi_dot: float,
-    tau: float,
-    dt: float,
-    method: int,
-    tol: float,
-    substeps: int = 0,
-) -> tuple:
-    """The fast path of :func:`step` for one roller, arguments already checked.
-
-    ``params`` is ``(*Scene.params, Scene.mu)`` as floats, ``method`` a code of
-    :data:`METHODS` other than DOP853, ``substeps`` 0 for automatic. Returns the fields of
-    :class:`StepResult` as a tuple, in its order.
-    """
-    return _advance(phi, phi_dot, tau, *params, dt, method, tol, substeps, np.empty(12),
-                    np.empty(12))
-
-
-def _dop853(phi, w, tau, P, dt, tol):
-    """The reference: scipy's DOP853 on the whole batch as one system (margins at the end)."""
-    params = tuple(P[:, i] for i in range(8))
-    n = phi.shape[0]
-
-    def rhs(_t, y):
-        return np.concatenate((y[n:], eq.accel(y[:n], y[n:], tau, *params[:7])))
-
-    sol = solve_ivp(rhs, (0.0, dt), np.concatenate((phi, w)), method="DOP853", rtol=tol,
-                    atol=tol)
-    y = sol.y[:, -1]
-    ok = np.isfinite(y[:n]) & np.isfinite(y[n:]) & sol.success
-    steps = np.full(n, sol.t.size - 1, dtype=np.int64)
-    phi1, w1 = np.where(ok, y[:n], phi), np.where(ok, y[n:], w)
-    m, r, kappa, e, k, g, c, mu = params
-    with np.errstate(all="ignore"):  # where not ok the fields are 0, as in the kernels
-        a = eq.accel(phi1, w1, tau, m, r, kappa, e, k, g, c)
-        normal, friction = eq.contact_forces(phi1, w1, a, m, r, kappa, e, g)
-        energy = eq.energy(phi1, w1, m, r, kappa, e, k, g)
-        lift, slip = normal / (m * g), (mu * normal - np.abs(friction)) / (m * g)
-    ok = ok & np.isfinite(a) & np.isfinite(energy)
-    phi1, w1 = np.where(ok, phi1, phi), np.where(ok, w1, w)
-    a, normal, friction, energy, lift, slip = (
-        np.where(ok, x, 0.0) for x in (a, normal, friction, energy, lift, slip)
-    )
-    return phi1, w1, a, steps, ok, normal, friction, energy, lift, slip
+        return StepResult(*(_KIND[f](getattr(out, f)[0]) for f in STEP_FIELDS))
+    return StepResult(*(np.array(getattr(out, f)).reshape(shape) for f in STEP_FIELDS))
 
 
 def predicted_substeps(
-    scene: Scene, phi_dot: float | np.ndarray, dt: float, tol: float, method: str = "rk4"
+    scene: Scene, phi_dot: float | np.ndarray, dt: float, tol: float, method: str = DEFAULT_METHOD
 ) -> np.ndarray | int:
-    """The substeps the automatic rule asks for at speed |φ'| (see the module docs)."""
-    code = _method_code(method)
-    if code == METHODS["dop853"]:
-        raise ValueError("method='dop853' chooses its own steps; no prediction is made")
+    """The substeps the prediction asks for at speed |φ'|: with λ the sum of
+
+    * ω_max = sqrt(max V'' / min J_I), the linearized frequency at the smallest J_I
+      (J_min = m(k² + (r − e)²), V''_max = m g (r²|κ|/s + e)),
+    * the rate at which θ sweeps the roller's geometry at speed |φ'|,
+      (|φ'|/s)(1 + (re/(k² + (r − e)²))^x) (x the scheme's ``sweep_exponent``),
+    * the damping rate c/J_min,
+
+    a scheme of order p takes n = ceil((C (λ dt)^(p+1) / tol)^(1/p)) substeps, and at least
+    λ dt / stable_step. The fixed-substep schemes take n; the adaptive ones start from dt/n.
+    """
+    sch = scheme(method)
+    if sch.substep is None:
+        raise ValueError(f"method={method!r} chooses its own steps; no prediction is made")
     _check_step_args(dt, tol, None)
     arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (phi_dot, *scene.params)))
     flat = [a.reshape(-1) for a in arrays]
-    out = np.array(
-        [_substeps(abs(v[0]), *v[1:], dt, tol, code) for v in zip(*flat, strict=True)]
-    )
+    out = np.array([
+        _substeps(abs(v[0]), *v[1:], dt, tol, sch.order, sch.constant, sch.stable_step,
+                  sch.sweep_exponent) for v in zip(*flat, strict=True)
+    ])
     return int(out[0]) if arrays[0].ndim == 0 else out.reshape(arrays[0].shape)
