@@ -146,9 +146,13 @@ class LQR(Controller):
         target = None if base.task.observes_target else base.task.default_target(scene)
         return cls(base.task, scene, max_torque, dt, target=target, **weights)
 
+    #: Targets closer than this [rad] share their gains (a moving target's in particular).
+    gain_resolution = 1e-3
+
     def gains(self, target: float) -> tuple[float, np.ndarray, np.ndarray]:
-        """(τ* [N·m], K (1, 2), P (2, 2)) about the rest position ``target`` [rad]."""
-        key = round(float(target), 9)
+        """(τ* [N·m], K (1, 2), P (2, 2)) about the rest position ``target`` [rad] (gains
+        computed at ``target`` rounded to :attr:`gain_resolution`, and cached)."""
+        key = round(float(target) / self.gain_resolution) * self.gain_resolution
         if key not in self._cache:
             tau_star = float(holding_torque(self.scene, key))
             A, B = linearize(self.scene, key, 0.0, tau_star)
@@ -166,25 +170,28 @@ class LQR(Controller):
         """The position error [rad] to the rest position ``target``, as the task measures it."""
         return self.task.error_to(phi, target, self.q)
 
-    def torque(self, phi: np.ndarray, phi_dot: np.ndarray, target: np.ndarray) -> np.ndarray:
-        """The unsaturated torque τ* − K x [N·m] for states and targets of shape (n,)."""
-        out = np.empty_like(phi)
-        for t in np.unique(target):
-            rows = target == t
-            tau_star, K, _ = self.gains(t)
-            x = np.stack([self.error(phi[rows], t), phi_dot[rows]])
-            out[rows] = tau_star - (K @ x)[0]
-        return out
+    def torque(self, phi: np.ndarray, phi_dot: np.ndarray, target: np.ndarray,
+               target_rate: np.ndarray | float = 0.0) -> np.ndarray:
+        """The unsaturated torque τ*(φ*) − K x [N·m] for states and targets of shape (n,),
+        x = (error, φ' − φ*'): the holding torque at the target as feedforward, and the
+        feedback on the error in position and in speed (a moving target: tracking)."""
+        key = np.round(target / self.gain_resolution)
+        gains = np.empty((phi.shape[0], 2))
+        for k in np.unique(key):
+            gains[key == k] = self.gains(k * self.gain_resolution)[1][0]
+        x0 = self.error(phi, target)
+        x1 = phi_dot - target_rate
+        return holding_torque(self.scene, target) - gains[:, 0] * x0 - gains[:, 1] * x1
 
     def act(self, observation: np.ndarray) -> np.ndarray:
         s = decode_observation(observation, self.scene, self.task)
         if self.target is not None:
-            target = np.full_like(s.phi, self.target)
+            target, rate = np.full_like(s.phi, self.target), 0.0
         elif s.target_phi is not None:
-            target = np.round(s.target_phi, 9)  # one cache entry per episode's target
+            target, rate = s.target_phi, s.target_phi_dot
         else:
             raise ValueError("LQR(target=None) needs observations that carry the target")
-        tau = self.torque(s.phi, s.phi_dot, target)
+        tau = self.torque(s.phi, s.phi_dot, target, rate)
         return np.clip(tau / self.max_torque, -1.0, 1.0)[:, None]
 
 

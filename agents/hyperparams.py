@@ -30,7 +30,8 @@ from typing import Any
 __all__ = ["ALGOS", "CLASSICAL", "HYPERPARAMS", "TASKS", "Linear", "hyperparams"]
 
 ALGOS = ("sac", "td3", "ppo")
-TASKS = ("roller_gym/RollerStabilize-v0", "roller_gym/RollerHold-v0", "roller_gym/RollerBalance-v0")
+TASKS = ("roller_gym/RollerStabilize-v0", "roller_gym/RollerHold-v0",
+         "roller_gym/RollerBalance-v0", "roller_gym/RollerTrack-v0")
 
 @dataclass(frozen=True)
 class Linear:
@@ -99,6 +100,10 @@ HYPERPARAMS: dict[tuple[str, str], dict[str, Any]] = {
     ("sac", "roller_gym/RollerBalance-v0"): {**_SAC, "total_steps": 25_000},
     ("td3", "roller_gym/RollerBalance-v0"): {**_TD3, "total_steps": 25_000},
     ("ppo", "roller_gym/RollerBalance-v0"): {**_PPO, "total_steps": 150_000},
+    # -- roller_gym/RollerTrack-v0: 400 steps, a target moving along the wall
+    ("sac", "roller_gym/RollerTrack-v0"): {**_SAC, "total_steps": 30_000},
+    ("td3", "roller_gym/RollerTrack-v0"): {**_TD3, "total_steps": 30_000},
+    ("ppo", "roller_gym/RollerTrack-v0"): {**_PPO, "total_steps": 150_000},
 }
 
 CLASSICAL: dict[str, dict[str, float]] = {
@@ -108,6 +113,7 @@ CLASSICAL: dict[str, dict[str, float]] = {
         "position_scale": 0.1, "speed_scale": 1.0, "torque_scale": 0.5,
     },
     "roller_gym/RollerHold-v0": {"position_scale": 0.1, "speed_scale": 1.0, "torque_scale": 0.5},
+    "roller_gym/RollerTrack-v0": {"position_scale": 0.1, "speed_scale": 1.0, "torque_scale": 0.5},
     # Swing-up: energy gain [N·m·s/(J·rad)]; LQR handover within 0.5 rad and 1.5 rad/s.
     "roller_gym/RollerBalance-v0": {
         "energy_gain": 20.0,

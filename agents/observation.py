@@ -51,13 +51,15 @@ class DecodedState:
     Attributes:
         phi: the rotation φ [rad].
         phi_dot: the angular speed φ' [rad/s].
-        target_phi: the target rest position φ* [rad], or None when the task does not
-            observe its target.
+        target_phi: the target φ* [rad], or None when the task does not observe its target.
+        target_phi_dot: the target's rate φ*' [rad/s]: 0 for a rest position, None when the
+            task does not observe its target.
     """
 
     phi: np.ndarray
     phi_dot: np.ndarray
     target_phi: np.ndarray | None
+    target_phi_dot: np.ndarray | None = None
 
 
 def decode_observation(observation: np.ndarray, scene: Scene,
@@ -89,8 +91,12 @@ def decode_observation(observation: np.ndarray, scene: Scene,
                        column("sin_phi"), rate)
     speed = np.clip(column("speed"), -_TANH_LIMIT, _TANH_LIMIT)
     phi_dot = SPEED_SCALE * np.arctanh(speed)
-    target = None
+    target = target_rate = None
     if "cos_psi_target" in task.observation:
         target = decode_angle(column("cos_psi_target"), column("sin_psi_target"),
                               column("cos_phi_target"), column("sin_phi_target"), rate)
-    return DecodedState(phi, phi_dot, target)
+        target_rate = np.zeros_like(target)
+    if "target_speed" in task.observation:
+        speed = np.clip(column("target_speed"), -_TANH_LIMIT, _TANH_LIMIT)
+        target_rate = SPEED_SCALE * np.arctanh(speed)
+    return DecodedState(phi, phi_dot, target, target_rate)

@@ -32,7 +32,7 @@ from roller_gym.physics import PRESETS, Scene, preset
 from roller_gym.task import NAMESPACE, TASKS
 
 #: The modules of the tasks, in the order they are listed; importing one registers its task.
-TASK_MODULES = ("stabilize", "hold", "balance")
+TASK_MODULES = ("stabilize", "hold", "balance", "track")
 for _module in TASK_MODULES:
     importlib.import_module(f"roller_gym.{_module}")
 

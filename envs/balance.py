@@ -16,7 +16,17 @@ Out-of-range actions are clipped; NaN or inf raise ``ValueError``.
 
 ## Observation space
 
-``Box(-1, 1, (5,), float32)``: cos ψ, sin ψ, cos φ, sin φ, tanh(φ'/10 rad/s).
+``Box(-1, 1, (5,), float32)``:
+
+=====  ======================  ==================================================
+index  field                   meaning
+=====  ======================  ==================================================
+0      ``cos_psi``             cos ψ: where the roller is on the surface (ψ = 0 at the bottom)
+1      ``sin_psi``             sin ψ
+2      ``cos_phi``             cos φ: how the roller is turned
+3      ``sin_phi``             sin φ
+4      ``speed``               tanh(φ' / 10 rad/s): the angular speed
+=====  ======================  ==================================================
 
 ## Reward
 

@@ -85,6 +85,12 @@ def scene_rows(scene: Scene, size: int) -> dict[str, np.ndarray]:
     return {f: np.broadcast_to(np.asarray(getattr(scene, f), float), (size,)) for f in _FIELDS}
 
 
+def target_torque(scene: Scene, target: Any) -> Any:
+    """τ* = dV/dφ(φ*) [N·m], the torque that holds the roller at rest at the target."""
+    m, r, kappa, e, _, g, _ = scene.params
+    return eq.dpotential(target, m, r, kappa, e, g)
+
+
 def put(scene: Scene, index: np.ndarray, rows: Scene, size: int) -> Scene:
     """A copy of ``scene`` (of ``size`` rollers) whose rollers ``index`` are ``rows``."""
     out = {}
@@ -149,7 +155,9 @@ class Starts:
     """Episode starts of some rollers: their scene (a batch), target and state (arrays)."""
 
     scene: Scene
+    target_params: np.ndarray
     target: np.ndarray
+    target_rate: np.ndarray
     phi: np.ndarray
     phi_dot: np.ndarray
 
@@ -193,15 +201,21 @@ def start_episodes(
         scene = Scene(**{**fields_, **drawn})
     else:
         scene = base
-    target = task.sample_targets(uniform(seed, episode, _TARGET_DRAW), scene)
+    draws = _TARGET_DRAW + np.arange(task.target_size)
+    params = task.sample_target_params(uniform(seed[:, None], episode[:, None], draws), scene)
+    params = np.broadcast_to(np.asarray(params, float), (n, task.target_size)).copy()
     if options.get("target") is not None:
-        target = np.array([task.target_from_option(options["target"], scene.item(i))
-                           for i in range(n)], dtype=float)
+        if task.moving_target:
+            raise ValueError(f"{task.name}'s target moves; options['target'] is not allowed")
+        params[:, 0] = [task.target_from_option(options["target"], scene.item(i))
+                        for i in range(n)]
+    target, target_rate = task.target_at(params, np.zeros(n))
     if options.get("state") is not None:
         phi, phi_dot = state_option(options["state"], scene, n)
     else:
         phi, phi_dot = _draw_states(task, scene, target, seed, episode)
-    return Starts(scene, np.broadcast_to(np.asarray(target, float), (n,)).copy(), phi, phi_dot)
+    return Starts(scene, params, np.asarray(target, float), np.asarray(target_rate, float), phi,
+                  phi_dot)
 
 
 def _draw_states(task: Any, scene: Scene, target: np.ndarray, seed: np.ndarray,
@@ -253,6 +267,8 @@ INFO_KEYS: dict[str, tuple[type, str]] = {
     "tol_met": (bool, "the step met the integrator's tolerance (False: out of float64's reach)"),
     "target_phi": (float, "the target φ* [rad]"),
     "target_psi": (float, "the target ψ* [rad]"),
+    "target_phi_dot": (float, "how fast the target moves, φ*' [rad/s] (0: a rest position)"),
+    "target_torque": (float, "τ* [N·m], the torque that holds the roller at rest at φ*"),
     "position_error": (float, "the task's position error [rad of φ]"),
     "is_success": (bool, "inside the task's success band at rest"),
 }
@@ -268,8 +284,11 @@ class Outcome:
 
 
 def outcome(task: Any, result: Any, action: Any, target: Any, q: Any, psi_rate: Any,
-            tau: Any) -> Outcome:
+            tau: Any, target_rate: Any = 0.0, target_torque: Any = 0.0) -> Outcome:
     """What a step means for the task: the termination rule, the reward, the info.
+
+    The target enters as φ* [rad], its rate φ*' [rad/s] and its holding torque τ* [N·m]
+    (:func:`target_torque`).
 
     ``result`` is the integrator's StepResult (floats or arrays); the step terminates on
     lift-off, slip or a step that could not stay finite, each flagged in the info; a failed
@@ -298,6 +317,8 @@ def outcome(task: Any, result: Any, action: Any, target: Any, q: Any, psi_rate: 
         "tol_met": result.tol_met,
         "target_phi": target,
         "target_psi": psi_rate * target,
+        "target_phi_dot": target_rate,
+        "target_torque": target_torque,
         "position_error": task.error(result.phi, target, q),
     }
     step = {**info, "action": action}

@@ -14,15 +14,19 @@ Out-of-range actions are clipped; NaN or inf raise ``ValueError``.
 
 ``Box(-1, 1, (9,), float32)``:
 
-=====  =====================  ====================================
-index  observation            meaning
-=====  =====================  ====================================
-0, 1   cos ψ, sin ψ           position on the surface
-2, 3   cos φ, sin φ           rotation of the roller
-4      tanh(φ' / 10 rad/s)    angular speed
-5, 6   cos ψ*, sin ψ*         the target position
-7, 8   cos φ*, sin φ*         the roller's rotation at the target
-=====  =====================  ====================================
+=====  ======================  ==================================================
+index  field                   meaning
+=====  ======================  ==================================================
+0      ``cos_psi``             cos ψ: where the roller is on the surface (ψ = 0 at the bottom)
+1      ``sin_psi``             sin ψ
+2      ``cos_phi``             cos φ: how the roller is turned
+3      ``sin_phi``             sin φ
+4      ``speed``               tanh(φ' / 10 rad/s): the angular speed
+5      ``cos_psi_target``      cos ψ*: where the target is
+6      ``sin_psi_target``      sin ψ*
+7      ``cos_phi_target``      cos φ*: the roller's rotation at the target
+8      ``sin_phi_target``      sin φ*
+=====  ======================  ==================================================
 
 ## Reward
 

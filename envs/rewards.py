@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-__all__ = ["near", "product", "wrap_angle", "xp"]
+__all__ = ["near", "product", "tolerance", "wrap_angle", "xp"]
 
 _LOG_VALUE_AT_MARGIN = math.log(0.1)
 
@@ -28,6 +28,15 @@ def near(x, margin, value_at_margin: float = 0.1):
     scale = _LOG_VALUE_AT_MARGIN if value_at_margin == 0.1 else math.log(value_at_margin)
     t = x / margin
     return xp(x).exp(scale * (t * t))  # t * t: inf (term 0) where ** would overflow
+
+
+def tolerance(x, bound, margin, value_at_margin: float = 0.1):
+    """1 where |x| <= ``bound``; outside, :func:`near` of the distance to the bound, so
+    ``value_at_margin`` at |x| = bound + margin (dm_control's ``tolerance`` with a
+    Gaussian sigmoid): being anywhere inside the band pays fully, just outside it costs."""
+    outside = xp(x).maximum(abs(x) - bound, 0.0) if type(x) is not float else max(
+        abs(x) - bound, 0.0)
+    return near(outside, margin, value_at_margin)
 
 
 def product(*weighted_terms):

@@ -78,6 +78,9 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
                                 tol=cfg.tolerance, substeps=cfg.substeps or None)
         self._set_scene(cfg.scene)
         self.target = self.task.default_target(self.scene)
+        self.target_rate, self._time = 0.0, 0.0
+        self.target_torque = float(episode.target_torque(self.scene, self.target))
+        self._target_params = np.full(self.task.target_size, self.target)
         self.phi, self.phi_dot, self.torque = self.target, 0.0, 0.0
         self._stream_seed: int | None = None  # set by the first reset
         self._episode = 0
@@ -106,11 +109,14 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
             np.array([self._episode], np.uint64), options,
         )
         self._set_scene(start.scene if start.scene.batch_size is None else start.scene.item(0))
-        self.target = float(start.target[0])
+        self._target_params = start.target_params[0]
+        self.target, self.target_rate = float(start.target[0]), float(start.target_rate[0])
+        self._time = 0.0
+        self.target_torque = float(episode.target_torque(self.scene, self.target))
         self.phi, self.phi_dot, self.torque = float(start.phi[0]), float(start.phi_dot[0]), 0.0
         at_start = episode.at_start(start.scene, start.phi, start.phi_dot)
         out = episode.outcome(self.task, at_start, 0.0, start.target, self._q,
-                              self._psi_rate, 0.0)
+                              self._psi_rate, 0.0, start.target_rate, self.target_torque)
         if self.render_mode == "human":
             self.render()
         first = {k: v[0] if isinstance(v, np.ndarray) else v for k, v in out.info.items()}
@@ -126,7 +132,13 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         tau = a * self.task.max_torque
         result = StepFloats._make(self._stepper.advance(self.phi, self.phi_dot, tau))
         self.phi, self.phi_dot, self.torque = result.phi, result.phi_dot, tau
-        out = episode.outcome(self.task, result, a, self.target, self._q, self._psi_rate, tau)
+        if self.task.moving_target:
+            self._time += self.config.dt
+            target, rate = self.task.target_at(self._target_params, self._time)
+            self.target, self.target_rate = float(target), float(rate)
+            self.target_torque = float(episode.target_torque(self.scene, self.target))
+        out = episode.outcome(self.task, result, a, self.target, self._q, self._psi_rate, tau,
+                              self.target_rate, self.target_torque)
         if self.render_mode == "human":
             self.render()
         return self._observation(), float(out.reward), bool(out.terminated), False, \
@@ -134,7 +146,8 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def _observation(self) -> np.ndarray:
         return np.array(
-            self.task.observation_terms(self.phi, self.phi_dot, self.target, self._psi_rate),
+            self.task.observation_terms(self.phi, self.phi_dot, self.target, self._psi_rate,
+                                        self.target_rate),
             dtype=np.float32,
         )
 

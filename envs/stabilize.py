@@ -15,13 +15,15 @@ or inf raise ``ValueError``.
 
 ``Box(-1, 1, (5,), float32)``:
 
-=====  =====================  ====================================
-index  observation            meaning
-=====  =====================  ====================================
-0, 1   cos ψ, sin ψ           position on the cylinder (ψ = 0 at the bottom)
-2, 3   cos φ, sin φ           rotation of the roller
-4      tanh(φ' / 10 rad/s)    angular speed
-=====  =====================  ====================================
+=====  ======================  ==================================================
+index  field                   meaning
+=====  ======================  ==================================================
+0      ``cos_psi``             cos ψ: where the roller is on the surface (ψ = 0 at the bottom)
+1      ``sin_psi``             sin ψ
+2      ``cos_phi``             cos φ: how the roller is turned
+3      ``sin_phi``             sin φ
+4      ``speed``               tanh(φ' / 10 rad/s): the angular speed
+=====  ======================  ==================================================
 
 ## Reward
 

@@ -63,6 +63,7 @@ OBSERVATION_FIELDS: dict[str, tuple[str, str]] = {
     "sin_psi_target": ("sin ψ*", "1"),
     "cos_phi_target": ("cos φ*: the roller's rotation at the target", "1"),
     "sin_phi_target": ("sin φ*", "1"),
+    "target_speed": ("tanh(φ*' / 10 rad/s): how fast the target moves, squashed", "1"),
 }
 
 #: The registry: task name -> task class (see :func:`register`).
@@ -119,6 +120,10 @@ class Task:
     classical: ClassVar[str] = "lqr"
     #: Whether the target's mirror image −φ* counts as well (the error is to the nearer).
     symmetric_target: ClassVar[bool] = False
+    #: Whether the target moves during an episode (then :meth:`target_at` gives it).
+    moving_target: ClassVar[bool] = False
+    #: How many numbers per episode define the target (1 for a rest position φ*).
+    target_size: ClassVar[int] = 1
     #: The preset the task's scene defaults to.
     default_scene: ClassVar[str] = "paper"
     #: The torque [N·m] an action of ±1 asks for, by default.
@@ -176,6 +181,16 @@ class Task:
         (one per roller of the batch ``scene``)."""
         raise NotImplementedError
 
+    def sample_target_params(self, u: np.ndarray, scene: Scene) -> np.ndarray:
+        """The numbers (n, ``target_size``) that define each episode's target, from uniforms
+        of that shape; a rest position φ* [rad] by default (:meth:`sample_targets`)."""
+        return self.sample_targets(u[:, 0], scene)[:, None]
+
+    def target_at(self, params: np.ndarray, t: Any) -> tuple[Any, Any]:
+        """(φ* [rad], φ*' [rad/s]) at time t [s] of the episode from its ``params``
+        (floats for one episode's params of shape (target_size,), else arrays)."""
+        return params[..., 0], 0.0 * params[..., 0]
+
     def start_candidates(
         self, u_phi: np.ndarray, u_dot: np.ndarray, scene: Scene
     ) -> tuple[np.ndarray, np.ndarray]:
@@ -226,23 +241,25 @@ class Task:
         q from :func:`wrap_rate`."""
         return rewards.wrap_angle(q * (phi - target)) / q
 
-    def observation_terms(self, phi, phi_dot, target, psi_rate):
+    def observation_terms(self, phi, phi_dot, target, rate, target_rate=0.0):
         """The observation's entries, in the order of ``observation`` (floats or arrays);
-        ``psi_rate`` = rκ/(1 − rκ) (0 on the floor)."""
-        terms = self.observation_dict(phi, phi_dot, target, psi_rate)
+        ``rate`` = dψ/dφ = rκ/(1 − rκ) (0 on the floor), ``target_rate`` φ*' [rad/s]."""
+        terms = self.observation_dict(phi, phi_dot, target, rate, target_rate)
         return tuple(terms[name] for name in self.observation)
 
-    def observation_dict(self, phi, phi_dot, target, psi_rate) -> dict[str, Any]:
+    def observation_dict(self, phi, phi_dot, target, rate, target_rate=0.0) -> dict[str, Any]:
         """The observed fields by name (the formulas of :data:`OBSERVATION_FIELDS`)."""
-        psi = psi_rate * phi
+        psi = rate * phi
         f = rewards.xp(psi)
         out = {"cos_psi": f.cos(psi), "sin_psi": f.sin(psi), "cos_phi": f.cos(phi),
                "sin_phi": f.sin(phi), "speed": f.tanh(phi_dot / SPEED_SCALE)}
         if self.observes_target:
-            psi_t = psi_rate * target
+            psi_t = rate * target
             f = rewards.xp(psi_t)
             out.update(cos_psi_target=f.cos(psi_t), sin_psi_target=f.sin(psi_t),
                        cos_phi_target=f.cos(target), sin_phi_target=f.sin(target))
+        if "target_speed" in self.observation:
+            out["target_speed"] = rewards.xp(psi).tanh(target_rate / SPEED_SCALE)
         return out
 
     def reward(self, step: Mapping[str, Any]):

@@ -134,6 +134,9 @@ class RollerVectorEnv(VectorEnv):
         self.phi = np.zeros(num_envs)
         self.phi_dot = np.zeros(num_envs)
         self.target = episode.per_scene_target(task, self._scene, num_envs)
+        self.target_rate = np.zeros(num_envs)
+        self.target_torque = np.asarray(episode.target_torque(self._scene, self.target), float)
+        self._target_params = np.repeat(self.target[:, None], task.target_size, axis=1)
         self.torque = np.zeros(num_envs)
         self.steps = np.zeros(num_envs, dtype=np.int64)
         self._done = np.zeros(num_envs, dtype=bool)
@@ -177,13 +180,16 @@ class RollerVectorEnv(VectorEnv):
             q = np.asarray(wrap_rate(start.scene), float)
             self._q[idx] = q
             self._psi_rate[idx] = np.where(np.asarray(start.scene.kappa) == 0, 0.0, q)
-        self.target[idx], self.phi[idx], self.phi_dot[idx] = (start.target, start.phi,
-                                                              start.phi_dot)
+        self._target_params[idx] = start.target_params
+        self.target[idx], self.target_rate[idx] = start.target, start.target_rate
+        self.target_torque[idx] = episode.target_torque(start.scene, start.target)
+        self.phi[idx], self.phi_dot[idx] = start.phi, start.phi_dot
         self.torque[idx] = 0.0
         self.steps[idx] = 0
         rest = episode.at_start(start.scene, start.phi, start.phi_dot)
         return episode.outcome(self.task, rest, 0.0, start.target, self._q[idx],
-                               self._psi_rate[idx], 0.0).info
+                               self._psi_rate[idx], 0.0, start.target_rate,
+                               self.target_torque[idx]).info
 
     def reset(
         self,
@@ -233,9 +239,14 @@ class RollerVectorEnv(VectorEnv):
         # stays as it is after the next.
         raw = self._stepper.advance(self.phi, self.phi_dot, tau)
         result = StepResult(*(np.array(getattr(raw, f)) for f in STEP_FIELDS))
-        out = episode.outcome(self.task, result, a, self.target, self._q, self._psi_rate, tau)
         self.phi, self.phi_dot, self.torque = result.phi, result.phi_dot, tau
         self.steps += 1
+        if self.task.moving_target:
+            self.target, self.target_rate = self.task.target_at(
+                self._target_params, self.steps * self.config.dt)
+            self.target_torque = episode.target_torque(self._scene, self.target)
+        out = episode.outcome(self.task, result, a, self.target, self._q, self._psi_rate, tau,
+                              self.target_rate, self.target_torque)
         reward = np.asarray(out.reward, dtype=np.float64)
         terminated = np.asarray(out.terminated, dtype=bool)
         truncated = self.steps >= self.max_episode_steps
@@ -279,7 +290,8 @@ class RollerVectorEnv(VectorEnv):
 
     # -- observation and info ------------------------------------------------------------
     def _observation(self) -> np.ndarray:
-        terms = self.task.observation_terms(self.phi, self.phi_dot, self.target, self._psi_rate)
+        terms = self.task.observation_terms(self.phi, self.phi_dot, self.target, self._psi_rate,
+                                            self.target_rate)
         return np.stack(terms, axis=1).astype(np.float32)
 
     def _masked_info(self, rows: dict[str, Any], idx: np.ndarray) -> dict[str, Any]:

@@ -135,7 +135,7 @@ def test_lqr_holds_the_target_with_the_holding_torque_and_pushes_back_when_off_i
     obs, _ = env.reset(seed=3, options={"state": (target + 0.05, 0.0)})
     assert policy.predict(obs)[0][0] * max_torque < tau_star - 1e-3  # restoring
     # The gains are computed once per target.
-    assert list(policy._cache) == [pytest.approx(target, abs=1e-6)]
+    assert list(policy._cache) == [pytest.approx(target, abs=policy.gain_resolution)]
 
 
 def test_energy_swing_up_balances_in_every_episode():

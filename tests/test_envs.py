@@ -36,6 +36,7 @@ DOCUMENTED = {
     "roller_gym/RollerStabilize-v0": {"steps": 200, "max_torque": 0.5, "obs": 5, "scene": "paper"},
     "roller_gym/RollerHold-v0": {"steps": 200, "max_torque": 1.0, "obs": 9, "scene": "paper"},
     "roller_gym/RollerBalance-v0": {"steps": 400, "max_torque": 0.4, "obs": 5, "scene": "balance"},
+    "roller_gym/RollerTrack-v0": {"steps": 400, "max_torque": 1.0, "obs": 10, "scene": "paper"},
 }
 IDS = list(DOCUMENTED)
 INFO_KEYS = ("phi", "phi_dot", "psi", "torque", "normal_force", "friction_force", "energy",
@@ -98,6 +99,19 @@ def documented_reward(env_id: str, scene: Scene, phi, phi_dot, action, target) -
     else:
         eps, margin = error(target), 2.0
     return near(eps, margin) * (0.5 + 0.5 * near(phi_dot, 5.0)) * (0.8 + 0.2 * near(action, 1.0))
+
+
+def documented_track_reward(scene: Scene, info: dict, max_torque: float) -> float:
+    """RollerTrack's docstring: tolerance(ε, 0.05, 1) (0.5 + 0.5 near(φ' − φ*', 5))
+    (0.8 + 0.2 near((τ − τ*)/max_torque, 1)), τ* = m g (r sin ψ* + e sin φ*)."""
+    q = psi_rate(scene)
+    target = info["target_phi"]
+    eps = wrap(q * (info["phi"] - target)) / q
+    position = 1.0 if abs(eps) <= 0.05 else near(abs(eps) - 0.05, 1.0)
+    m, r, e, g = (float(getattr(scene, name)) for name in ("m", "r", "e", "g"))
+    holding = m * g * (r * math.sin(q * target) + e * math.sin(target))
+    return (position * (0.5 + 0.5 * near(info["phi_dot"] - info["target_phi_dot"], 5.0))
+            * (0.8 + 0.2 * near((info["torque"] - holding) / max_torque, 1.0)))
 
 
 def act(a: float) -> np.ndarray:
@@ -206,11 +220,13 @@ def test_observation_entries_match_the_state(env_id):
         assert env.observation_space.contains(obs)
         expected = [math.cos(psi), math.sin(psi), math.cos(phi), math.sin(phi),
                     math.tanh(phi_dot / 10.0)]
-        if env_id == "roller_gym/RollerHold-v0":
+        if env_id in ("roller_gym/RollerHold-v0", "roller_gym/RollerTrack-v0"):
             target = info["target_phi"]
             assert info["target_psi"] == pytest.approx(q * target, rel=1e-12)
             expected += [math.cos(q * target), math.sin(q * target), math.cos(target),
                          math.sin(target)]
+        if env_id == "roller_gym/RollerTrack-v0":
+            expected += [math.tanh(info["target_phi_dot"] / 10.0)]
         np.testing.assert_allclose(obs, expected, rtol=0, atol=2e-7)
         if t < 11:
             obs, _, terminated, _, info = env.step(act(rng.uniform(-1, 1)))
@@ -357,8 +373,11 @@ def test_reward_is_the_documented_formula(env_id):
     scene = env.unwrapped.scene
     for a in (0.4, -0.9, 0.0, 1.0, 3.0, -0.2, 0.7, -2.0):
         _, reward, terminated, _, info = env.step(act(a))
-        expected = documented_reward(env_id, scene, info["phi"], info["phi_dot"],
-                                     float(np.clip(np.float32(a), -1, 1)), info["target_phi"])
+        if env_id == "roller_gym/RollerTrack-v0":
+            expected = documented_track_reward(scene, info, DOCUMENTED[env_id]["max_torque"])
+        else:
+            expected = documented_reward(env_id, scene, info["phi"], info["phi_dot"],
+                                         float(np.clip(np.float32(a), -1, 1)), info["target_phi"])
         assert reward == pytest.approx(expected, rel=1e-12, abs=1e-15)
         assert 0.0 <= reward <= 1.0 and not terminated
 

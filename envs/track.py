@@ -1,0 +1,121 @@
+"""roller_gym/RollerTrack-v0: follow a target that moves along the wall.
+
+Each episode draws a smooth target trajectory φ*(t) (ψ*(t) = q φ*(t) on the wall): a
+center and two sinusoids of random amplitude, frequency and phase, kept inside the range
+where the roller can be held at rest (:func:`roller_gym.task.hold_range`), so the target
+can always be followed. The agent must keep the roller on it, against gravity, while it
+moves. The target's position and its rate are observed.
+
+## Action space
+
+``Box(-1, 1, (1,), float32)``: τ = action · ``max_torque`` [N·m] (default 1 N·m).
+Out-of-range actions are clipped; NaN or inf raise ``ValueError``.
+
+## Observation space
+
+``Box(-1, 1, (10,), float32)``:
+
+=====  ======================  =============================================
+index  field                   meaning
+=====  ======================  =============================================
+0      ``cos_psi``             cos ψ: where the roller is on the surface
+1      ``sin_psi``             sin ψ
+2      ``cos_phi``             cos φ: how the roller is turned
+3      ``sin_phi``             sin φ
+4      ``speed``               tanh(φ' / 10 rad/s)
+5      ``cos_psi_target``      cos ψ*: where the target is now
+6      ``sin_psi_target``      sin ψ*
+7      ``cos_phi_target``      cos φ*
+8      ``sin_phi_target``      sin φ*
+9      ``target_speed``        tanh(φ*' / 10 rad/s): how fast the target moves
+=====  ======================  =============================================
+
+## Reward
+
+In [0, 1] per step, ε the position error to the target now (rad of φ):
+``tolerance(ε, 0.05 rad, 1 rad) · (0.5 + 0.5 near(φ' − φ*', 5 rad/s))
+· (0.8 + 0.2 near((τ − τ*)/max_torque, 1))``, where ``tolerance`` is 1 inside the
+success band and decays as ``near`` outside it, and τ* the torque that holds the roller
+at rest at φ* (``info["target_torque"]``): following costs nothing beyond holding.
+
+## Starting state
+
+ψ uniform in ±60°, φ' uniform in ±1 rad/s (redrawn until the roller rolls). The target
+trajectory: center c within ±30 % of the holdable range's half-width about its middle;
+two sinusoids of amplitude 20–50 % each of what is left to the range's edge, of frequency
+0.2–0.8 rad/s, and of uniform phase.
+
+## Episode end
+
+* Terminated: slip or lift-off during a step, or a step that could not stay finite.
+* Truncated: 400 steps (20 s).
+* ``info["is_success"]``: |ε| <= 0.05 rad and |φ' − φ*'| <= 0.1 rad/s.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+from roller_gym import rewards
+from roller_gym.physics import Scene
+from roller_gym.task import Task, hold_range, per_scene, register
+
+__all__ = ["TrackTask"]
+
+
+@register
+class TrackTask(Task):
+    name = "RollerTrack"
+    reward_threshold = 376.0  # LQR's return − 5 % (docs/RESULTS.md)
+    default_max_torque = 1.0
+    max_episode_steps = 400
+    observation = ("cos_psi", "sin_psi", "cos_phi", "sin_phi", "speed", "cos_psi_target",
+                   "sin_psi_target", "cos_phi_target", "sin_phi_target", "target_speed")
+    moving_target = True
+    #: center, then (amplitude [rad], frequency [rad/s], phase [rad]) of two sinusoids.
+    target_size = 7
+    position_margin = 1.0
+    #: The range of the sinusoids' frequencies [rad/s].
+    frequencies = (0.2, 0.8)
+
+    def sample_target_params(self, u: np.ndarray, scene: Scene) -> np.ndarray:
+        low = per_scene(lambda s: hold_range(s, self.max_torque)[0], scene)
+        high = per_scene(lambda s: hold_range(s, self.max_torque)[1], scene)
+        middle, half = 0.5 * (high + low), 0.5 * (high - low)
+        center = middle + 0.3 * half * (2.0 * u[:, 0] - 1.0)
+        room = half - np.abs(center - middle)  # the sinusoids stay within the range
+        f_low, f_high = self.frequencies
+        return np.stack([
+            center,
+            room * (0.2 + 0.3 * u[:, 1]), f_low + (f_high - f_low) * u[:, 2],
+            2.0 * np.pi * u[:, 3],
+            room * (0.2 + 0.3 * u[:, 4]), f_low + (f_high - f_low) * u[:, 5],
+            2.0 * np.pi * u[:, 6],
+        ], axis=1)
+
+    def target_at(self, params: np.ndarray, t: Any) -> tuple[Any, Any]:
+        c, a1, w1, p1, a2, w2, p2 = (params[..., j] for j in range(7))
+        phase1, phase2 = w1 * t + p1, w2 * t + p2
+        target = c + a1 * np.sin(phase1) + a2 * np.sin(phase2)
+        rate = a1 * w1 * np.cos(phase1) + a2 * w2 * np.cos(phase2)
+        return target, rate
+
+    def reward(self, step: Mapping[str, Any]):
+        relative_speed = step["phi_dot"] - step["target_phi_dot"]
+        extra_torque = (step["torque"] - step["target_torque"]) / self.max_torque
+        return rewards.tolerance(step["position_error"], self.success_band,
+                                 self.position_margin) * rewards.product(
+            (rewards.near(relative_speed, self.speed_margin), self.speed_weight),
+            (rewards.near(extra_torque, 1.0), self.control_weight),
+        )
+
+    def success(self, step: Mapping[str, Any]):
+        relative_speed = step["phi_dot"] - step["target_phi_dot"]
+        return ((abs(step["position_error"]) <= self.success_band)
+                & (abs(relative_speed) <= self.success_speed))
+
+    def default_target(self, scene: Scene) -> float:
+        low, high = hold_range(scene, self.max_torque)
+        return 0.5 * (low + high)

@@ -1,0 +1,141 @@
+"""The task registry: what a task declares is what the environments do, and a new task
+needs the registry alone. RollerTrack's moving target, checked independently."""
+
+from __future__ import annotations
+
+import importlib
+import math
+import re
+from typing import ClassVar
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import roller_gym
+from gymnasium.envs.registration import register as gym_register
+from gymnasium.vector import SyncVectorEnv
+from roller_gym.agents import controller_for, rollout
+from roller_gym.task import OBSERVATION_FIELDS, TASKS, Task, hold_range, register
+
+TASK_CLASSES = list(TASKS.values())
+
+
+def docstring_table(module) -> list[tuple[int, str]]:
+    """(index, field) rows of the observation table in a task module's docstring."""
+    return [(int(i), f) for i, f in re.findall(r"^(\d+)\s+``(\w+)``", module.__doc__, re.M)]
+
+
+@pytest.mark.parametrize("task", TASK_CLASSES, ids=lambda t: t.name)
+def test_docstring_table_is_the_declared_observation(task):
+    module = importlib.import_module(task.__module__)
+    assert docstring_table(module) == list(enumerate(task.observation))
+    assert f"``Box(-1, 1, ({len(task.observation)},), float32)``" in module.__doc__
+    assert f"roller_gym/{task.name}-v{task.version}" in module.__doc__.splitlines()[0]
+
+
+@pytest.mark.parametrize("task", TASK_CLASSES, ids=lambda t: t.name)
+def test_every_registered_task_is_a_gymnasium_id_with_its_declarations(task):
+    assert task.env_id() in roller_gym.ENV_IDS
+    spec = gym.spec(task.env_id())
+    assert spec.max_episode_steps == task.max_episode_steps
+    assert spec.reward_threshold == task.reward_threshold
+    env = gym.make(task.env_id())
+    assert type(env.unwrapped.task) is task
+    assert env.observation_space.shape == (len(task.observation),)
+    vec = gym.make_vec(task.env_id(), num_envs=2)
+    assert type(vec.unwrapped.task) is task  # make_vec passes the spec's task= on
+    obs, _ = env.reset(seed=0)
+    for field in task.observation:  # every field decodes by name, inside [-1, 1]
+        assert -1.0 <= obs[task.index(field)] <= 1.0
+
+
+def test_the_registry_refuses_a_duplicate_name_and_unknown_fields():
+    with pytest.raises(ValueError, match="registered already"):
+        register(type("Again", (Task,), {"name": "RollerHold"}))
+    with pytest.raises(ValueError, match="unknown fields"):
+        register(type("Odd", (Task,), {"name": "RollerOdd", "observation": ("cos_psi", "x")}))
+    assert "RollerOdd" not in TASKS
+    with pytest.raises(ValueError, match="not a registered task"):
+        gym.make("roller_gym/RollerHold-v0", task="RollerNope")
+
+
+def test_a_new_task_through_the_registry_alone():
+    """A fourth static task declared here (rest at φ* = 0.3 rad with a narrower band): one
+    class and one Gymnasium registration with the generic entry points; the single and
+    the native vector environment serve it, and the vector one matches SyncVectorEnv."""
+
+    class OffsetTask(Task):
+        name = "RollerOffsetTest"
+        reward_threshold = 100.0
+        success_band: ClassVar[float] = 0.02
+
+        def sample_targets(self, u, scene):
+            return np.full(np.shape(u), 0.3)
+
+    register(OffsetTask)
+    try:
+        gym_register(id=OffsetTask.env_id(), entry_point="roller_gym.roller_env:RollerEnv",
+                     vector_entry_point="roller_gym.vector_env:RollerVectorEnv",
+                     max_episode_steps=50, kwargs={"task": OffsetTask.name})
+        env = gym.make(OffsetTask.env_id())
+        _, info = env.reset(seed=0, options={"state": (0.31, 0.0)})
+        assert info["target_phi"] == 0.3 and info["is_success"]
+        native = gym.make_vec(OffsetTask.env_id(), num_envs=3)
+        sync = SyncVectorEnv([lambda: gym.make(OffsetTask.env_id())] * 3)
+        np.testing.assert_array_equal(native.reset(seed=4)[0], sync.reset(seed=4)[0])
+        a = np.full((3, 1), 0.2, np.float32)
+        np.testing.assert_array_equal(native.step(a)[0], sync.step(a)[0])
+    finally:
+        TASKS.pop(OffsetTask.name, None)
+        gym.registry.pop(OffsetTask.env_id(), None)
+
+
+def test_observation_fields_are_declared_once():
+    declared = set(OBSERVATION_FIELDS)
+    used = {f for task in TASK_CLASSES for f in task.observation}
+    assert used <= declared
+
+
+# -- RollerTrack ---------------------------------------------------------------------------
+TRACK = "roller_gym/RollerTrack-v0"
+
+
+def test_track_target_moves_smoothly_inside_the_holdable_range():
+    """Over 20 seeded episodes: the target stays in the holdable range, it moves, and the
+    reported rate φ*' is its time derivative (central differences of the reported φ*)."""
+    env = gym.make(TRACK)
+    dt = env.unwrapped.config.dt
+    low, high = hold_range(env.unwrapped.scene, env.unwrapped.task.max_torque)
+    for seed in range(20):
+        _, info = env.reset(seed=seed)
+        targets, rates = [info["target_phi"]], [info["target_phi_dot"]]
+        for _ in range(400):
+            _, _, terminated, truncated, info = env.step(np.zeros(1, np.float32))
+            targets.append(info["target_phi"])
+            rates.append(info["target_phi_dot"])
+            if terminated or truncated:
+                break
+        targets, rates = np.array(targets), np.array(rates)
+        assert low <= targets.min() and targets.max() <= high
+        assert np.ptp(targets) > 0.05
+        central = (targets[2:] - targets[:-2]) / (2 * dt)
+        np.testing.assert_allclose(central, rates[1:-1], atol=0.01 * np.abs(rates).max() + 1e-3)
+
+
+def test_track_refuses_a_fixed_target_option():
+    with pytest.raises(ValueError, match="moves"):
+        gym.make(TRACK).reset(seed=0, options={"target": 0.1})
+
+
+def test_lqr_tracking_follows_the_moving_target():
+    """The classical reference (LQR about the moving target, holding torque as
+    feedforward, feedback on the position and the relative speed) ends 20 seeded episodes
+    inside the success band, with a return near the maximum (1 per step)."""
+    env = gym.make(TRACK)
+    policy = controller_for(env)
+    episodes = [rollout(env, policy, seed) for seed in range(20)]
+    assert np.mean([e.success for e in episodes]) >= 0.9
+    assert all(not e.terminated for e in episodes)
+    assert np.mean([e.total_return for e in episodes]) >= TASKS["RollerTrack"].reward_threshold
+    worst = max(float(np.max(np.abs(e.error[50:]))) for e in episodes)
+    assert worst < 0.05 * math.pi  # after the first 2.5 s it stays within 0.16 rad
