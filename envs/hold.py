@@ -76,10 +76,10 @@ class HoldTask(Task):
             target = float(value)
         except (TypeError, ValueError):
             raise ValueError(f"options['target']={value!r} must be a number [rad]") from None
-        phi = target if scene.kappa == 0 else target / wrap_rate(scene)
+        q = wrap_rate(scene)  # on the floor the target is φ* itself (q = 1)
+        phi = target / q
         low, high = hold_range(scene, self.max_torque)
         if not (math.isfinite(phi) and low <= phi <= high):
-            q = 1.0 if scene.kappa == 0 else wrap_rate(scene)
             lo, hi = sorted((low * q, high * q))  # q < 0 on a drum
             raise ValueError(
                 f"options['target']={value!r} rad cannot be held in this scene with "

@@ -94,16 +94,21 @@ def get_task(task: str | type[Task]) -> type[Task]:
     return TASKS[name]
 
 
-def wrap_rate(scene: Scene):
-    """q = rκ/(1 − rκ) = dψ/dφ on a curved surface, 1 on the floor (float or array)."""
+def psi_rate(scene: Scene) -> float | np.ndarray:
+    """dψ/dφ = rκ/(1 − rκ) [-]: ψ = psi_rate · φ (0 on the floor, where ψ stays 0); a float
+    for a scalar scene, an array for a batch."""
     kappa = np.asarray(scene.kappa, dtype=float)
-    q = np.where(kappa == 0, 1.0, scene.r * kappa / (1.0 - scene.r * kappa))
-    return float(q) if q.ndim == 0 else q
+    rate = scene.r * kappa / (1.0 - scene.r * kappa)
+    return float(rate) if np.ndim(rate) == 0 else rate
 
 
-def psi_rate(scene: Scene) -> float:
-    """dψ/dφ = rκ/(1 − rκ) [-] of a scalar scene (0 on the floor)."""
-    return float(scene.r * scene.kappa / (1.0 - scene.r * scene.kappa))
+def wrap_rate(scene: Scene) -> float | np.ndarray:
+    """The rate q by which errors are wrapped (see the module docs): :func:`psi_rate`, except
+    on the floor, where ψ stays 0 and φ itself is wrapped (q = 1)."""
+    rate = psi_rate(scene)
+    if np.ndim(rate) == 0:
+        return rate if rate != 0.0 else 1.0
+    return np.where(rate == 0.0, 1.0, rate)
 
 
 class Task:

@@ -32,7 +32,7 @@ from roller_gym import episode
 from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig, resolve_scene
 from roller_gym.physics import Scene
 from roller_gym.physics.integrators import STEP_FIELDS, BatchStepper, StepResult
-from roller_gym.task import Task, get_task, wrap_rate
+from roller_gym.task import Task, get_task, psi_rate, wrap_rate
 
 __all__ = ["RollerVectorEnv"]
 
@@ -130,7 +130,7 @@ class RollerVectorEnv(VectorEnv):
         self._scene = self._base  # a scalar Scene while every sub-environment shares it
         self._stepper.set_scenes(self._scene)
         self._q = np.broadcast_to(np.asarray(wrap_rate(self._scene), float), (num_envs,)).copy()
-        self._psi_rate = np.where(np.asarray(self._scene.kappa) == 0, 0.0, self._q)
+        self._psi_rate = np.broadcast_to(psi_rate(self._scene), (num_envs,)).copy()
         self.phi = np.zeros(num_envs)
         self.phi_dot = np.zeros(num_envs)
         self.target = episode.per_scene_target(task, self._scene, num_envs)
@@ -177,9 +177,8 @@ class RollerVectorEnv(VectorEnv):
         if self.config.randomize or (options or {}).get("scene") is not None:
             self._scene = episode.put(self._scene, idx, start.scene, self.num_envs)
             self._stepper.set_scenes(start.scene, idx)
-            q = np.asarray(wrap_rate(start.scene), float)
-            self._q[idx] = q
-            self._psi_rate[idx] = np.where(np.asarray(start.scene.kappa) == 0, 0.0, q)
+            self._q[idx] = wrap_rate(start.scene)
+            self._psi_rate[idx] = psi_rate(start.scene)
         self._target_params[idx] = start.target_params
         self.target[idx], self.target_rate[idx] = start.target, start.target_rate
         self.target_torque[idx] = episode.target_torque(start.scene, start.target)
