@@ -21,14 +21,22 @@ declared once in :data:`OBSERVATION_FIELDS`; a task lists the ones it observes, 
 in ``Task.observation``, and agents read them by name (:meth:`Task.index`).
 
 **The reward** sees the step's named physics (the info's keys, :data:`roller_gym.episode.
-INFO_KEYS`, and the ``action``). By default it is a product of bounded terms
-(:mod:`roller_gym.rewards`), in [0, 1] per step:
+INFO_KEYS`, and the ``action``). It is a product of bounded terms (:mod:`roller_gym.rewards`),
+in [0, 1] per step, the same for every task:
 
-    reward = near(error, position_margin)
-             · (1 − w_v + w_v · near(φ', speed_margin))
-             · (1 − w_u + w_u · near(action, 1))
+    reward = position(ε)
+             · (1 − w_v + w_v · near(φ' − φ*', speed_margin))
+             · (1 − w_u + w_u · near((τ − τ*) / max_torque, 1))
+    position(ε) = (1 − w_p) · tolerance(ε, band, position_margin)
+                  + w_p · tolerance(ε, band, 3 · band)
 
-with w_v = 0.5 (being at rest) and w_u = 0.2 (using little torque; action in [−1, 1]).
+with ε the position error, φ*' the target's rate (0 for a rest position), τ* the torque
+that holds the roller at rest at the target (``info["target_torque"]``), ``band`` the
+success band, w_v = 0.5 (moving with the target), w_u = 0.2 (no torque beyond holding) and
+w_p = 0.6 (precision). ``tolerance`` is 1 inside the band; outside it decays as ``near``
+of the distance to the band. So at rest the reward is largest inside the success band, and
+resting one band-width outside it costs about 14 % of the step's reward (the narrow term),
+while the wide term still guides from far away.
 """
 
 from __future__ import annotations
@@ -136,6 +144,7 @@ class Task:
     max_episode_steps: ClassVar[int] = 200
     reward_threshold: ClassVar[float]
     position_margin: ClassVar[float] = 2.0  # rad of φ
+    precision_weight: ClassVar[float] = 0.6
     speed_margin: ClassVar[float] = 5.0  # rad/s
     speed_weight: ClassVar[float] = 0.5
     control_weight: ClassVar[float] = 0.2
@@ -269,17 +278,23 @@ class Task:
 
     def reward(self, step: Mapping[str, Any]):
         """The reward in [0, 1] (formula in the module docs) from the step's named physics:
-        the info's keys (``position_error``, ``phi_dot``, ``torque``, ``energy``, the
-        forces and margins, …) and ``action``."""
-        return rewards.near(step["position_error"], self.position_margin) * rewards.product(
-            (rewards.near(step["phi_dot"], self.speed_margin), self.speed_weight),
-            (rewards.near(step["action"], 1.0), self.control_weight),
+        the info's keys (``position_error``, ``phi_dot``, ``target_phi_dot``, ``torque``,
+        ``target_torque``, ``energy``, the forces and margins, …) and ``action``."""
+        error, band = step["position_error"], self.success_band
+        position = ((1.0 - self.precision_weight)
+                    * rewards.tolerance(error, band, self.position_margin)
+                    + self.precision_weight * rewards.tolerance(error, band, 3.0 * band))
+        return position * rewards.product(
+            (rewards.near(step["phi_dot"] - step["target_phi_dot"], self.speed_margin),
+             self.speed_weight),
+            (rewards.near((step["torque"] - step["target_torque"]) / self.max_torque, 1.0),
+             self.control_weight),
         )
 
     def success(self, step: Mapping[str, Any]):
-        """Inside the tolerance band at rest (from the same named physics)."""
+        """Inside the success band, moving with the target (at rest for a rest position)."""
         return ((abs(step["position_error"]) <= self.success_band)
-                & (abs(step["phi_dot"]) <= self.success_speed))
+                & (abs(step["phi_dot"] - step["target_phi_dot"]) <= self.success_speed))
 
 
 def per_scene(function, scene: Scene) -> np.ndarray:

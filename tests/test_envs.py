@@ -33,10 +33,14 @@ ROOT = Path(__file__).resolve().parents[1]
 # From the docstrings: steps per episode, default max_torque [N·m], observation size,
 # default preset.
 DOCUMENTED = {
-    "roller_gym/RollerStabilize-v0": {"steps": 200, "max_torque": 0.5, "obs": 5, "scene": "paper"},
-    "roller_gym/RollerHold-v0": {"steps": 200, "max_torque": 1.0, "obs": 9, "scene": "paper"},
-    "roller_gym/RollerBalance-v0": {"steps": 400, "max_torque": 0.4, "obs": 5, "scene": "balance"},
-    "roller_gym/RollerTrack-v0": {"steps": 400, "max_torque": 1.0, "obs": 10, "scene": "paper"},
+    "roller_gym/RollerStabilize-v0": {"steps": 200, "max_torque": 0.5, "obs": 5, "scene": "paper",
+                                      "band": 0.05, "margin": 2.0},
+    "roller_gym/RollerHold-v0": {"steps": 200, "max_torque": 1.0, "obs": 9, "scene": "paper",
+                                 "band": 0.05, "margin": 2.0},
+    "roller_gym/RollerBalance-v0": {"steps": 400, "max_torque": 0.4, "obs": 5, "scene": "balance",
+                                    "band": 0.1, "margin": 3.0},
+    "roller_gym/RollerTrack-v0": {"steps": 400, "max_torque": 1.0, "obs": 10, "scene": "paper",
+                                  "band": 0.05, "margin": 1.0},
 }
 IDS = list(DOCUMENTED)
 INFO_KEYS = ("phi", "phi_dot", "psi", "torque", "normal_force", "friction_force", "energy",
@@ -87,31 +91,30 @@ def wrap(x: float) -> float:
     return (x + math.pi) % (2 * math.pi) - math.pi
 
 
-def documented_reward(env_id: str, scene: Scene, phi, phi_dot, action, target) -> float:
-    """The reward of the task docstrings, ε one turn of ψ either way (in rad of φ)."""
+def documented_reward(env_id: str, scene: Scene, info: dict) -> float:
+    """The reward of the task docstrings: (0.4 tolerance(ε, b, m) + 0.6 tolerance(ε, b, 3b))
+    (0.5 + 0.5 near(φ' − φ*', 5)) (0.8 + 0.2 near((τ − τ*)/max_torque, 1)), ε one turn of ψ
+    either way (in rad of φ; Balance: to the nearer of ±φ_b), τ* = m g (r sin ψ* + e sin φ*)."""
+    doc = DOCUMENTED[env_id]
     q = psi_rate(scene) or 1.0
+    target = info["target_phi"]
 
     def error(t):
-        return wrap(q * (phi - t)) / q
+        return wrap(q * (info["phi"] - t)) / q
 
+    eps = error(target)
     if env_id == "roller_gym/RollerBalance-v0":
-        eps, margin = min((error(target), error(-target)), key=abs), 3.0
-    else:
-        eps, margin = error(target), 2.0
-    return near(eps, margin) * (0.5 + 0.5 * near(phi_dot, 5.0)) * (0.8 + 0.2 * near(action, 1.0))
+        eps = min((error(target), error(-target)), key=abs)
+    band = doc["band"]
 
+    def tolerance(x, margin):
+        return 1.0 if abs(x) <= band else near(abs(x) - band, margin)
 
-def documented_track_reward(scene: Scene, info: dict, max_torque: float) -> float:
-    """RollerTrack's docstring: tolerance(ε, 0.05, 1) (0.5 + 0.5 near(φ' − φ*', 5))
-    (0.8 + 0.2 near((τ − τ*)/max_torque, 1)), τ* = m g (r sin ψ* + e sin φ*)."""
-    q = psi_rate(scene)
-    target = info["target_phi"]
-    eps = wrap(q * (info["phi"] - target)) / q
-    position = 1.0 if abs(eps) <= 0.05 else near(abs(eps) - 0.05, 1.0)
     m, r, e, g = (float(getattr(scene, name)) for name in ("m", "r", "e", "g"))
-    holding = m * g * (r * math.sin(q * target) + e * math.sin(target))
+    holding = m * g * (r * math.sin(psi_rate(scene) * target) + e * math.sin(target))
+    position = 0.4 * tolerance(eps, doc["margin"]) + 0.6 * tolerance(eps, 3 * band)
     return (position * (0.5 + 0.5 * near(info["phi_dot"] - info["target_phi_dot"], 5.0))
-            * (0.8 + 0.2 * near((info["torque"] - holding) / max_torque, 1.0)))
+            * (0.8 + 0.2 * near((info["torque"] - holding) / doc["max_torque"], 1.0)))
 
 
 def act(a: float) -> np.ndarray:
@@ -373,11 +376,7 @@ def test_reward_is_the_documented_formula(env_id):
     scene = env.unwrapped.scene
     for a in (0.4, -0.9, 0.0, 1.0, 3.0, -0.2, 0.7, -2.0):
         _, reward, terminated, _, info = env.step(act(a))
-        if env_id == "roller_gym/RollerTrack-v0":
-            expected = documented_track_reward(scene, info, DOCUMENTED[env_id]["max_torque"])
-        else:
-            expected = documented_reward(env_id, scene, info["phi"], info["phi_dot"],
-                                         float(np.clip(np.float32(a), -1, 1)), info["target_phi"])
+        expected = documented_reward(env_id, scene, info)
         assert reward == pytest.approx(expected, rel=1e-12, abs=1e-15)
         assert 0.0 <= reward <= 1.0 and not terminated
 
