@@ -71,6 +71,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--runs", default=None, metavar="LOG_FOLDER",
                    help="for every task, take the latest experiment of each algorithm in this "
                         "log folder of roller-gym train (<LOG_FOLDER>/<algo>/<env name>_<N>)")
+    p.add_argument("--algos", nargs="+", default=list(ALGOS), choices=ALGOS,
+                   help="with --runs: the algorithms to take (default: sac td3 ppo)")
     p.add_argument("--baselines", nargs="*", default=list(BASELINES), choices=BASELINES,
                    help="baselines to compare (default: classical zero random)")
     p.add_argument("--episodes", type=int, default=100, help="episodes per policy (default 100)")
@@ -210,9 +212,12 @@ def main(argv: list[str] | None = None) -> None:
         # -- the policies: trained models, then the baselines -------------------------------
         run_dirs = [Path(m) for m in args.models]
         if args.runs:
-            found = [find_run(args.runs, algo, env_id) for algo in ALGOS]
+            found = [find_run(args.runs, algo, env_id) for algo in args.algos]
             run_dirs += [d for d in found if d is not None]
-        configs = [read_config(d) for d in run_dirs]
+        try:
+            configs = [read_config(d) for d in run_dirs]
+        except FileNotFoundError as exc:
+            raise SystemExit(f"--models: {exc}") from None
         for d, c in zip(run_dirs, configs, strict=True):
             if c["env"] != env_id:
                 raise SystemExit(f"{d} was trained on {c['env']}, not {env_id}")
