@@ -7,7 +7,9 @@ Every policy offers stable-baselines3's ``predict(observation, deterministic=Tru
 module                 what it holds
 =====================  ===============================================================
 ``hyperparams``        the rl-zoo3 hyperparameter files (``sac.yml``, ...) per
-                       task, and the classical controllers' settings
+                       task, and the classical controllers' settings (its function
+                       ``hyperparams`` is not re-exported here: the name would hide
+                       the module)
 ``observation``        the state (φ, φ', target φ*) recovered from an observation
 ``classical``          :class:`LQR` (Stabilize, Hold), :class:`EnergySwingUp`
                        (Balance), :class:`ZeroTorque`, :class:`RandomPolicy`
@@ -36,7 +38,7 @@ from roller_gym.agents.classical import (
     ZeroTorque,
     controller_for,
 )
-from roller_gym.agents.hyperparams import CLASSICAL, hyperparams
+from roller_gym.agents.hyperparams import CLASSICAL
 from roller_gym.agents.observation import DecodedState, decode_observation
 from roller_gym.agents.policies import TrainedPolicy, baseline, load_policy, rollout
 
@@ -52,7 +54,6 @@ __all__ = [
     "baseline",
     "controller_for",
     "decode_observation",
-    "hyperparams",
     "load_policy",
     "rollout",
 ]

@@ -44,6 +44,14 @@ def test_every_algorithm_has_a_file_with_an_entry_for_every_task_and_nothing_els
         assert load_config(algo) == _raw(algo)
 
 
+def test_the_module_of_the_files_is_not_hidden_by_a_name_of_its_package():
+    """``import roller_gym.agents.hyperparams as h`` resolves through the package's attributes:
+    a function of the same name there would stand in for the module."""
+    import roller_gym.agents.hyperparams as module
+
+    assert module.config_file("sac").name == "sac.yml"
+
+
 def test_hyperparams_rejects_an_unknown_algorithm_or_task():
     with pytest.raises(ValueError, match=r"algo='a2c'.*allowed: sac, td3, ppo"):
         hyperparams("a2c", TASKS[0])
