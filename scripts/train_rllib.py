@@ -2,10 +2,10 @@
 
 Needs the ``rllib`` extra (its own environment, see README: RLlib pins its Gymnasium)::
 
-    python scripts/train_rllib.py --algo PPO --env roller_gym/RollerStabilize-v0 --iterations 20
-    python scripts/train_rllib.py --algo SAC --num-env-runners 1 --envs-per-runner 4
-    python scripts/train_rllib.py --env-kwarg dt=0.02 --env-kwarg 'randomize={"m": [0.8, 1.2]}'
-    python scripts/train_rllib.py --address HEAD_IP:6379 --num-env-runners 16   # a cluster
+    roller-gym train-rllib --algo PPO --env roller_gym/RollerStabilize-v0 --iterations 20
+    roller-gym train-rllib --algo SAC --num-env-runners 1 --envs-per-runner 4
+    roller-gym train-rllib --env-kwarg dt=0.02 --env-kwarg 'randomize={"m": [0.8, 1.2]}'
+    roller-gym train-rllib --address HEAD_IP:6379 --num-env-runners 16   # a cluster
 
 With no ``--address`` a local Ray is started on this machine (all its CPUs, or
 ``--num-cpus``); with one, the script joins that running cluster (``auto``: the cluster
