@@ -40,6 +40,7 @@ __all__ = [
     "Episode",
     "Policy",
     "TrainedPolicy",
+    "algorithm_class",
     "baseline",
     "find_run",
     "load_policy",
@@ -53,28 +54,55 @@ BASELINES = ("classical", "zero", "random")
 Policy = Any  # anything with predict(observation, deterministic=True) -> (action, state)
 
 
-#: How to get the packages that read training runs.
+#: How to get the packages that train and read training runs.
 ZOO_HINT = 'pip install "roller-gym[zoo]"'
 
+# Reading a run needs PyYAML and stable-baselines3, not rl-zoo3 itself: importing rl_zoo3
+# replaces Gymnasium's TimeLimit wrapper for the whole process (rl_zoo3.gym_patches), which a
+# library function must not do to its caller.
 
-def _zoo_utils() -> Any:
+
+#: Saved objects a policy that only acts does not need, replaced at loading (as rl-zoo3's
+#: enjoy script does): rl-zoo3's schedules are pickled objects of rl_zoo3, which unpickling
+#: would import.
+ACTING_ONLY: dict[str, Any] = {
+    "learning_rate": 0.0,
+    "lr_schedule": lambda _: 0.0,
+    "clip_range": lambda _: 0.0,
+}
+
+
+def algorithm_class(algo: str) -> type:
+    """The stable-baselines3 class of ``"sac"``, ``"td3"`` or ``"ppo"``."""
+    from stable_baselines3 import PPO, SAC, TD3
+
+    classes = {"sac": SAC, "td3": TD3, "ppo": PPO}
+    if algo.lower() not in classes:
+        raise ValueError(f"algo={algo!r} is not one of {', '.join(classes)}")
+    return classes[algo.lower()]
+
+
+def _read_yaml(path: Path) -> Any:
+    """A YAML file rl-zoo3 wrote. It dumps OrderedDicts (python/object tags) and reads them
+    back with the unsafe loader; so do we, on the user's own run folder."""
     try:
-        import rl_zoo3.utils
+        import yaml
     except ImportError:
-        raise ImportError(f"reading rl-zoo3 training runs needs rl-zoo3: {ZOO_HINT}") from None
-    return rl_zoo3.utils
+        raise ImportError(f"reading training runs needs PyYAML: {ZOO_HINT}") from None
+    with path.open() as f:
+        return yaml.load(f, Loader=yaml.UnsafeLoader)
 
 
 def find_run(log_folder: str | Path, algo: str, env_id: str) -> Path | None:
     """The latest rl-zoo3 experiment ``<log_folder>/<algo>/<env name>_<N>`` of ``algo`` on
-    ``env_id`` (the largest N), or None if there is none."""
-    from huggingface_sb3 import EnvironmentName
-
-    utils = _zoo_utils()
-    env_name = EnvironmentName(env_id)
-    run_id = utils.get_latest_run_id(str(Path(log_folder) / algo.lower()), env_name)
-    run_dir = Path(log_folder) / algo.lower() / f"{env_name}_{run_id}"
-    return run_dir if run_id > 0 and run_dir.is_dir() else None
+    ``env_id`` (the largest N whose ``args.yml`` names ``env_id``), or None if there is none."""
+    found = []
+    for args_file in Path(log_folder, algo.lower()).glob("*_*/*/args.yml"):
+        run_dir = args_file.parent.parent
+        run_id = run_dir.name.rpartition("_")[2]
+        if run_id.isdigit() and _read_yaml(args_file)["env"] == env_id:
+            found.append((int(run_id), run_dir))
+    return max(found)[1] if found else None
 
 
 def _monitor_wall_time(run_dir: Path) -> float | None:
@@ -107,7 +135,6 @@ def read_config(run_dir: str | Path) -> dict[str, Any]:
     Raises:
         FileNotFoundError: ``run_dir`` holds no ``*/args.yml`` (not an rl-zoo3 experiment).
     """
-    import yaml
     from stable_baselines3.common.save_util import load_from_zip_file
 
     run_dir = Path(run_dir)
@@ -118,13 +145,11 @@ def read_config(run_dir: str | Path) -> dict[str, Any]:
             "folder of roller-gym train / rl_zoo3.train (they look like runs/sac/"
             "roller_gym-RollerStabilize-v0_1)")
     params_dir = found[0].parent
-    hyperparams, _ = _zoo_utils().get_saved_hyperparams(str(params_dir))
-    # rl-zoo3 saves its arguments as a pickled OrderedDict (python/object YAML tags), and
-    # reads them back with the unsafe loader; so do we, on the user's own run folder.
-    with found[0].open() as f:
-        args = yaml.load(f, Loader=yaml.UnsafeLoader)
+    hyperparams = dict(_read_yaml(params_dir / "config.yml"))
+    args = _read_yaml(found[0])
     model = run_dir / f"{params_dir.name}.zip"
-    data, _, _ = load_from_zip_file(model, device="cpu", load_data=True)
+    data, _, _ = load_from_zip_file(model, device="cpu", load_data=True,
+                                    custom_objects=ACTING_ONLY)
     wall_time = _monitor_wall_time(run_dir)
     return {
         "algo": args["algo"],
@@ -167,7 +192,8 @@ class TrainedPolicy:
 
 
 def load_policy(run_dir: str | Path, best: bool = False, device: str = "cpu") -> TrainedPolicy:
-    """Load the model a training run saved (and its normalization statistics).
+    """Load the model a training run saved (and its normalization statistics), to act: its
+    learning-rate and clipping schedules are not restored (:data:`ACTING_ONLY`).
 
     Args:
         run_dir: the rl-zoo3 experiment folder (see :func:`read_config`).
@@ -178,7 +204,8 @@ def load_policy(run_dir: str | Path, best: bool = False, device: str = "cpu") ->
     run_dir = Path(run_dir)
     config = read_config(run_dir)
     path = run_dir / "best_model.zip" if best else Path(config["model"])
-    model = _zoo_utils().ALGOS[config["algo"]].load(path, device=device)
+    model = algorithm_class(config["algo"]).load(path, device=device,
+                                                 custom_objects=ACTING_ONLY)
     normalizer = None
     stats = Path(config["params_dir"]) / "vecnormalize.pkl"
     if stats.is_file():

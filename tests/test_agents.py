@@ -4,6 +4,8 @@ test_cli.py; the hyperparameter files in test_zoo.py."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from pathlib import Path
 
 import gymnasium as gym
@@ -14,6 +16,7 @@ from roller_gym.agents import LQR, EnergySwingUp, baseline, decode_observation, 
 from roller_gym.agents.hyperparams import ALGOS, CLASSICAL, hyperparams
 from roller_gym.agents.policies import read_config
 from roller_gym.physics import holding_torque
+from zoo import HAVE_RL_ZOO3, import_rl_zoo3
 
 torch.set_num_threads(1)
 
@@ -153,7 +156,9 @@ _RUNS: dict[str, tuple] = {}
 
 
 def _train(argv: list[str]) -> Path:
-    pytest.importorskip("rl_zoo3", reason="training runs rl-zoo3 (the zoo extra)")
+    if not HAVE_RL_ZOO3:
+        pytest.skip("training runs rl-zoo3, not installed (the zoo extra; CI installs it)")
+    import_rl_zoo3("rl_zoo3.train")  # before roller-gym train imports it: see tests/zoo.py
     from roller_gym.scripts import train
 
     return train.main([*argv, "--verbose", "0"])
@@ -198,10 +203,10 @@ def test_saved_model_loads_as_rl_zoo3_loads_it(short_run):
     """load_policy against rl-zoo3's own way (its enjoy script's): the latest experiment's
     final model, found by get_model_path and loaded by the algorithm's class."""
     from huggingface_sb3 import EnvironmentName
-    from rl_zoo3.utils import ALGOS as ZOO_ALGOS
-    from rl_zoo3.utils import get_model_path
 
     algo, run_dir, log_folder = short_run
+    zoo_utils = import_rl_zoo3("rl_zoo3.utils")
+    ZOO_ALGOS, get_model_path = zoo_utils.ALGOS, zoo_utils.get_model_path
     env_id = "roller_gym/RollerStabilize-v0"
     _, model_path, log_path = get_model_path(0, str(log_folder), algo, EnvironmentName(env_id))
     assert Path(log_path) == run_dir
@@ -219,6 +224,21 @@ def test_saved_model_loads_as_rl_zoo3_loads_it(short_run):
                                   best.predict(observations, deterministic=True)[0])
 
 
+def test_loading_a_run_leaves_gymnasium_unpatched(short_run):
+    """Importing rl_zoo3 replaces Gymnasium's TimeLimit (see tests/zoo.py); reading a run
+    must not do that to the caller's process."""
+    _, run_dir, _ = short_run
+    code = ("import sys, gymnasium as gym\n"
+            "from roller_gym.agents import load_policy, rollout\n"
+            f"policy = load_policy({str(run_dir)!r}, best=True)\n"
+            "env = gym.make('roller_gym/RollerStabilize-v0')\n"
+            "rollout(env, policy, 0)\n"
+            "print('rl_zoo3' in sys.modules, type(env).__module__)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, timeout=300).stdout.split()
+    assert out == ["False", "gymnasium.wrappers.common"]
+
+
 def test_normalized_ppo_run_saves_its_statistics_and_reloads_them(tmp_path):
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
@@ -233,6 +253,7 @@ def test_normalized_ppo_run_saves_its_statistics_and_reloads_them(tmp_path):
     assert stats.is_file()
     # PPO trains whole rollouts (2 x 512): 1,000 steps become 1,024, and the linear learning
     # rate schedule ends at exactly 0, not below.
+    import_rl_zoo3("rl_zoo3.utils")  # unpickling rl-zoo3's schedule imports it: tests/zoo.py
     model = PPO.load(config["model"], device="cpu")
     assert model.num_timesteps == 1024
     assert model._current_progress_remaining == 0.0 and model.lr_schedule(0.0) == 0.0

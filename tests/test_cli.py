@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 from roller_gym.scripts.cli import COMMANDS
+from zoo import NEEDS_RL_ZOO3
 
 #: The console script pip installs next to the interpreter (pip install -e . / a wheel).
 ENTRY_POINT = Path(sys.executable).with_name("roller-gym")
@@ -100,8 +101,8 @@ def test_a_command_without_its_extra_says_what_to_install(command, missing, extr
     assert "Traceback" not in result.stderr
 
 
+@NEEDS_RL_ZOO3
 def test_train_show_command_is_rl_zoo3_with_the_shipped_file():
-    pytest.importorskip("rl_zoo3", reason="roller-gym train needs rl-zoo3 (the zoo extra)")
     from roller_gym.agents.hyperparams import config_file
 
     out = roller_gym("train", "--algo", "ppo", "--steps", "3000", "--show-command").stdout
@@ -113,8 +114,8 @@ def test_train_show_command_is_rl_zoo3_with_the_shipped_file():
     assert words[words.index("--n-timesteps") + 1] == "4096"
 
 
+@NEEDS_RL_ZOO3
 def test_train_evaluate_replay_end_to_end(tmp_path):
-    pytest.importorskip("rl_zoo3", reason="roller-gym train needs rl-zoo3 (the zoo extra)")
     env_id = "roller_gym/RollerStabilize-v0"
     roller_gym("train", "--env", env_id, "--steps", "300", "--eval-freq", "150",
                "--eval-episodes", "1", "--verbose", "0", cwd=tmp_path)
