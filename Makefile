@@ -13,15 +13,17 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet -e ".[all]"
 	touch $(STAMP)
 
-run: $(STAMP)  ## train the default agent on the default task, evaluate it, write results/
-	$(PY) scripts/train.py
-	$(PY) scripts/evaluate.py --env roller_gym/RollerStabilize-v0 --models runs/sac-RollerStabilize-v0 --out results
+RG := $(VENV)/bin/roller-gym
+
+run: $(STAMP)  ## train the default agent (SAC, rl-zoo3) on the default task, evaluate it against LQR
+	$(RG) train --algo sac --env roller_gym/RollerStabilize-v0 --log-folder runs
+	$(RG) evaluate --env roller_gym/RollerStabilize-v0 --runs runs --algos sac --out results
 
 TASKS := roller_gym/RollerStabilize-v0 roller_gym/RollerHold-v0 roller_gym/RollerBalance-v0
 results: $(STAMP)  ## train SAC, TD3 and PPO on every task, evaluate all, write docs/RESULTS.md
 	set -e; for env in $(TASKS); do for algo in sac td3 ppo; do \
-		$(PY) scripts/train.py --algo $$algo --env $$env; done; done
-	$(PY) scripts/evaluate.py --env $(TASKS) --runs runs --out docs/results \
+		$(RG) train --algo $$algo --env $$env --log-folder runs; done; done
+	$(RG) evaluate --env $(TASKS) --runs runs --out docs/results \
 		--report docs/RESULTS.md --notes docs/results/notes.md
 
 test: $(STAMP)  ## the whole test suite and the linter
@@ -42,10 +44,10 @@ test-rllib: $(RLLIB_STAMP)  ## the physics and env tests on RLlib's Gymnasium re
 	$(RLLIB_VENV)/bin/python -m pytest -q --ignore=tests/test_agents.py --ignore=tests/test_benchmark.py
 
 train-rllib: $(RLLIB_STAMP)  ## PPO on a local Ray
-	$(RLLIB_VENV)/bin/python scripts/train_rllib.py
+	$(RLLIB_VENV)/bin/roller-gym train-rllib
 
 bench: $(STAMP)
-	$(PY) scripts/benchmark.py
+	$(VENV)/bin/roller-gym benchmark
 
 clean:
 	rm -rf $(VENV) $(RLLIB_VENV) runs results

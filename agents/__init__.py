@@ -6,16 +6,18 @@ Every policy offers stable-baselines3's ``predict(observation, deterministic=Tru
 =====================  ===============================================================
 module                 what it holds
 =====================  ===============================================================
-``hyperparams``        the hyperparameters per (algorithm, task), default steps
-                       included, and the classical controllers' settings
+``hyperparams``        the rl-zoo3 hyperparameter files (``sac.yml``, ...) per
+                       task, and the classical controllers' settings (its function
+                       ``hyperparams`` is not re-exported here: the name would hide
+                       the module)
 ``observation``        the state (φ, φ', target φ*) recovered from an observation
 ``classical``          :class:`LQR` (Stabilize, Hold), :class:`EnergySwingUp`
                        (Balance), :class:`ZeroTorque`, :class:`RandomPolicy`
 ``policies``           loading a trained run, the baselines by name, playing an episode
 =====================  ===============================================================
 
-The scripts: ``scripts/train.py`` (train and save a run), ``scripts/evaluate.py`` (the
-results table and plots), ``scripts/replay.py`` (an episode to a GIF).
+The commands: ``roller-gym train`` (train and save a run with rl-zoo3), ``roller-gym
+evaluate`` (the results table and plots), ``roller-gym replay`` (an episode to a GIF).
 
 Example::
 
@@ -36,13 +38,12 @@ from roller_gym.agents.classical import (
     ZeroTorque,
     controller_for,
 )
-from roller_gym.agents.hyperparams import CLASSICAL, HYPERPARAMS, hyperparams
+from roller_gym.agents.hyperparams import CLASSICAL
 from roller_gym.agents.observation import DecodedState, decode_observation
 from roller_gym.agents.policies import TrainedPolicy, baseline, load_policy, rollout
 
 __all__ = [
     "CLASSICAL",
-    "HYPERPARAMS",
     "LQR",
     "Controller",
     "DecodedState",
@@ -53,7 +54,6 @@ __all__ = [
     "baseline",
     "controller_for",
     "decode_observation",
-    "hyperparams",
     "load_policy",
     "rollout",
 ]

@@ -4,19 +4,26 @@ A *policy* is anything with stable-baselines3's ``predict(observation, determini
 -> (action, state)``: a trained model (:class:`TrainedPolicy`, which applies the saved
 observation normalization), or a controller of :mod:`roller_gym.agents.classical`.
 
-A training run (``scripts/train.py``) writes a directory::
+A training run (``roller-gym train``, or ``python -m rl_zoo3.train`` with the same
+hyperparameter files) is an rl-zoo3 experiment folder::
 
-    runs/<algo>-<env_id>/
-        model.zip          the final model
-        best_model.zip     the best model of the periodic evaluations
-        config.json        what produced it: algo, env, env_kwargs, seed, steps, wall time, ...
-        evaluations.npz    the periodic evaluations (the learning curve)
-        vecnormalize.pkl   the normalization statistics (if the run normalized)
-        checkpoints/, tb/, monitor/
+    runs/<algo>/<env name>_<N>/          (env name: the task ID with "/" -> "-")
+        <env name>.zip                   the final model
+        best_model.zip                   the best model of the periodic evaluations
+        evaluations.npz                  the periodic evaluations (the learning curve)
+        rl_model_<steps>_steps.zip       checkpoints
+        0.monitor.csv, ...               the training episodes
+        <env name>/config.yml            the hyperparameters the run used
+        <env name>/args.yml              the command-line arguments (algo, env, seed, ...)
+        <env name>/vecnormalize.pkl      the normalization statistics (if the run normalized)
+
+:func:`find_run` picks the latest experiment of an (algorithm, task) in a log folder, as
+rl-zoo3's ``enjoy`` does; :func:`read_config` and :func:`load_policy` read one.
 """
 
 from __future__ import annotations
 
+import csv
 import json
 import pickle
 from dataclasses import dataclass
@@ -35,6 +42,7 @@ __all__ = [
     "TrainedPolicy",
     "algorithm_class",
     "baseline",
+    "find_run",
     "load_policy",
     "read_config",
     "rollout",
@@ -44,6 +52,24 @@ __all__ = [
 BASELINES = ("classical", "zero", "random")
 
 Policy = Any  # anything with predict(observation, deterministic=True) -> (action, state)
+
+
+#: How to get the packages that train and read training runs.
+ZOO_HINT = 'pip install "roller-gym[zoo]"'
+
+# Reading a run needs PyYAML and stable-baselines3, not rl-zoo3 itself: importing rl_zoo3
+# replaces Gymnasium's TimeLimit wrapper for the whole process (rl_zoo3.gym_patches), which a
+# library function must not do to its caller.
+
+
+#: Saved objects a policy that only acts does not need, replaced at loading (as rl-zoo3's
+#: enjoy script does): rl-zoo3's schedules are pickled objects of rl_zoo3, which unpickling
+#: would import.
+ACTING_ONLY: dict[str, Any] = {
+    "learning_rate": 0.0,
+    "lr_schedule": lambda _: 0.0,
+    "clip_range": lambda _: 0.0,
+}
 
 
 def algorithm_class(algo: str) -> type:
@@ -56,12 +82,87 @@ def algorithm_class(algo: str) -> type:
     return classes[algo.lower()]
 
 
+def _read_yaml(path: Path) -> Any:
+    """A YAML file rl-zoo3 wrote. It dumps OrderedDicts (python/object tags) and reads them
+    back with the unsafe loader; so do we, on the user's own run folder."""
+    try:
+        import yaml
+    except ImportError:
+        raise ImportError(f"reading training runs needs PyYAML: {ZOO_HINT}") from None
+    with path.open() as f:
+        return yaml.load(f, Loader=yaml.UnsafeLoader)
+
+
+def find_run(log_folder: str | Path, algo: str, env_id: str) -> Path | None:
+    """The latest rl-zoo3 experiment ``<log_folder>/<algo>/<env name>_<N>`` of ``algo`` on
+    ``env_id`` (the largest N whose ``args.yml`` names ``env_id``), or None if there is none."""
+    found = []
+    for args_file in Path(log_folder, algo.lower()).glob("*_*/*/args.yml"):
+        run_dir = args_file.parent.parent
+        run_id = run_dir.name.rpartition("_")[2]
+        if run_id.isdigit() and _read_yaml(args_file)["env"] == env_id:
+            found.append((int(run_id), run_dir))
+    return max(found)[1] if found else None
+
+
+def _monitor_wall_time(run_dir: Path) -> float | None:
+    """Seconds from the first monitor's start to the last episode's end over the episode
+    monitors (stable-baselines3's ``*.monitor.csv``) of ``run_dir``; None if no episode ended."""
+    from stable_baselines3.common.monitor import get_monitor_files
+
+    starts, ends = [], []
+    for name in get_monitor_files(str(run_dir)):
+        with open(name) as f:
+            t_start = float(json.loads(f.readline().lstrip("#"))["t_start"])
+            rows = list(csv.DictReader(f))
+        starts.append(t_start)
+        if rows:
+            ends.append(t_start + float(rows[-1]["t"]))
+    return max(ends) - min(starts) if ends else None
+
+
 def read_config(run_dir: str | Path) -> dict[str, Any]:
-    """The ``config.json`` a training run saved in ``run_dir``."""
-    path = Path(run_dir) / "config.json"
-    if not path.is_file():
-        raise FileNotFoundError(f"{path} not found: is {run_dir} a run directory of train.py?")
-    return json.loads(path.read_text())
+    """What produced the training run in ``run_dir`` (an rl-zoo3 experiment folder).
+
+    Returns:
+        ``algo``, ``env`` (the task ID), ``env_kwargs``, ``seed``, ``hyperparams`` (rl-zoo3's
+        ``config.yml``: the hyperparameters as used), ``model`` (the final model's path),
+        ``params_dir`` (where ``config.yml`` lies), ``trained_steps`` (environment steps the
+        final model was trained for), ``wall_time_s`` (seconds from the creation of the
+        training environments to the end of the last training episode; None if no episode
+        ended).
+
+    Raises:
+        FileNotFoundError: ``run_dir`` holds no ``*/args.yml`` (not an rl-zoo3 experiment).
+    """
+    from stable_baselines3.common.save_util import load_from_zip_file
+
+    run_dir = Path(run_dir)
+    found = sorted(run_dir.glob("*/args.yml"))
+    if not found:
+        raise FileNotFoundError(
+            f"run_dir={str(run_dir)!r} holds no <env name>/args.yml: it is not an experiment "
+            "folder of roller-gym train / rl_zoo3.train (they look like runs/sac/"
+            "roller_gym-RollerStabilize-v0_1)")
+    params_dir = found[0].parent
+    hyperparams = dict(_read_yaml(params_dir / "config.yml"))
+    args = _read_yaml(found[0])
+    model = run_dir / f"{params_dir.name}.zip"
+    data, _, _ = load_from_zip_file(model, device="cpu", load_data=True,
+                                    custom_objects=ACTING_ONLY)
+    wall_time = _monitor_wall_time(run_dir)
+    return {
+        "algo": args["algo"],
+        "env": args["env"],
+        # As rl-zoo3 decides: the hyperparameters' env_kwargs, else the command line's.
+        "env_kwargs": dict(hyperparams.get("env_kwargs") or args.get("env_kwargs") or {}),
+        "seed": args["seed"],
+        "hyperparams": hyperparams,
+        "model": str(model),
+        "params_dir": str(params_dir),
+        "trained_steps": int(data["num_timesteps"]),
+        "wall_time_s": wall_time,
+    }
 
 
 class TrainedPolicy:
@@ -70,7 +171,7 @@ class TrainedPolicy:
     Args:
         model: the loaded model (``SAC.load(...)`` etc.).
         normalizer: the saved ``VecNormalize`` (its statistics only), or None.
-        config: the run's configuration (``config.json``), for reference.
+        config: the run's configuration (:func:`read_config`), for reference.
     """
 
     def __init__(self, model: Any, normalizer: Any = None,
@@ -91,20 +192,22 @@ class TrainedPolicy:
 
 
 def load_policy(run_dir: str | Path, best: bool = False, device: str = "cpu") -> TrainedPolicy:
-    """Load the model a training run saved (and its normalization statistics).
+    """Load the model a training run saved (and its normalization statistics), to act: its
+    learning-rate and clipping schedules are not restored (:data:`ACTING_ONLY`).
 
     Args:
-        run_dir: the run directory written by ``scripts/train.py``.
+        run_dir: the rl-zoo3 experiment folder (see :func:`read_config`).
         best: load ``best_model.zip`` (the best periodic evaluation) instead of the final
-            ``model.zip``.
+            model.
         device: the torch device.
     """
     run_dir = Path(run_dir)
     config = read_config(run_dir)
-    path = run_dir / ("best_model.zip" if best else "model.zip")
-    model = algorithm_class(config["algo"]).load(path, device=device)
+    path = run_dir / "best_model.zip" if best else Path(config["model"])
+    model = algorithm_class(config["algo"]).load(path, device=device,
+                                                 custom_objects=ACTING_ONLY)
     normalizer = None
-    stats = run_dir / "vecnormalize.pkl"
+    stats = Path(config["params_dir"]) / "vecnormalize.pkl"
     if stats.is_file():
         with stats.open("rb") as f:
             normalizer = pickle.load(f)  # VecNormalize without its venv: statistics only

@@ -1,24 +1,27 @@
 """Evaluate trained agents and the baselines on the same seeded episodes; tables and plots.
 
-    python scripts/evaluate.py --env roller_gym/RollerStabilize-v0 \\
-        --models runs/sac-RollerStabilize-v0
-    python scripts/evaluate.py --env roller_gym/RollerStabilize-v0 roller_gym/RollerHold-v0 \\
+    roller-gym evaluate --env roller_gym/RollerStabilize-v0 \\
+        --models runs/sac/roller_gym-RollerStabilize-v0_1
+    roller-gym evaluate --env roller_gym/RollerStabilize-v0 roller_gym/RollerHold-v0 \\
         roller_gym/RollerBalance-v0 \\
         --runs runs --out docs/results --report docs/RESULTS.md --notes docs/results/notes.md
 
-Every policy (each trained model, the classical controller: LQR or the energy swing-up,
-zero torque, random actions) plays the episodes ``env.reset(seed=s)`` for s in
-range(--episodes), so all face the same start states and targets. Per task it prints and
-writes (into --out):
+The trained models are experiment folders of ``roller-gym train`` (or of ``python -m
+rl_zoo3.train`` with roller-gym's hyperparameter files): named with --models, or the latest
+one of every algorithm in the log folder --runs.
+
+Every policy (each trained model, the classical controller: LQR or the energy swing-up, zero
+torque, random actions) plays the episodes ``env.reset(seed=s)`` for s in range(--episodes),
+so all face the same start states and targets. Per task it prints and writes (into --out):
 
 * ``evaluation.md``: the tables of all tasks (mean ± std return, success rate, final
-  |position error|, mean |τ|, training steps and wall time) and the targets of issue 5;
+  |position error|, mean |τ|, training steps and wall time) and whether the targets are met;
   ``<env>.md`` and ``<env>.json``: one task's table and its numbers;
 * ``<env>-learning.png``: the learning curves (periodic evaluations during training)
   against the baselines' mean returns;
 * ``<env>-trajectories.png``: episode 0 of every policy, side by side.
 
-``--report`` assembles the tasks' tables, the targets of issue 5 and the plots into one
+``--report`` assembles the tasks' tables, the targets and the plots into one
 Markdown file (``docs/RESULTS.md``).
 """
 
@@ -38,36 +41,50 @@ import matplotlib.pyplot as plt
 import numpy as np
 import roller_gym  # registers the tasks
 from roller_gym import file_name
+from roller_gym.agents.classical import CONTROLLERS
 from roller_gym.agents.hyperparams import ALGOS
-from roller_gym.agents.policies import BASELINES, baseline, load_policy, read_config, rollout
+from roller_gym.agents.policies import (
+    BASELINES,
+    baseline,
+    find_run,
+    load_policy,
+    read_config,
+    rollout,
+)
+from roller_gym.task import get_task
 
 #: How the baselines are named in the tables.
 BASELINE_LABELS = {"zero": "zero torque", "random": "random"}
-#: Target of issue 5 on Stabilize and Hold: SAC's mean return within 5% of |LQR's| below it.
+#: Target: SAC's mean return within 5 % of the classical controller's below it.
 RETURN_TOLERANCE = 0.05
-#: Target on Balance: SAC succeeds in at least this share of the episodes.
-BALANCE_SUCCESS = 0.9
+#: Target: SAC succeeds in at least this share of the episodes.
+SUCCESS_TARGET = 0.9
 
 
-def parse_args() -> argparse.Namespace:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], epilog=__doc__[
+        __doc__.index("\n\n") + 2:], formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--env", nargs="+", default=["roller_gym/RollerStabilize-v0"],
                    choices=roller_gym.ENV_IDS,
                    help="the task(s) (default roller_gym/RollerStabilize-v0)")
     p.add_argument("--models", nargs="*", default=[],
-                   help="run directories of scripts/train.py to evaluate (one task)")
-    p.add_argument("--runs", default=None,
-                   help="take the runs <RUNS>/<algo>-<env> that exist, for every task")
+                   help="experiment folders of roller-gym train to evaluate (one task), e.g. "
+                        "runs/sac/roller_gym-RollerStabilize-v0_1")
+    p.add_argument("--runs", default=None, metavar="LOG_FOLDER",
+                   help="for every task, take the latest experiment of each algorithm in this "
+                        "log folder of roller-gym train (<LOG_FOLDER>/<algo>/<env name>_<N>)")
+    p.add_argument("--algos", nargs="+", default=list(ALGOS), choices=ALGOS,
+                   help="with --runs: the algorithms to take (default: sac td3 ppo)")
     p.add_argument("--baselines", nargs="*", default=list(BASELINES), choices=BASELINES,
                    help="baselines to compare (default: classical zero random)")
     p.add_argument("--episodes", type=int, default=100, help="episodes per policy (default 100)")
     p.add_argument("--best", action="store_true",
-                   help="evaluate best_model.zip (best periodic evaluation) instead of model.zip")
+                   help="evaluate best_model.zip (best periodic evaluation) instead of the final "
+                        "model")
     p.add_argument("--out", default="results", help="output directory (default results)")
     p.add_argument("--report", default=None, help="also write this Markdown report")
     p.add_argument("--notes", default=None, help="Markdown appended to the report as its notes")
-    return p.parse_args()
+    return p
 
 
 def evaluate(env: gym.Env, policy: Any, episodes: int) -> dict[str, Any]:
@@ -98,7 +115,8 @@ def evaluate(env: gym.Env, policy: Any, episodes: int) -> dict[str, Any]:
 
 
 def classical_label(env_id: str) -> str:
-    return "energy swing-up + LQR" if env_id == "roller_gym/RollerBalance-v0" else "LQR"
+    """The name of the task's classical controller in the tables."""
+    return CONTROLLERS[get_task(env_id).classical][1]
 
 
 def markdown_table(rows: list[dict[str, Any]]) -> str:
@@ -119,28 +137,26 @@ def markdown_table(rows: list[dict[str, Any]]) -> str:
 
 
 def target_check(env_id: str, rows: list[dict[str, Any]]) -> tuple[str, bool | None]:
-    """The sentence on issue 5's target for this task, and whether it is met (None: no SAC)."""
+    """The sentence on the target for this task, and whether it is met (None: no SAC)."""
     by_name = {r["name"]: r for r in rows}
     sac, classical = by_name.get("sac"), by_name.get("classical")
     if sac is None:
         return "Target: not checked (no SAC run evaluated).", None
-    if env_id == "roller_gym/RollerBalance-v0":
-        met = sac["success_rate"] >= BALANCE_SUCCESS
-        return (f"Target: SAC succeeds in at least {BALANCE_SUCCESS:.0%} of the episodes: "
-                f"**{'met' if met else 'missed'}** (SAC: {sac['success_rate']:.0%}).", met)
     if classical is None:
-        return "Target: not checked (no LQR evaluated).", None
+        return "Target: not checked (no classical controller evaluated).", None
     bound = classical["return_mean"] - RETURN_TOLERANCE * abs(classical["return_mean"])
-    met = sac["return_mean"] >= bound
-    return (f"Target: SAC's mean return at least LQR's − {RETURN_TOLERANCE:.0%} of |LQR's| "
-            f"= {bound:.1f}: **{'met' if met else 'missed'}** (SAC: {sac['return_mean']:.1f}, "
-            f"LQR: {classical['return_mean']:.1f}).", met)
+    met = sac["return_mean"] >= bound and sac["success_rate"] >= SUCCESS_TARGET
+    return (f"Target: SAC succeeds in at least {SUCCESS_TARGET:.0%} of the episodes and its "
+            f"mean return is at least the classical controller's − {RETURN_TOLERANCE:.0%} "
+            f"= {bound:.1f}: **{'met' if met else 'missed'}** (SAC: "
+            f"{sac['success_rate']:.0%}, {sac['return_mean']:.1f}; "
+            f"{classical['label']}: {classical['return_mean']:.1f}).", met)
 
 
 def plot_learning_curves(env_id: str, rows: list[dict[str, Any]], path: Path) -> None:
     fig, ax = plt.subplots(figsize=(7, 4))
     for r in rows:
-        if r.get("run_dir"):
+        if r.get("run_dir") and (Path(r["run_dir"]) / "evaluations.npz").is_file():
             data = np.load(Path(r["run_dir"]) / "evaluations.npz")
             mean, std = data["results"].mean(axis=1), data["results"].std(axis=1)
             ax.plot(data["timesteps"], mean, label=r["label"])
@@ -160,7 +176,7 @@ def plot_learning_curves(env_id: str, rows: list[dict[str, Any]], path: Path) ->
 def plot_trajectories(env_id: str, rows: list[dict[str, Any]], path: Path) -> None:
     quantities = [("phi", "φ [rad] (dashed: target)"), ("phi_dot", "φ' [rad/s]"),
                   ("torque", "τ [N·m]")]
-    targets = [1.0, -1.0] if env_id == "roller_gym/RollerBalance-v0" else [1.0]  # ±φ_b both count
+    targets = [1.0, -1.0] if get_task(env_id).symmetric_target else [1.0]  # ±φ* both count
     fig, axes = plt.subplots(len(quantities), len(rows), sharex=True, sharey="row",
                              figsize=(2.6 * len(rows), 6.5), squeeze=False)
     for j, r in enumerate(rows):
@@ -185,8 +201,8 @@ def plot_trajectories(env_id: str, rows: list[dict[str, Any]], path: Path) -> No
     plt.close(fig)
 
 
-def main() -> None:
-    args = parse_args()
+def main(argv: list[str] | None = None) -> None:
+    args = build_parser().parse_args(argv)
     matplotlib.use("Agg")  # files only, no window
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -197,9 +213,12 @@ def main() -> None:
         # -- the policies: trained models, then the baselines -------------------------------
         run_dirs = [Path(m) for m in args.models]
         if args.runs:
-            candidates = [Path(args.runs) / f"{a}-{file_name(env_id)}" for a in ALGOS]
-            run_dirs += [d for d in candidates if (d / "config.json").is_file()]
-        configs = [read_config(d) for d in run_dirs]
+            found = [find_run(args.runs, algo, env_id) for algo in args.algos]
+            run_dirs += [d for d in found if d is not None]
+        try:
+            configs = [read_config(d) for d in run_dirs]
+        except FileNotFoundError as exc:
+            raise SystemExit(f"--models: {exc}") from None
         for d, c in zip(run_dirs, configs, strict=True):
             if c["env"] != env_id:
                 raise SystemExit(f"{d} was trained on {c['env']}, not {env_id}")
@@ -253,14 +272,14 @@ def write_report(path: Path, out: Path, sections: list[tuple[str, str, str]],
     lines = [
         "# Results",
         "",
-        "Sample agents of issue 5 on the three tasks: SAC, TD3 and PPO (stable-baselines3, "
+        "Sample agents on the three tasks: SAC, TD3 and PPO (stable-baselines3, "
         "trained here on the CPU) against the classical controller (LQR on Stabilize and "
         "Hold, energy swing-up handing over to LQR on Balance), zero torque and random "
         "actions.",
         "",
-        "Reproduce with `make results` (it trains the nine agents with the hyperparameters "
-        "of `agents/hyperparams.py` into `runs/`, seed 0, then runs "
-        f"`python scripts/evaluate.py --env {' '.join(args.env)} --runs {args.runs} "
+        "Reproduce with `make results` (it trains the nine agents with `roller-gym train`, "
+        "rl-zoo3 with the hyperparameter files of `agents/hyperparams/`, into `runs/`, "
+        f"seed 0, then runs `roller-gym evaluate --env {' '.join(args.env)} --runs {args.runs} "
         f"--out {args.out} --report {args.report}"
         + (f" --notes {args.notes}" if args.notes else "") + "`).",
         "",
@@ -268,9 +287,9 @@ def write_report(path: Path, out: Path, sections: list[tuple[str, str, str]],
         f"… {args.episodes - 1}, acting deterministically ({'best' if args.best else 'final'} "
         "model of each run). *Success*: `info[\"is_success\"]` at the episode's last step. "
         "*Final |error|*: the position error at the last step. *Mean |τ|*: over all steps. "
-        "*Wall time*: the training run's, on this machine "
-        f"({platform.machine()}, {os.cpu_count()} cores shared with other jobs; torch "
-        "on 1 thread).",
+        "*Wall time*: the training run's, from its episode monitors "
+        f"({platform.machine()}, {os.cpu_count()} CPU cores, possibly shared with other jobs; "
+        "torch on 1 thread).",
         "",
     ]
     for env_id, table, check in sections:

@@ -1,12 +1,12 @@
 """Render one episode of a policy to a GIF (or an MP4).
 
-    python scripts/replay.py runs/sac-RollerStabilize-v0   # -> runs/.../replay.gif
-    python scripts/replay.py runs/sac-RollerHold-v0 --seed 3 --out hold.gif
-    python scripts/replay.py classical --env roller_gym/RollerBalance-v0 --out balance.gif
+    roller-gym replay runs/sac/roller_gym-RollerStabilize-v0_1   # -> <that folder>/replay.gif
+    roller-gym replay runs/sac/roller_gym-RollerHold-v0_1 --seed 3 --out hold.gif
+    roller-gym replay classical --env roller_gym/RollerBalance-v0 --out balance.gif
 
-The policy is a run directory of ``scripts/train.py`` (its saved model, in the environment
-it was trained in) or a baseline name (``classical``, ``zero``, ``random``, with --env).
-The episode is ``env.reset(seed=--seed)``, as in ``scripts/evaluate.py``. GIFs need only
+The policy is an experiment folder of ``roller-gym train`` (its saved model, in the
+environment it was trained in) or a baseline name (``classical``, ``zero``, ``random``, with
+--env). The episode is ``env.reset(seed=--seed)``, as in ``roller-gym evaluate``. GIFs need only
 Pillow; an ``.mp4`` needs imageio's ffmpeg plugin (``pip install imageio[ffmpeg]``).
 """
 
@@ -22,10 +22,11 @@ from roller_gym import file_name
 from roller_gym.agents.policies import BASELINES, baseline, load_policy, read_config, rollout
 
 
-def parse_args() -> argparse.Namespace:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("policy", help=f"a run directory, or one of: {', '.join(BASELINES)}")
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], epilog=__doc__[
+        __doc__.index("\n\n") + 2:], formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("policy", help="an experiment folder of roller-gym train, or one of: "
+                                  f"{', '.join(BASELINES)}")
     p.add_argument("--env", default=None, choices=roller_gym.ENV_IDS,
                    help="the task (default: the run's; required for a baseline)")
     p.add_argument("--seed", type=int, default=0, help="the episode's reset seed (default 0)")
@@ -34,11 +35,11 @@ def parse_args() -> argparse.Namespace:
                         "<policy>-<env>.gif for a baseline)")
     p.add_argument("--best", action="store_true", help="use the run's best_model.zip")
     p.add_argument("--fps", type=int, default=20, help="frames per second (default 20 = 1/dt)")
-    return p.parse_args()
+    return p
 
 
-def main() -> None:
-    args = parse_args()
+def main(argv: list[str] | None = None) -> None:
+    args = build_parser().parse_args(argv)
     if args.policy in BASELINES:
         if args.env is None:
             raise SystemExit(f"--env is needed to replay the baseline {args.policy!r}")
@@ -46,7 +47,10 @@ def main() -> None:
         policy = baseline(args.policy, env)
         out = Path(args.out or f"{args.policy}-{file_name(args.env)}.gif")
     else:
-        config = read_config(args.policy)
+        try:
+            config = read_config(args.policy)
+        except FileNotFoundError as exc:
+            raise SystemExit(f"policy: {exc}; or give one of: {', '.join(BASELINES)}") from None
         if args.env is not None and args.env != config["env"]:
             raise SystemExit(f"{args.policy} was trained on {config['env']}, not {args.env}")
         env = gym.make(config["env"], render_mode="rgb_array", **config["env_kwargs"])

@@ -2,10 +2,10 @@
 
 Needs the ``rllib`` extra (its own environment, see README: RLlib pins its Gymnasium)::
 
-    python scripts/train_rllib.py --algo PPO --env roller_gym/RollerStabilize-v0 --iterations 20
-    python scripts/train_rllib.py --algo SAC --num-env-runners 1 --envs-per-runner 4
-    python scripts/train_rllib.py --env-kwarg dt=0.02 --env-kwarg 'randomize={"m": [0.8, 1.2]}'
-    python scripts/train_rllib.py --address HEAD_IP:6379 --num-env-runners 16   # a cluster
+    roller-gym train-rllib --algo PPO --env roller_gym/RollerStabilize-v0 --iterations 20
+    roller-gym train-rllib --algo SAC --num-env-runners 1 --envs-per-runner 4
+    roller-gym train-rllib --env-kwarg dt=0.02 --env-kwarg 'randomize={"m": [0.8, 1.2]}'
+    roller-gym train-rllib --address HEAD_IP:6379 --num-env-runners 16   # a cluster
 
 With no ``--address`` a local Ray is started on this machine (all its CPUs, or
 ``--num-cpus``); with one, the script joins that running cluster (``auto``: the cluster
@@ -33,17 +33,17 @@ from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
+from roller_gym import ENV_IDS
 
-ENV_IDS = ("roller_gym/RollerStabilize-v0", "roller_gym/RollerHold-v0",
-           "roller_gym/RollerBalance-v0")  # = roller_gym.ENV_IDS
 VECTORIZE_MODES = {"sync": "sync", "async": "async", "native": "vector_entry_point"}
 
 
-def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    p.add_argument("--algo", choices=["PPO", "SAC"], default="PPO")
-    p.add_argument("--env", choices=ENV_IDS, default="roller_gym/RollerStabilize-v0")
+    p.add_argument("--algo", choices=["PPO", "SAC"], default="PPO", help="RLlib's algorithm")
+    p.add_argument("--env", choices=ENV_IDS, default="roller_gym/RollerStabilize-v0",
+                   help="the task")
     p.add_argument("--env-kwarg", action="append", default=[], metavar="KEY=VALUE",
                    help="a keyword argument of gymnasium.make (VALUE is JSON if it parses, "
                         "else a string), e.g. dt=0.02, scene=paper; repeat for more")
@@ -60,8 +60,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
                         "(default 256)")
     p.add_argument("--minibatch-size", type=int, default=128, help="PPO's SGD minibatch")
     p.add_argument("--num-epochs", type=int, default=10, help="PPO's epochs over each batch")
-    p.add_argument("--lr", type=float, default=3e-4)
-    p.add_argument("--gamma", type=float, default=0.99)
+    p.add_argument("--lr", type=float, default=3e-4, help="the learning rate")
+    p.add_argument("--gamma", type=float, default=0.99, help="the discount factor")
     p.add_argument("--hidden", type=int, nargs="+", default=[64, 64],
                    help="hidden layer sizes of the networks")
     p.add_argument("--address", default=None,
@@ -74,8 +74,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--torch-threads", type=int, default=1,
                    help="torch threads of the learner (in this process); small networks gain "
                         "nothing from more, and on a busy machine more threads are much slower")
-    p.add_argument("--seed", type=int, default=0)
-    return p.parse_args(argv)
+    p.add_argument("--seed", type=int, default=0, help="the seed of training")
+    return p
+
+
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    return build_parser().parse_args(argv)
 
 
 def parse_env_kwargs(items: list[str]) -> dict[str, Any]:
@@ -197,7 +201,7 @@ def main(argv: list[str] | None = None) -> None:
         import torch
     except ImportError as e:
         raise SystemExit(f"{e}: the rllib extra is not installed; it needs its own "
-                         "environment (see README): pip install -e '.[rllib]'") from None
+                         'environment (see README): pip install "roller-gym[rllib]"') from None
 
     torch.set_num_threads(args.torch_threads)  # the env runners get 1 each from Ray
     # Start (no --address) or join (--address) Ray. "local" forces a new local instance

@@ -1,10 +1,9 @@
-"""The sample agents: observation decoding, the classical controllers, short training runs,
-saving and loading, and the scripts end to end (issue 5)."""
+"""The sample agents: observation decoding, the classical controllers, short training runs
+(rl-zoo3, through ``roller-gym train``), saving and loading. The commands end to end are in
+test_cli.py; the hyperparameter files in test_zoo.py."""
 
 from __future__ import annotations
 
-import importlib.util
-import json
 import subprocess
 import sys
 from pathlib import Path
@@ -12,22 +11,14 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import pytest
-import roller_gym
 import torch
 from roller_gym.agents import LQR, EnergySwingUp, baseline, decode_observation, load_policy, rollout
-from roller_gym.agents.hyperparams import ALGOS, CLASSICAL, HYPERPARAMS, TASKS, Linear
-from roller_gym.physics import holding_torque
+from roller_gym.agents.hyperparams import ALGOS, CLASSICAL, hyperparams
+from roller_gym.agents.policies import read_config
+from roller_gym.physics import Scene, holding_torque
+from zoo import HAVE_RL_ZOO3, import_rl_zoo3
 
-ROOT = Path(__file__).resolve().parents[1]
 torch.set_num_threads(1)
-
-
-def _load_script(name: str):
-    path = ROOT / "scripts" / f"{name}.py"
-    spec = importlib.util.spec_from_file_location(f"_script_{name}", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def _wrapped_difference(a, b):
@@ -67,7 +58,7 @@ def test_decode_recovers_the_state_the_env_reports(env_id, scene):
 def test_decode_picks_the_turn_beyond_one_revolution_of_phi():
     """With R = 10 r, ψ = φ/9: φ = 4 rad and φ = 4 − 2π share cos φ and sin φ, and only
     (cos ψ, sin ψ) tells them apart; φ = 7.5 and −8 rad lie beyond one turn of φ."""
-    env = gym.make("roller_gym/RollerStabilize-v0", scene=roller_gym.Scene(R=1.0))
+    env = gym.make("roller_gym/RollerStabilize-v0", scene=Scene(R=1.0))
     for phi in (4.0, 4.0 - 2 * np.pi, -3.9, 7.5, -8.0):
         obs, _ = env.reset(options={"state": (phi, -2.0)})
         s = decode_observation(obs, env.unwrapped.scene, env.unwrapped.task)
@@ -160,34 +151,29 @@ def test_baselines_by_name():
         baseline("pid", env)
 
 
-def test_linear_schedule_decays_to_zero_and_never_below():
-    schedule = Linear(1e-3)
-    assert schedule(1.0) == 1e-3 and schedule(0.5) == pytest.approx(5e-4)
-    # PPO's last rollout overshoots the requested steps: progress goes slightly negative.
-    assert schedule(0.0) == 0.0 == schedule(-0.01)
-
-
-def test_hyperparameters_cover_every_algorithm_and_task():
-    assert set(HYPERPARAMS) == {(a, t) for a in ALGOS for t in TASKS}
-    assert set(TASKS) == set(roller_gym.ENV_IDS)
-    for params in HYPERPARAMS.values():
-        assert params["total_steps"] > 0 and params["n_envs"] >= 1
-
-
-# -- training, saving, loading -------------------------------------------------------------
+# -- training (rl-zoo3 through roller-gym train), saving, loading ---------------------------
 _RUNS: dict[str, tuple] = {}
 
 
+def _train(argv: list[str]) -> Path:
+    if not HAVE_RL_ZOO3:
+        pytest.skip("training runs rl-zoo3, not installed (the zoo extra; CI installs it)")
+    import_rl_zoo3("rl_zoo3.train")  # before roller-gym train imports it: see tests/zoo.py
+    from roller_gym.scripts import train
+
+    return train.main([*argv, "--verbose", "0"])
+
+
 def _short_run(algo: str, tmp_path_factory) -> tuple:
-    """(algo, run directory, model) of a short training run (2,000 steps), made once."""
+    """(algo, experiment folder, log folder) of a short training run (2,000 steps), made once."""
     if algo not in _RUNS:
-        run_dir = tmp_path_factory.mktemp(algo) / "run"
-        run_dir, model = _load_script("train").main([
+        log_folder = tmp_path_factory.mktemp(algo) / "runs"
+        run_dir = _train([
             "--algo", algo, "--env", "roller_gym/RollerStabilize-v0", "--steps", "2000",
-            "--run-dir", str(run_dir), "--eval-freq", "1000", "--eval-episodes", "2",
-            "--checkpoints", "1", "--no-progress-bar",
+            "--log-folder", str(log_folder), "--eval-freq", "1000", "--eval-episodes", "2",
+            "--checkpoints", "1",
         ])
-        _RUNS[algo] = (algo, run_dir, model)
+        _RUNS[algo] = (algo, run_dir, log_folder)
     return _RUNS[algo]
 
 
@@ -196,72 +182,85 @@ def short_run(request, tmp_path_factory):
     return _short_run(request.param, tmp_path_factory)
 
 
-def test_short_training_run_completes_and_saves(short_run):
-    algo, run_dir, _ = short_run
-    config = json.loads((run_dir / "config.json").read_text())
-    assert config["algo"] == algo and config["env"] == "roller_gym/RollerStabilize-v0"
-    assert config["trained_steps"] >= 2000 == config["total_steps"]
-    assert config["wall_time_s"] > 0
-    for name in ("model.zip", "best_model.zip", "evaluations.npz"):
+def test_short_training_run_completes_and_saves_with_our_hyperparameters(short_run):
+    algo, run_dir, log_folder = short_run
+    env_id = "roller_gym/RollerStabilize-v0"
+    # rl-zoo3's layout: <log folder>/<algo>/<env name>_1, no colon, no nested folder per task
+    assert run_dir.parent == log_folder / algo and run_dir.name == "roller_gym-RollerStabilize-v0_1"
+    config = read_config(run_dir)
+    assert config["algo"] == algo and config["env"] == env_id and config["seed"] == 0
+    assert config["trained_steps"] >= 2000 and config["wall_time_s"] > 0
+    # The configuration rl-zoo3 saved is the hyperparameter file's entry, as written.
+    assert dict(config["hyperparams"]) == hyperparams(algo, env_id)
+    for name in ("best_model.zip", "evaluations.npz", Path(config["model"]).name):
         assert (run_dir / name).is_file(), name
-    assert list((run_dir / "checkpoints").glob("model_*_steps.zip"))
-    assert list((run_dir / "tb").iterdir())
+    assert list(run_dir.glob("rl_model_*_steps.zip"))
+    assert list((log_folder / "tensorboard").rglob("events.out.tfevents.*"))
     assert len(np.load(run_dir / "evaluations.npz")["timesteps"]) >= 2
 
 
-def test_saved_model_loads_and_acts_identically(short_run):
-    _, run_dir, model = short_run
+def test_saved_model_loads_as_rl_zoo3_loads_it(short_run):
+    """load_policy against rl-zoo3's own way (its enjoy script's): the latest experiment's
+    final model, found by get_model_path and loaded by the algorithm's class."""
+    from huggingface_sb3 import EnvironmentName
+
+    algo, run_dir, log_folder = short_run
+    zoo_utils = import_rl_zoo3("rl_zoo3.utils")
+    ZOO_ALGOS, get_model_path = zoo_utils.ALGOS, zoo_utils.get_model_path
+    env_id = "roller_gym/RollerStabilize-v0"
+    _, model_path, log_path = get_model_path(0, str(log_folder), algo, EnvironmentName(env_id))
+    assert Path(log_path) == run_dir
+    reference = ZOO_ALGOS[algo].load(model_path, device="cpu")
     loaded = load_policy(run_dir)
-    env = gym.make("roller_gym/RollerStabilize-v0")
+    assert loaded.model.num_timesteps == reference.num_timesteps >= 2000
+    env = gym.make(env_id)
     observations = np.stack([env.reset(seed=s)[0] for s in range(50)])
-    expected, _ = model.predict(observations, deterministic=True)
-    actual, _ = loaded.predict(observations, deterministic=True)
-    np.testing.assert_array_equal(actual, expected)
-    assert rollout(env, loaded, 7).total_return == rollout(env, model, 7).total_return
+    expected, _ = reference.predict(observations, deterministic=True)
+    np.testing.assert_array_equal(loaded.predict(observations, deterministic=True)[0], expected)
+    assert rollout(env, loaded, 7).total_return == rollout(env, reference, 7).total_return
+    # best=True takes the best periodic evaluation's model instead.
+    best = ZOO_ALGOS[algo].load(run_dir / "best_model.zip", device="cpu")
+    np.testing.assert_array_equal(load_policy(run_dir, best=True).predict(observations)[0],
+                                  best.predict(observations, deterministic=True)[0])
 
 
-def test_normalized_run_saves_its_statistics_and_reloads_them(tmp_path, monkeypatch):
-    key = ("ppo", "roller_gym/RollerStabilize-v0")
-    monkeypatch.setitem(HYPERPARAMS, key, {
-        **HYPERPARAMS[key], "n_envs": 2, "n_steps": 512,
-        "normalize": {"norm_obs": True, "norm_reward": True},
-    })
-    run_dir, model = _load_script("train").main([
-        "--algo", "ppo", "--steps", "1024", "--run-dir", str(tmp_path / "run"),
-        "--eval-episodes", "1", "--checkpoints", "0", "--no-progress-bar",
+def test_loading_a_run_leaves_gymnasium_unpatched(short_run):
+    """Importing rl_zoo3 replaces Gymnasium's TimeLimit (see tests/zoo.py); reading a run
+    must not do that to the caller's process."""
+    _, run_dir, _ = short_run
+    code = ("import sys, gymnasium as gym\n"
+            "from roller_gym.agents import load_policy, rollout\n"
+            f"policy = load_policy({str(run_dir)!r}, best=True)\n"
+            "env = gym.make('roller_gym/RollerStabilize-v0')\n"
+            "rollout(env, policy, 0)\n"
+            "print('rl_zoo3' in sys.modules, type(env).__module__)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, timeout=300).stdout.split()
+    assert out == ["False", "gymnasium.wrappers.common"]
+
+
+def test_normalized_ppo_run_saves_its_statistics_and_reloads_them(tmp_path):
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+
+    run_dir = _train([
+        "--algo", "ppo", "--steps", "1000", "--log-folder", str(tmp_path),
+        "--eval-episodes", "1", "--checkpoints", "0",
+        "--hyperparams", "n_envs:2", "n_steps:512", "normalize:dict(norm_obs=True)",
     ])
-    assert (run_dir / "vecnormalize.pkl").is_file()
-    loaded = load_policy(run_dir)
+    config = read_config(run_dir)
+    stats = Path(config["params_dir"]) / "vecnormalize.pkl"
+    assert stats.is_file()
+    # PPO trains whole rollouts (2 x 512): 1,000 steps become 1,024, and the linear learning
+    # rate schedule ends at exactly 0, not below.
+    import_rl_zoo3("rl_zoo3.utils")  # unpickling rl-zoo3's schedule imports it: tests/zoo.py
+    model = PPO.load(config["model"], device="cpu")
+    assert model.num_timesteps == 1024
+    assert model._current_progress_remaining == 0.0 and model.lr_schedule(0.0) == 0.0
     env = gym.make("roller_gym/RollerStabilize-v0")
+    normalizer = VecNormalize.load(str(stats), DummyVecEnv([lambda: env]))
     observations = np.stack([env.reset(seed=s)[0] for s in range(20)])
-    normalized = model.get_env().normalize_obs(observations)
+    normalized = normalizer.normalize_obs(observations)
     assert not np.allclose(normalized, observations)
     expected, _ = model.predict(normalized, deterministic=True)
-    np.testing.assert_array_equal(loaded.predict(observations)[0], expected)
-
-
-# -- the scripts end to end ----------------------------------------------------------------
-def test_evaluate_and_replay_scripts(tmp_path, tmp_path_factory):
-    _, run_dir, _ = _short_run("sac", tmp_path_factory)
-    out = tmp_path / "results"
-    subprocess.run(
-        [sys.executable, str(ROOT / "scripts" / "evaluate.py"),
-         "--env", "roller_gym/RollerStabilize-v0",
-         "--models", str(run_dir), "--episodes", "3", "--out", str(out),
-         "--report", str(tmp_path / "RESULTS.md")],
-        check=True, cwd=tmp_path, capture_output=True,
-    )
-    table = (out / "RollerStabilize-v0.md").read_text()
-    for label in ("SAC", "LQR", "zero torque", "random"):
-        assert f"| {label} |" in table
-    numbers = json.loads((out / "RollerStabilize-v0.json").read_text())
-    lqr = next(p for p in numbers["policies"] if p["name"] == "classical")
-    assert lqr["success_rate"] == 1.0 and len(lqr["returns"]) == 3
-    for plot in ("learning", "trajectories"):
-        assert (out / f"RollerStabilize-v0-{plot}.png").stat().st_size > 10_000
-    assert "Target:" in (tmp_path / "RESULTS.md").read_text()
-
-    gif = tmp_path / "replay.gif"
-    subprocess.run([sys.executable, str(ROOT / "scripts" / "replay.py"), str(run_dir),
-                    "--out", str(gif)], check=True, cwd=tmp_path, capture_output=True)
-    assert gif.read_bytes()[:6] == b"GIF89a"
+    np.testing.assert_array_equal(load_policy(run_dir).predict(observations)[0], expected)

@@ -1,0 +1,89 @@
+"""The ``roller-gym`` command: one subcommand per program of ``roller_gym.scripts``.
+
+    roller-gym train [options]        train SAC, TD3 or PPO with rl-zoo3
+    roller-gym evaluate [options]     trained agents against the classical baselines
+    roller-gym replay RUN [options]   one episode to a GIF
+    roller-gym benchmark [options]    speed against accuracy, peers in the same run
+    roller-gym train-rllib [options]  PPO or SAC on Ray RLlib
+    roller-gym COMMAND --help         the options of a command
+
+Each subcommand runs ``roller_gym.scripts.<program>.main`` with the remaining arguments, so
+``roller-gym train --algo td3`` and ``python -m roller_gym.scripts.train --algo td3`` are
+the same. A program is imported only when its command runs: a command whose extra is not
+installed says which one to install.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from collections.abc import Sequence
+from typing import NamedTuple
+
+
+class Command(NamedTuple):
+    """A subcommand: its module in ``roller_gym.scripts``, what it does, and the extra that
+    installs what it needs."""
+
+    module: str
+    summary: str
+    extra: str
+
+
+COMMANDS: dict[str, Command] = {
+    "train": Command("train", "train SAC, TD3 or PPO on a task with rl-zoo3", "zoo"),
+    "evaluate": Command("evaluate", "evaluate trained agents and the classical baselines; "
+                        "tables and plots", "zoo,plots"),
+    "replay": Command("replay", "render one episode of a policy to a GIF or MP4",
+                      "zoo,render"),
+    "benchmark": Command("benchmark", "speed against accuracy: integrators, MuJoCo, "
+                         "throughput", "bench,plots"),
+    "train-rllib": Command("train_rllib", "train PPO or SAC on Ray RLlib (its own "
+                           "environment)", "rllib"),
+}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The top-level parser: the command's name only (its options are the program's)."""
+    width = max(map(len, COMMANDS))
+    listing = "\n".join(f"  {name:{width}s}  {c.summary}" for name, c in COMMANDS.items())
+    p = argparse.ArgumentParser(
+        prog="roller-gym",
+        description="roller-gym's programs: training, evaluation, replay, benchmark.",
+        epilog=f"commands:\n{listing}\n\n`roller-gym COMMAND --help` lists a command's options.",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("command", choices=list(COMMANDS), metavar="COMMAND",
+                   help=f"one of: {', '.join(COMMANDS)}")
+    return p
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    """Run ``roller-gym COMMAND [options]`` (``argv``: the arguments after ``roller-gym``)."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    parser = build_parser()
+    if not argv or argv[0].startswith("-"):  # no command: --help, or an error naming them
+        parser.parse_args(argv[:1])
+    name = parser.parse_args(argv[:1]).command
+    command = COMMANDS[name]
+    try:
+        program = importlib.import_module(f"roller_gym.scripts.{command.module}")
+    except ImportError as exc:  # a package of an extra that is not installed
+        if exc.name is not None and exc.name.split(".")[0] == "roller_gym":
+            raise
+        extras = f"roller-gym[{command.extra}]"
+        raise SystemExit(f"roller-gym {name} needs {exc.name!r}, which is not installed: "
+                         f'pip install "{extras}"') from None
+    # The program's usage lines read "roller-gym COMMAND ...": argparse names a program
+    # after sys.argv[0].
+    saved = sys.argv[0]
+    sys.argv[0] = f"roller-gym {name}"
+    try:
+        program.main(argv[1:])
+    finally:
+        sys.argv[0] = saved
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,144 @@
+"""The ``roller-gym`` console command: every subcommand's --help explains every option of its
+program's parser, bad commands fail clearly, and train -> evaluate -> replay work end to end
+through the installed entry point."""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from roller_gym.scripts.cli import COMMANDS
+from zoo import NEEDS_RL_ZOO3
+
+#: The console script pip installs next to the interpreter (pip install -e . / a wheel).
+ENTRY_POINT = Path(sys.executable).with_name("roller-gym")
+
+
+def roller_gym(*args: str, cwd: Path | None = None, check: bool = True,
+               timeout: float = 900) -> subprocess.CompletedProcess:
+    assert ENTRY_POINT.is_file(), (
+        f"{ENTRY_POINT} is missing: install the package (pip install -e .) so that "
+        "[project.scripts] creates it")
+    return subprocess.run([str(ENTRY_POINT), *args], capture_output=True, text=True,
+                          check=check, cwd=cwd, timeout=timeout)
+
+
+class _ParserCapturedError(Exception):
+    def __init__(self, parser: argparse.ArgumentParser) -> None:
+        self.parser = parser
+
+
+def program_parser(command: str, monkeypatch) -> argparse.ArgumentParser:
+    """The parser a command's program builds: run its main() until it parses its arguments."""
+    try:
+        program = importlib.import_module(f"roller_gym.scripts.{COMMANDS[command].module}")
+    except ImportError as exc:
+        pytest.skip(f"roller-gym {command} needs {exc.name}, not installed here")
+
+    def capture(self, *args, **kwargs):
+        raise _ParserCapturedError(self)
+
+    monkeypatch.setattr(argparse.ArgumentParser, "parse_args", capture)
+    with pytest.raises(_ParserCapturedError) as caught:
+        program.main([])
+    return caught.value.parser
+
+
+@pytest.mark.parametrize("command", list(COMMANDS))
+def test_help_lists_and_explains_every_option_of_the_programs_parser(command, monkeypatch):
+    parser = program_parser(command, monkeypatch)
+    monkeypatch.undo()
+    out = roller_gym(command, "--help").stdout
+    assert out.startswith(f"usage: roller-gym {command} ")
+    actions = [a for a in parser._actions if not isinstance(a, argparse._HelpAction)]
+    assert actions
+    for action in actions:
+        names = action.option_strings or [action.metavar or action.dest]
+        for name in names:
+            assert name in out, f"roller-gym {command} --help does not show {name}"
+        assert action.help and action.help.strip(), f"{command} {names[0]} has no help text"
+        # The explanation is printed (argparse wraps it; compare its first words).
+        assert " ".join(action.help.split()[:3]).split("%")[0].strip() in " ".join(out.split())
+
+
+def test_top_level_help_names_every_command():
+    out = roller_gym("--help").stdout
+    for name, command in COMMANDS.items():
+        assert name in out and command.summary.split(";")[0] in " ".join(out.split())
+
+
+@pytest.mark.parametrize("argv", [["frobnicate"], ["trian", "--steps", "3"]])
+def test_an_unknown_command_fails_naming_it_and_the_allowed_ones(argv):
+    result = roller_gym(*argv, check=False)
+    assert result.returncode == 2 and result.stdout == ""
+    assert f"invalid choice: '{argv[0]}'" in result.stderr
+    for name in COMMANDS:
+        assert f"'{name}'" in result.stderr
+
+
+def test_no_command_fails_asking_for_one():
+    result = roller_gym(check=False)
+    assert result.returncode == 2 and "required: COMMAND" in result.stderr
+
+
+@pytest.mark.parametrize(("command", "missing", "extra"), [
+    ("train", "rl_zoo3", "roller-gym[zoo]"),
+    ("evaluate", "matplotlib", "roller-gym[zoo,plots]"),
+])
+def test_a_command_without_its_extra_says_what_to_install(command, missing, extra):
+    code = (f"import sys; sys.modules[{missing!r}] = None\n"
+            "from roller_gym.scripts.cli import main\n"
+            f"main([{command!r}])")
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                            timeout=300)
+    assert result.returncode == 1
+    assert f'pip install "{extra}"' in result.stderr
+    assert "Traceback" not in result.stderr
+
+
+@NEEDS_RL_ZOO3
+def test_train_show_command_is_rl_zoo3_with_the_shipped_file():
+    from roller_gym.agents.hyperparams import config_file
+
+    out = roller_gym("train", "--algo", "ppo", "--steps", "3000", "--show-command").stdout
+    words = out.split()
+    assert words[1:3] == ["-m", "rl_zoo3.train"]
+    assert words[words.index("-conf") + 1] == str(config_file("ppo"))
+    assert words[words.index("--gym-packages") + 1] == "roller_gym"
+    # PPO's 3,000 steps become whole rollouts of 8 x 256: 4,096.
+    assert words[words.index("--n-timesteps") + 1] == "4096"
+
+
+@NEEDS_RL_ZOO3
+def test_train_evaluate_replay_end_to_end(tmp_path):
+    env_id = "roller_gym/RollerStabilize-v0"
+    roller_gym("train", "--env", env_id, "--steps", "300", "--eval-freq", "150",
+               "--eval-episodes", "1", "--verbose", "0", cwd=tmp_path)
+    # rl-zoo3's experiment folder: no colon, no folder per namespace.
+    (run_dir,) = (tmp_path / "runs" / "sac").iterdir()
+    assert run_dir.name == "roller_gym-RollerStabilize-v0_1"
+
+    roller_gym("evaluate", "--env", env_id, "--runs", "runs", "--episodes", "3",
+               "--out", "results", "--report", "RESULTS.md", cwd=tmp_path)
+    out = tmp_path / "results"
+    table = (out / "RollerStabilize-v0.md").read_text()
+    for label in ("SAC", "LQR", "zero torque", "random"):
+        assert f"| {label} |" in table
+    assert "| SAC | 300 |" in table  # the steps the run trained, read from its model
+    numbers = json.loads((out / "RollerStabilize-v0.json").read_text())
+    assert [p["name"] for p in numbers["policies"]] == ["sac", "classical", "zero", "random"]
+    lqr = numbers["policies"][1]
+    assert lqr["success_rate"] == 1.0 and len(lqr["returns"]) == 3
+    for plot in ("learning", "trajectories"):
+        assert (out / f"RollerStabilize-v0-{plot}.png").stat().st_size > 10_000
+    assert "Target:" in (tmp_path / "RESULTS.md").read_text()
+
+    roller_gym("replay", str(run_dir), "--out", "replay.gif", cwd=tmp_path)
+    assert (tmp_path / "replay.gif").read_bytes()[:6] == b"GIF89a"
+    bad = roller_gym("replay", "no-such-run", check=False, cwd=tmp_path)
+    assert bad.returncode == 1 and "no-such-run" in bad.stderr and "classical" in bad.stderr
