@@ -12,13 +12,13 @@ range(--episodes), so all face the same start states and targets. Per task it pr
 writes (into --out):
 
 * ``evaluation.md``: the tables of all tasks (mean ± std return, success rate, final
-  |position error|, mean |τ|, training steps and wall time) and the targets of issue 5;
+  |position error|, mean |τ|, training steps and wall time) and whether SAC meets its target;
   ``<env>.md`` and ``<env>.json``: one task's table and its numbers;
 * ``<env>-learning.png``: the learning curves (periodic evaluations during training)
   against the baselines' mean returns;
 * ``<env>-trajectories.png``: episode 0 of every policy, side by side.
 
-``--report`` assembles the tasks' tables, the targets of issue 5 and the plots into one
+``--report`` assembles the tasks' tables, the targets and the plots into one
 Markdown file (``docs/RESULTS.md``).
 """
 
@@ -43,7 +43,7 @@ from roller_gym.agents.policies import BASELINES, baseline, load_policy, read_co
 
 #: How the baselines are named in the tables.
 BASELINE_LABELS = {"zero": "zero torque", "random": "random"}
-#: Target of issue 5 on Stabilize and Hold: SAC's mean return within 5% of |LQR's| below it.
+#: Target on Stabilize and Hold: SAC's mean return within 5% of |LQR's| below it.
 RETURN_TOLERANCE = 0.05
 #: Target on Balance: SAC succeeds in at least this share of the episodes.
 BALANCE_SUCCESS = 0.9
@@ -67,7 +67,13 @@ def parse_args() -> argparse.Namespace:
     p.add_argument("--out", default="results", help="output directory (default results)")
     p.add_argument("--report", default=None, help="also write this Markdown report")
     p.add_argument("--notes", default=None, help="Markdown appended to the report as its notes")
-    return p.parse_args()
+    args = p.parse_args()
+    if args.notes is not None and not Path(args.notes).is_file():
+        p.error(f"--notes {args.notes!r}: no such file; it must be an existing Markdown file "
+                "(or leave --notes out for a report without notes)")
+    if args.notes is not None and args.report is None:
+        p.error(f"--notes {args.notes!r} needs --report: the notes are appended to the report")
+    return args
 
 
 def evaluate(env: gym.Env, policy: Any, episodes: int) -> dict[str, Any]:
@@ -119,7 +125,7 @@ def markdown_table(rows: list[dict[str, Any]]) -> str:
 
 
 def target_check(env_id: str, rows: list[dict[str, Any]]) -> tuple[str, bool | None]:
-    """The sentence on issue 5's target for this task, and whether it is met (None: no SAC)."""
+    """The sentence on SAC's target for this task, and whether it is met (None: no SAC)."""
     by_name = {r["name"]: r for r in rows}
     sac, classical = by_name.get("sac"), by_name.get("classical")
     if sac is None:
@@ -253,8 +259,8 @@ def write_report(path: Path, out: Path, sections: list[tuple[str, str, str]],
     lines = [
         "# Results",
         "",
-        "Sample agents of issue 5 on the three tasks: SAC, TD3 and PPO (stable-baselines3, "
-        "trained here on the CPU) against the classical controller (LQR on Stabilize and "
+        "Sample agents on the three tasks: SAC, TD3 and PPO (stable-baselines3, "
+        "trained on a CPU) against the classical controller (LQR on Stabilize and "
         "Hold, energy swing-up handing over to LQR on Balance), zero torque and random "
         "actions.",
         "",
@@ -268,16 +274,15 @@ def write_report(path: Path, out: Path, sections: list[tuple[str, str, str]],
         f"… {args.episodes - 1}, acting deterministically ({'best' if args.best else 'final'} "
         "model of each run). *Success*: `info[\"is_success\"]` at the episode's last step. "
         "*Final |error|*: the position error at the last step. *Mean |τ|*: over all steps. "
-        "*Wall time*: the training run's, on this machine "
-        f"({platform.machine()}, {os.cpu_count()} cores shared with other jobs; torch "
-        "on 1 thread).",
+        "*Wall time*: the training run's "
+        f"({platform.machine()}, {os.cpu_count()} cores; torch on 1 thread).",
         "",
     ]
     for env_id, table, check in sections:
         lines += [f"## {env_id}", "", table, "", check, "",
                   f"![learning curves]({rel / f'{file_name(env_id)}-learning.png'})", "",
                   f"![trajectories]({rel / f'{file_name(env_id)}-trajectories.png'})", ""]
-    if args.notes and Path(args.notes).is_file():
+    if args.notes:
         lines += [Path(args.notes).read_text().rstrip(), ""]
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("\n".join(lines))
