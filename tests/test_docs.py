@@ -10,8 +10,13 @@ its headings. Links with a scheme (``https:``, ``mailto:``) are not checked.
 from __future__ import annotations
 
 import re
+import shutil
 import subprocess
+import sys
+import tarfile
 import unicodedata
+from email.message import Message
+from email.parser import Parser
 from pathlib import Path, PurePosixPath
 
 import pytest
@@ -131,3 +136,87 @@ def test_the_checker_finds_each_kind_of_broken_link() -> None:
     bad = [p.split(":")[0] for p in problems]
     assert bad == ["../shared/B.md", "docs/results/gone.png", "docs/B.md#nowhere", "#nowhere",
                    "/docs/B.md", "docs/none.png"]
+
+
+# -- the long description a package index shows (setup.py) ------------------------------------
+
+BUILD_SDIST = "from setuptools import build_meta as b; print(b.build_sdist({out!r}))"
+WHEEL_METADATA = (
+    "from setuptools import build_meta as b; print(b.prepare_metadata_for_build_wheel({out!r}))"
+)
+
+
+def _copy_tracked_tree(dest: Path) -> Path:
+    """The repository's tracked files, copied to ``dest`` (builds run on the copy)."""
+    for name in tracked_files():
+        source = ROOT / name
+        if source.is_file():
+            (dest / name).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(source, dest / name)
+    return dest
+
+
+def _run(code: str, cwd: Path) -> str:
+    out = subprocess.run([sys.executable, "-c", code], cwd=cwd, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr[-3000:]
+    return out.stdout.strip().splitlines()[-1]
+
+
+def _build(tree: Path) -> tuple[Message, Message, set[str]]:
+    """The sdist's PKG-INFO, the wheel's METADATA built from the unpacked sdist, and the
+    sdist's files (paths inside the project folder)."""
+    sdist = tree / "dist" / _run(BUILD_SDIST.format(out="dist"), tree)
+    with tarfile.open(sdist) as tar:
+        tar.extractall(tree / "unpacked", filter="data")
+        names = {"/".join(n.split("/")[1:]) for n in tar.getnames()}
+    project = next((tree / "unpacked").iterdir())
+    pkg_info = Parser().parsestr((project / "PKG-INFO").read_text(encoding="utf-8"))
+    (project / "meta").mkdir()
+    dist_info = _run(WHEEL_METADATA.format(out=str(project / "meta")), project)
+    metadata = Parser().parsestr((project / "meta" / dist_info / "METADATA").read_text(
+        encoding="utf-8"))
+    return pkg_info, metadata, names
+
+
+def _relative(targets: list[str]) -> list[str]:
+    return [t for t in targets if t and not _SCHEME.match(t) and not t.startswith("#")]
+
+
+def test_long_description_has_no_relative_links_and_names_files_the_sdist_ships(tmp_path):
+    """No base URL set (none exists yet): README's links become the names of files that
+    the source distribution contains, and the wheel carries the same description."""
+    pkg_info, metadata, names = _build(_copy_tracked_tree(tmp_path))
+    description = pkg_info.get_payload()
+    assert pkg_info["Description-Content-Type"] == "text/markdown"
+    assert metadata.get_payload() == description
+    readme_links = _relative(links((ROOT / "README.md").read_text()))
+    assert readme_links, "README.md has no relative links: the rewrite is untested"
+    assert _relative(links(description)) == []
+    for target in readme_links:
+        path = target.split("#")[0]
+        assert f"`{path}`" in description, f"{path} is not named in the long description"
+        assert path in names, f"{path} is named in the long description but not in the sdist"
+    # Nothing else changed: the text outside the links is README's.
+    assert description.startswith("# roller-gym\n")
+    assert "## Set-up: two commands" in description
+
+
+def test_long_description_links_are_absolute_under_the_configured_base_url(tmp_path):
+    """With [tool.roller_gym.readme] base-url set, each relative link is that URL + its path
+    (images under image-base-url), and code is left alone."""
+    tree = _copy_tracked_tree(tmp_path)
+    pyproject = tree / "pyproject.toml"
+    base, raw = "https://example.org/org/roller-gym/blob/v0/", "https://example.org/raw/v0/"
+    text = pyproject.read_text()
+    assert 'base-url = ""' in text and 'image-base-url = ""' in text
+    pyproject.write_text(text.replace('image-base-url = ""', f'image-base-url = "{raw}"')
+                         .replace('\nbase-url = ""', f'\nbase-url = "{base}"'))
+    readme = tree / "README.md"
+    readme.write_text(readme.read_text() + "\n![a plot](docs/benchmarks/energy.png)\n"
+                      "`[not a link](docs/PHYSICS.md)`\n")
+    description = _build(tree)[0].get_payload()
+    expected = [base + t for t in _relative(links(readme.read_text()))[:-1]]
+    expected.append(raw + "docs/benchmarks/energy.png")
+    assert _relative(links(description)) == []
+    assert [t for t in links(description) if t.startswith("https://example.org/")] == expected
+    assert "`[not a link](docs/PHYSICS.md)`" in description
