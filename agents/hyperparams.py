@@ -14,7 +14,7 @@
   included).
 
 The steps were chosen to fit the whole results run (9 trainings) in about an hour on a
-shared 2-core CPU; see ``docs/RESULTS.md`` for what they achieve.
+2-core x86-64 CPU under load from other processes; see ``docs/RESULTS.md`` for what they achieve.
 
 ``CLASSICAL[env_id]`` holds the classical controllers' settings (see
 :mod:`roller_gym.agents.classical`): Bryson's-rule scales of the LQR, the swing-up's energy gain and
@@ -47,7 +47,7 @@ class Linear:
         return self.start * max(progress_remaining, 0.0)
 
 
-# Small networks: the state is two numbers (three with a target), and on this CPU the
+# Small networks: the state is two numbers (three with a target), and on a CPU the
 # gradient step, not the physics, is what a training run spends its time on.
 _SMALL = {"net_arch": [64, 64]}
 

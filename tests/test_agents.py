@@ -1,5 +1,5 @@
 """The sample agents: observation decoding, the classical controllers, short training runs,
-saving and loading, and the scripts end to end (issue 5)."""
+saving and loading, and the scripts end to end."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The single environments (issue 4): registration, spaces, reset and step, info, errors,
+"""The single environments: registration, spaces, reset and step, info, errors,
 construction arguments, the checkers of Gymnasium and Stable-Baselines3, pickling and
 SubprocVecEnv.
 

@@ -1,4 +1,4 @@
-"""Rendering (issue 4): rgb_array frames, render_mode=None, headless "human" mode, and
+"""Rendering: rgb_array frames, render_mode=None, headless "human" mode, and
 pygame imported only when rendering.
 
 The pictures are checked against the geometry of ``docs/PHYSICS.md``: the contact
