@@ -1,7 +1,7 @@
 """roller_gym/RollerStabilize-v0: bring the roller to rest at the bottom.
 
 A roller rolls without slipping inside a fixed cylinder (the scene of
-``../shared/PHYSICS.md``; by default the preset ``"paper"``). A torque drives it. It
+``docs/PHYSICS.md``; by default the preset ``"paper"``). A torque drives it. It
 starts somewhere around the bottom, moving; the agent must bring it to rest at φ = 0,
 where its mass center hangs straight below the axle at the lowest point.
 

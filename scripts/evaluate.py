@@ -202,7 +202,13 @@ def plot_trajectories(env_id: str, rows: list[dict[str, Any]], path: Path) -> No
 
 
 def main(argv: list[str] | None = None) -> None:
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.notes is not None and not Path(args.notes).is_file():
+        parser.error(f"--notes {args.notes!r}: no such file; it must be an existing Markdown "
+                     "file (or leave --notes out for a report without notes)")
+    if args.notes is not None and args.report is None:
+        parser.error(f"--notes {args.notes!r} needs --report: the notes are appended to it")
     matplotlib.use("Agg")  # files only, no window
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -272,12 +278,11 @@ def write_report(path: Path, out: Path, sections: list[tuple[str, str, str]],
     lines = [
         "# Results",
         "",
-        "Sample agents on the three tasks: SAC, TD3 and PPO (stable-baselines3, "
-        "trained here on the CPU) against the classical controller (LQR on Stabilize and "
-        "Hold, energy swing-up handing over to LQR on Balance), zero torque and random "
-        "actions.",
+        "Sample agents on the tasks: SAC, TD3 and PPO (stable-baselines3, trained on the "
+        "CPU) against each task's classical controller (LQR; on Balance an energy swing-up "
+        "handing over to LQR), zero torque and random actions.",
         "",
-        "Reproduce with `make results` (it trains the nine agents with `roller-gym train`, "
+        "Reproduce with `make results` (it trains the agents with `roller-gym train`, "
         "rl-zoo3 with the hyperparameter files of `agents/hyperparams/`, into `runs/`, "
         f"seed 0, then runs `roller-gym evaluate --env {' '.join(args.env)} --runs {args.runs} "
         f"--out {args.out} --report {args.report}"
@@ -288,8 +293,7 @@ def write_report(path: Path, out: Path, sections: list[tuple[str, str, str]],
         "model of each run). *Success*: `info[\"is_success\"]` at the episode's last step. "
         "*Final |error|*: the position error at the last step. *Mean |τ|*: over all steps. "
         "*Wall time*: the training run's, from its episode monitors "
-        f"({platform.machine()}, {os.cpu_count()} CPU cores, possibly shared with other jobs; "
-        "torch on 1 thread).",
+        f"({platform.machine()}, {os.cpu_count()} CPU cores; torch on 1 thread).",
         "",
     ]
     for env_id, table, check in sections:

@@ -1,7 +1,7 @@
 """The roller scene in MuJoCo, modelled as well as a general-purpose engine allows.
 
 MuJoCo has no rolling-without-slipping constraint between a cylinder and a concave
-cylinder, so the scene of ``shared/PHYSICS.md`` is built from two joints and a coupling,
+cylinder, so the scene of ``docs/PHYSICS.md`` is built from two joints and a coupling,
 in the x-z plane (gravity −z; our y is MuJoCo's z):
 
 * a body ``arm`` hinged at the fixed cylinder's axis O. Its hinge axis is −y, so its joint

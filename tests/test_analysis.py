@@ -1,6 +1,6 @@
 """analysis.py: energy and power, contact margins, equilibria, linearization, small oscillations.
 
-References: PHYSICS.md's formulas typed in here, analytic results, finite differences and
+References: docs/PHYSICS.md's formulas typed in here, analytic results, finite differences and
 complex-step derivatives, and scipy's DOP853 at rtol = 1e-13.
 """
 

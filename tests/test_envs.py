@@ -1,9 +1,9 @@
-"""The single environments (issue 4): registration, spaces, reset and step, info, errors,
+"""The single environments: registration, spaces, reset and step, info, errors,
 construction arguments, the checkers of Gymnasium and Stable-Baselines3, pickling and
 SubprocVecEnv.
 
 The independent source for the physics is :func:`model`, written here from
-``shared/PHYSICS.md`` in its cylinder form (R − r, not the code's curvature form); the
+``docs/PHYSICS.md`` in its cylinder form (R − r, not the code's curvature form); the
 documented numbers (episode lengths, default torques, observation layout, reward) are
 copied from the docstrings of ``envs/__init__.py`` and the task modules.
 """

@@ -1,4 +1,4 @@
-"""Fidelity (issue 4): over 10 s of seeded random torques, the environment's state against
+"""Fidelity: over 10 s of seeded random torques, the environment's state against
 a reference integration, ``roller_gym.physics.step(..., method="dop853", tol=1e-13)`` per
 control step under the same torque sequence.
 

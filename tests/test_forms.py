@@ -2,7 +2,7 @@
 
 The forms are evaluated from the scene's vectors (forms.py) and solved for φ''; they are
 compared with one another on random scenes of all three shapes and against analytic
-properties of the equation of motion in PHYSICS.md. (Lagrange's equations and Newton–Euler
+properties of the equation of motion in docs/PHYSICS.md. (Lagrange's equations and Newton–Euler
 are in test_reference_derivations.py.)
 
 Random states keep |ψ| <= π and |φ| <= 4π: in a physically meaningful range. (In a tight

@@ -1,6 +1,6 @@
 """The physics checked against derivations written here, independently of roller_gym.physics.
 
-* Lagrange's equations with ``sympy.physics.mechanics``, built from PHYSICS.md alone: the
+* Lagrange's equations with ``sympy.physics.mechanics``, built from docs/PHYSICS.md alone: the
   generalized coordinate φ, the mass center C = O1 + e(−sin φ, −cos φ) with
   O1 = O + (R − r)(sin ψ, −cos ψ), ψ = rφ/(R − r) (on the floor O1 = (rφ, r)), the kinetic
   energy ½ m v_C² + ½ m k² φ'² of a rigid body turning clockwise at φ', the potential

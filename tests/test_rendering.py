@@ -1,7 +1,7 @@
-"""Rendering (issue 4): rgb_array frames, render_mode=None, headless "human" mode, and
+"""Rendering: rgb_array frames, render_mode=None, headless "human" mode, and
 pygame imported only when rendering.
 
-The pictures are checked against the geometry of ``shared/PHYSICS.md``: the contact
+The pictures are checked against the geometry of ``docs/PHYSICS.md``: the contact
 point I = R (sin ψ, −cos ψ) from the axis O, so the red contact marker sits below the
 picture's center at ψ = 0 and moves right for ψ > 0, left for ψ < 0.
 """

@@ -1,4 +1,4 @@
-"""The native vector environments (issue 4): ``gymnasium.make_vec(ID, num_envs=N)``.
+"""The native vector environments: ``gymnasium.make_vec(ID, num_envs=N)``.
 
 The independent source is N single environments (``gymnasium.make(ID)``, seeded
 ``seed + i``) driven in lockstep with the same actions, with Gymnasium's next-step

@@ -4,7 +4,7 @@
 module                 what it holds
 =====================  ================================================================
 ``scene``              :class:`Scene` (parameters, validation, shapes) and the presets
-``equations``          each equation of ``PHYSICS.md`` written once (floats, arrays, numba)
+``equations``          each equation of ``docs/PHYSICS.md`` written once (floats, arrays, numba)
 ``forms``              the paper's forms of the theorem (Eqs. 15, 18, 24, 30), as references
 ``analysis``           kinematics, contact forces, energy, equilibria, linearization
 ``integrators``        one control step at constant torque: RK4, semi-implicit Euler,

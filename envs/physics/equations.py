@@ -5,7 +5,7 @@ Python float, a NumPy array (a batch of states, torques and per-element scene
 parameters, broadcast together) and, compiled by numba (``register_jitable``), the
 integrators' inner loops.
 
-Conventions (``../shared/PHYSICS.md``): φ is the roller's rotation, positive clockwise,
+Conventions (``docs/PHYSICS.md``): φ is the roller's rotation, positive clockwise,
 0 when C is straight below O1 and O1 straight below O. With the signed curvature
 κ = 1/R of the fixed surface and s = 1 − rκ,
 

@@ -1,6 +1,6 @@
 """Scenes: the roller and the fixed surface it rolls on, as one immutable value.
 
-A :class:`Scene` holds the parameters of the model in ``../shared/PHYSICS.md`` (SI units):
+A :class:`Scene` holds the parameters of the model in ``docs/PHYSICS.md`` (SI units):
 
 ========  ==========================================================  ============
 field     meaning                                                     unit
