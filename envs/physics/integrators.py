@@ -28,12 +28,15 @@ the control step. The next size is ``h · clip(0.9 (tol h/dt / err)^(1/8), 0.2, 
 is the prediction of :func:`predicted_substeps` (from the scene's fastest time scale), which
 only starts the controller.
 
-**Unreachable tolerances** are reported per step, never looped on: a substep is never smaller
-than ``dt / MAX_SUBSTEPS``, nor than the size below which float64 rounding over the substeps
-alone would exceed ``tol`` (``ROUNDOFF_FACTOR · ε · max(|φ|, |φ'|) · dt / tol``). A substep
-at that floor is accepted even if its error estimate exceeds ``tol · h / dt``, and the step
-reports ``tol_met=False``; :class:`Stepper` and :class:`BatchStepper` then warn once.
-``error_estimate`` is the sum of the accepted substeps' error estimates.
+**Unreachable tolerances** are reported per step, never looped on: a substep whose error
+estimate is at the level of float64 rounding (``ROUNDOFF_FACTOR · ε · max(|φ|, |φ'|)``) is
+accepted even if that exceeds its share of ``tol`` (no smaller substep would do better), and
+after ``MAX_SUBSTEPS`` accepted substeps the rest of the control step is taken in at most
+``MAX_SUBSTEPS`` more, each accepted. A step with such a substep reports ``tol_met=False``
+(its tolerance was not verified); :class:`Stepper` and :class:`BatchStepper` then warn once
+(not with fixed ``substeps``). ``error_estimate`` is the sum of the accepted substeps' error
+estimates. Measured on random scenes, the estimates can miss part of the error (local errors
+also grow along the step), so each scheme's estimates may add up to only ``tol_share · tol``.
 
 **Fixed-substep schemes (euler, midpoint)** and rk8/rk4 with ``substeps=n`` take n equal
 substeps; for euler and midpoint n is, unless given, predicted from the scene's fastest time
@@ -179,9 +182,9 @@ def scene_arrays(scene: Scene, n: int | None = None) -> np.ndarray:
 # -- the substep rule (the first step-size guess of the adaptive schemes) ------------------------
 
 #: The most substeps one control step may take (the smallest substep is dt / MAX_SUBSTEPS).
-MAX_SUBSTEPS = 100_000
-#: Substeps of size h are never smaller than ROUNDOFF_FACTOR · ε · max(|φ|, |φ'|) · dt / tol:
-#: below it, float64 rounding over the dt/h substeps alone could exceed tol.
+MAX_SUBSTEPS = 200_000
+#: A substep whose error estimate is below ROUNDOFF_FACTOR · ε · max(|φ|, |φ'|) (float64
+#: rounding) is accepted even above its share of tol: no smaller substep would do better.
 ROUNDOFF_FACTOR = 8.0
 _EPS = float(np.finfo(float).eps)
 
@@ -307,6 +310,9 @@ def _finish(io, col, ok, phi, w, tau, nsub, lift, slip, err, tol_met):
 #: Rollers advanced together (in lockstep, each with its own step size) by one task.
 CHUNK = 64
 _SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0
+#: The first substep of a control step is dt / (_FIRST_STEP_SPLIT · the predicted count): a
+#: first guess too large can pass with an estimate far below its error (measured: 28×).
+_FIRST_STEP_SPLIT = 2.0
 #: Attempts (accepted or rejected substeps) after which a roller still running is failed.
 _MAX_ATTEMPTS = 4 * MAX_SUBSTEPS
 
@@ -316,11 +322,13 @@ def _rk_chunk(io, lo, hi, tab, cfg):
     """Advance rollers (columns) lo..hi−1 of ``io`` over one control step.
 
     ``tab``: the pair (see :func:`_tableau`); ``cfg``: ``(dt, tol, fixed substeps or 0,
-    halvings of the controller's root, order, constant, stable step, sweep exponent)``.
+    halvings of the controller's root, order, constant, stable step, sweep exponent,
+    tol share)``.
     """
     n = hi - lo
     s = tab.shape[0] - 3
     dt, tol, nfixed, halvings = cfg[0], cfg[1], int(cfg[2]), int(cfg[3])
+    share = tol * cfg[8]  # the error the accepted substeps' estimates may add up to
     fixed = nfixed > 0
     kp = np.empty((s + 1, n))  # stage velocities φ'
     kw = np.empty((s + 1, n))  # stage accelerations φ''
@@ -336,6 +344,7 @@ def _rk_chunk(io, lo, hi, tab, cfg):
     status = np.zeros(n, dtype=np.int64)  # 0 running, 1 done, 2 failed
     rejected = np.zeros(n, dtype=np.bool_)
     missed = np.zeros(n, dtype=np.bool_)
+    hforce = np.zeros(n)
     for i in range(n):
         col = lo + i
         for f in range(len(SCENE_FIELDS)):
@@ -351,7 +360,7 @@ def _rk_chunk(io, lo, hi, tab, cfg):
         else:
             guess = _substeps(abs(w[i]), par[0, i], par[1, i], par[2, i], par[3, i], par[4, i],
                               par[5, i], par[6, i], dt, tol, cfg[4], cfg[5], cfg[6], cfg[7])
-            hdes[i] = dt / guess
+            hdes[i] = dt / (_FIRST_STEP_SPLIT * guess)
     m, r, kappa, e, k, g, c, mu = par[0], par[1], par[2], par[3], par[4], par[5], par[6], par[7]
     for _attempt in range(_MAX_ATTEMPTS):
         running = 0
@@ -410,11 +419,15 @@ def _rk_chunk(io, lo, hi, tab, cfg):
             err = max(errp, errw)
             fin = (math.isfinite(phin[i]) and math.isfinite(wn[i])
                    and math.isfinite(kw[s, i]) and math.isfinite(err))
-            floor = max(dt / MAX_SUBSTEPS,
-                        ROUNDOFF_FACTOR * _EPS * max(abs(phi[i]), abs(w[i])) * dt / tol)
-            ratio = err * dt / (tol * h) if h > 0.0 else 0.0
+            # past MAX_SUBSTEPS accepted substeps, the rest in at most MAX_SUBSTEPS more
+            if count[i] == MAX_SUBSTEPS and hforce[i] == 0.0:
+                hforce[i] = (dt - t[i]) / MAX_SUBSTEPS
+            floor = max(1e-12 * dt, hforce[i])
+            ratio = err * dt / (share * h) if h > 0.0 else 0.0
             ok = fin and ratio <= 1.0
-            forced = h <= floor
+            # an estimate at the level of float64 rounding: no smaller substep can do better
+            noise = ROUNDOFF_FACTOR * _EPS * max(abs(phi[i]), abs(w[i]), abs(phin[i]), abs(wn[i]))
+            forced = h <= floor or err <= noise
             if fixed:
                 accept, fail = fin, not fin
             else:
@@ -560,6 +573,8 @@ class Scheme:
             on the presets (for the adaptive schemes only the first step-size guess).
         sweep_exponent: the exponent of re/(k² + (r − e)²) in the prediction's sweep rate.
         halvings: the adaptive controller takes the 2^halvings-th root of the error ratio.
+        tol_share: the share of ``tol`` the accepted substeps' error estimates may add up to
+            (below 1: room for what the estimates miss, measured in the tests).
     """
 
     name: str
@@ -571,6 +586,7 @@ class Scheme:
     constant: float = 0.0
     sweep_exponent: float = 0.5
     halvings: int = 0
+    tol_share: float = 1.0
 
     def kernels(self) -> tuple[Callable, Callable]:
         """(serial, parallel) kernels ``f(io, tableau, cfg)`` of this scheme."""
@@ -579,8 +595,8 @@ class Scheme:
 
 _SCHEME_LIST = (
     Scheme("rk8", 8, 1.0, True, _rk_chunk, _DOP853, constant=1e-6, sweep_exponent=0.75,
-           halvings=3),
-    Scheme("rk4", 4, 1.0, True, _rk_chunk, _RK4, constant=0.02, halvings=2),
+           halvings=3, tol_share=0.25),
+    Scheme("rk4", 4, 1.0, True, _rk_chunk, _RK4, constant=0.02, halvings=2, tol_share=0.1),
     Scheme("euler", 1, 0.5, False, _euler_substep, constant=2.0),
     Scheme("midpoint", 2, math.inf, False, _midpoint_substep, constant=0.3),
     Scheme("dop853", 8, math.inf, True, None),
@@ -644,7 +660,7 @@ class _Base:
         self._tab = self.scheme.tableau if self.scheme.tableau is not None else np.zeros((1, 1))
         sch = self.scheme
         self._cfg = np.array([dt, tol, substeps or 0, sch.halvings, sch.order, sch.constant,
-                              sch.stable_step, sch.sweep_exponent], dtype=float)
+                              sch.stable_step, sch.sweep_exponent, sch.tol_share], dtype=float)
         self._io = np.zeros((len(ROWS), num))
         self._warned = False
 
