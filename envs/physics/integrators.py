@@ -315,9 +315,6 @@ def _finish(io, col, ok, phi, w, tau, nsub, lift, slip, err, tol_met):
 #: Rollers advanced together (in lockstep, each with its own step size) by one task.
 CHUNK = 64
 _SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0
-#: The first substep of a control step is dt / (_FIRST_STEP_SPLIT · the predicted count): a
-#: first guess too large can pass with an estimate far below its error (measured: 28×).
-_FIRST_STEP_SPLIT = 2.0
 #: Attempts (accepted or rejected substeps) after which a roller still running is failed.
 _MAX_ATTEMPTS = 4 * MAX_SUBSTEPS
 
@@ -348,6 +345,7 @@ def _rk_chunk(io, lo, hi, tab, cfg):
     hforce, count, last = rows[17], rows[18], rows[19]
     status = rows[20]  # 0 running, 1 done, 2 failed
     rejected = rows[21]  # 0 or 1
+    act = np.empty(n, dtype=np.int64)
     for i in range(n):
         hforce[i], count[i], status[i], rejected[i] = 0.0, 0.0, 0.0, 0.0
     for i in range(n):
@@ -365,16 +363,20 @@ def _rk_chunk(io, lo, hi, tab, cfg):
         else:
             guess = _substeps(abs(w[i]), par[0, i], par[1, i], par[2, i], par[3, i], par[4, i],
                               par[5, i], par[6, i], dt, tol, cfg[4], cfg[5], cfg[6], cfg[7])
-            hdes[i] = dt / (_FIRST_STEP_SPLIT * guess)
+            hdes[i] = dt / guess
     m, r, kappa, e, k, g, c, mu = par[0], par[1], par[2], par[3], par[4], par[5], par[6], par[7]
     for _attempt in range(_MAX_ATTEMPTS):
-        running = 0
+        # the rollers still running, by index: the others cost nothing from here on
+        na = 0
         for i in range(n):
-            running += status[i] == 0
-        if running == 0:
+            if status[i] == 0.0:
+                act[na] = i
+                na += 1
+        if na == 0:
             break
         # this attempt's sizes, and the margins at the start of the substep
-        for i in range(n):
+        for q in range(na):
+            i = act[q]
             if fixed:
                 h = hdes[i]
                 last[i] = 1.0 if count[i] + 1 >= nfixed else 0.0
@@ -387,15 +389,18 @@ def _rk_chunk(io, lo, hi, tab, cfg):
             lift[i], slip[i] = min(lift[i], li), min(slip[i], si)
         # the stages
         for st in range(1, s + 1):
-            for i in range(n):
+            for q in range(na):
+                i = act[q]
                 acc_p[i], acc_w[i] = 0.0, 0.0
             for j in range(st):
                 a = tab[st, j]
                 if a != 0.0:
-                    for i in range(n):
+                    for q in range(na):
+                        i = act[q]
                         acc_p[i] += a * kp[j, i]
                         acc_w[i] += a * kw[j, i]
-            for i in range(n):
+            for q in range(na):
+                i = act[q]
                 wi = w[i] + hh[i] * acc_w[i]
                 pi = phi[i] + hh[i] * acc_p[i]
                 kp[st, i] = wi
@@ -403,17 +408,20 @@ def _rk_chunk(io, lo, hi, tab, cfg):
                 if st == s:  # the weights b: the new state, and f there (the last stage)
                     phin[i], wn[i] = pi, wi
         # the error estimates (scipy's DOP853 form; E3 = 0 gives |h E5·K|)
-        for i in range(n):
+        for q in range(na):
+            i = act[q]
             e5p[i], e5w[i], e3p[i], e3w[i] = 0.0, 0.0, 0.0, 0.0
         for j in range(s + 1):
             a3, a5 = tab[s + 1, j], tab[s + 2, j]
-            for i in range(n):
+            for q in range(na):
+                i = act[q]
                 e3p[i] += a3 * kp[j, i]
                 e3w[i] += a3 * kw[j, i]
                 e5p[i] += a5 * kp[j, i]
                 e5w[i] += a5 * kw[j, i]
         # accept or reject, and the next size, per roller
-        for i in range(n):
+        for q in range(na):
+            i = act[q]
             if status[i] != 0:
                 continue
             h = hh[i]
