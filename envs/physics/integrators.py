@@ -614,8 +614,8 @@ _SCHEME_LIST = (
 )
 #: The schemes by name.
 SCHEMES: dict[str, Scheme] = {s.name: s for s in _SCHEME_LIST}
-#: The names of the schemes (the ``method`` arguments).
-METHODS = tuple(SCHEMES)
+#: The schemes by name (the ``method`` arguments are its keys).
+METHODS = SCHEMES
 DEFAULT_METHOD = "rk8"
 
 _KERNELS: dict[str, tuple[Callable, Callable]] = {}
@@ -867,3 +867,42 @@ def predicted_substeps(
                   sch.sweep_exponent) for v in zip(*flat, strict=True)
     ])
     return int(out[0]) if arrays[0].ndim == 0 else out.reshape(arrays[0].shape)
+
+
+# -- the old call forms, for scripts that still use them ------------------------------------------
+
+_SHIM_CACHE: dict[tuple, _Base] = {}
+
+
+def _shim(cls, first, method, dt, tol, substeps):
+    name = method.name if isinstance(method, Scheme) else method
+    key = (cls, first, name, float(dt), float(tol), int(substeps or 0))
+    if key not in _SHIM_CACHE:
+        if cls is Stepper:
+            _SHIM_CACHE[key] = Stepper(Scene(), method=name, dt=dt, tol=tol,
+                                       substeps=substeps or None)
+        else:
+            _SHIM_CACHE[key] = BatchStepper(first, method=name, dt=dt, tol=tol,
+                                            substeps=substeps or None)
+    return _SHIM_CACHE[key]
+
+
+def step_one(row: tuple[float, ...], phi: float, phi_dot: float, tau: float, dt: float,
+             method: str | Scheme, tol: float, substeps: int = 0) -> tuple:
+    """One roller's step from its scene numbers ``row`` (:data:`SCENE_FIELDS` order): the
+    fields of :class:`StepResult` in order. (Prefer :class:`Stepper`.)"""
+    stepper = _shim(Stepper, 0, method, dt, tol, substeps)
+    stepper._io[: len(SCENE_FIELDS), 0] = row
+    return stepper.advance(phi, phi_dot, tau)
+
+
+def advance_batch(rows: np.ndarray, phi: np.ndarray, phi_dot: np.ndarray, tau: np.ndarray,
+                  dt: float, method: str | Scheme, tol: float, substeps: int,
+                  out: np.ndarray) -> None:
+    """A batch's step from its scene numbers ``rows`` (n, len(SCENE_FIELDS)); writes the fields
+    of :class:`StepResult`, in order, into the rows of ``out``. (Prefer :class:`BatchStepper`.)"""
+    stepper = _shim(BatchStepper, rows.shape[0], method, dt, tol, substeps)
+    stepper.scene_table()[:] = rows.T
+    res = stepper.advance(phi, phi_dot, tau)
+    for j, name in enumerate(STEP_FIELDS[: out.shape[0]]):
+        out[j] = getattr(res, name)
