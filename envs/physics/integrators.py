@@ -345,9 +345,12 @@ def _rk_chunk(io, lo, hi, tab, cfg):
     hforce, count, last = rows[17], rows[18], rows[19]
     status = rows[20]  # 0 running, 1 done, 2 failed
     rejected = rows[21]  # 0 or 1
-    act = np.empty(n, dtype=np.int64)
+    slot = rows[22]  # the roller (column lo + slot) whose numbers are in this lane
     for i in range(n):
-        hforce[i], count[i], status[i], rejected[i] = 0.0, 0.0, 0.0, 0.0
+        hforce[i], count[i], status[i], rejected[i], slot[i] = 0.0, 0.0, 0.0, 0.0, i
+    # The running rollers are kept in lanes 0..na−1 (a finished one swaps places with the last
+    # running one), so every per-lane loop runs over contiguous lanes.
+    na = n
     for i in range(n):
         col = lo + i
         for f in range(len(SCENE_FIELDS)):
@@ -366,17 +369,10 @@ def _rk_chunk(io, lo, hi, tab, cfg):
             hdes[i] = dt / guess
     m, r, kappa, e, k, g, c, mu = par[0], par[1], par[2], par[3], par[4], par[5], par[6], par[7]
     for _attempt in range(_MAX_ATTEMPTS):
-        # the rollers still running, by index: the others cost nothing from here on
-        na = 0
-        for i in range(n):
-            if status[i] == 0.0:
-                act[na] = i
-                na += 1
         if na == 0:
             break
         # this attempt's sizes, and the margins at the start of the substep
-        for q in range(na):
-            i = act[q]
+        for i in range(na):
             if fixed:
                 h = hdes[i]
                 last[i] = 1.0 if count[i] + 1 >= nfixed else 0.0
@@ -389,18 +385,15 @@ def _rk_chunk(io, lo, hi, tab, cfg):
             lift[i], slip[i] = min(lift[i], li), min(slip[i], si)
         # the stages
         for st in range(1, s + 1):
-            for q in range(na):
-                i = act[q]
+            for i in range(na):
                 acc_p[i], acc_w[i] = 0.0, 0.0
             for j in range(st):
                 a = tab[st, j]
                 if a != 0.0:
-                    for q in range(na):
-                        i = act[q]
+                    for i in range(na):
                         acc_p[i] += a * kp[j, i]
                         acc_w[i] += a * kw[j, i]
-            for q in range(na):
-                i = act[q]
+            for i in range(na):
                 wi = w[i] + hh[i] * acc_w[i]
                 pi = phi[i] + hh[i] * acc_p[i]
                 kp[st, i] = wi
@@ -408,20 +401,17 @@ def _rk_chunk(io, lo, hi, tab, cfg):
                 if st == s:  # the weights b: the new state, and f there (the last stage)
                     phin[i], wn[i] = pi, wi
         # the error estimates (scipy's DOP853 form; E3 = 0 gives |h E5·K|)
-        for q in range(na):
-            i = act[q]
+        for i in range(na):
             e5p[i], e5w[i], e3p[i], e3w[i] = 0.0, 0.0, 0.0, 0.0
         for j in range(s + 1):
             a3, a5 = tab[s + 1, j], tab[s + 2, j]
-            for q in range(na):
-                i = act[q]
+            for i in range(na):
                 e3p[i] += a3 * kp[j, i]
                 e3w[i] += a3 * kw[j, i]
                 e5p[i] += a5 * kp[j, i]
                 e5w[i] += a5 * kw[j, i]
         # accept or reject, and the next size, per roller
-        for q in range(na):
-            i = act[q]
+        for i in range(na):
             if status[i] != 0:
                 continue
             h = hh[i]
@@ -470,9 +460,17 @@ def _rk_chunk(io, lo, hi, tab, cfg):
                     factor = min(factor, 1.0)
                 rejected[i] = 0.0 if accept else 1.0
                 hdes[i] = max(h * factor, floor)
+        i = 0
+        while i < na:
+            if status[i] != 0.0:
+                na -= 1
+                for row in range(scratch.shape[0]):
+                    scratch[row, i], scratch[row, na] = scratch[row, na], scratch[row, i]
+            else:
+                i += 1
     for i in range(n):
-        _finish(io, lo + i, status[i] == 1.0, phi[i], w[i], tau[i], count[i], lift[i], slip[i],
-                err_sum[i], err_sum[i] <= share)
+        _finish(io, lo + int(slot[i]), status[i] == 1.0, phi[i], w[i], tau[i], count[i],
+                lift[i], slip[i], err_sum[i], err_sum[i] <= share)
 
 
 @_jit
