@@ -51,6 +51,13 @@ never reported as a lift-off).
 **Margins.** The lift-off and slip margins are the smallest met at the start of every
 accepted substep and at the end of the step.
 
+**Batch kernel.** A batch is cut into chunks of ``CHUNK`` rollers, handed to the cores
+(``numba.prange``) from ``PARALLEL_THRESHOLD`` rollers on. Within a chunk, the running rollers
+advance together, each with its own (t, h): every stage is one loop over contiguous lanes, and
+a roller that has finished swaps places with the last running one, so the loops shrink with
+the work left. The stage loops call ``equations.accel``, whose ``sin`` is libm's: LLVM
+vectorizes the loops that combine the stages but not the ones that evaluate φ'' (calls).
+
 **Layout.** The kernels work on one float64 table per batch, ``io`` of shape
 ``(len(ROWS), n)``: one row per name of :data:`ROWS` (the scene's :data:`SCENE_FIELDS`, the
 inputs :data:`INPUT_FIELDS`, the outputs :data:`STEP_FIELDS`), one column per roller, so a
@@ -310,9 +317,9 @@ def _finish(io, col, ok, phi, w, tau, nsub, lift, slip, err, tol_met):
             io[row, col] = math.nan
 
 
-# -- the adaptive kernel: explicit Runge–Kutta pairs, rollers in lockstep ------------------------
+# -- the adaptive kernel: explicit Runge–Kutta pairs, a chunk of rollers together ----------------
 
-#: Rollers advanced together (in lockstep, each with its own step size) by one task.
+#: Rollers advanced together (each with its own step size) by one task.
 CHUNK = 64
 _SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0
 #: Attempts (accepted or rejected substeps) after which a roller still running is failed.
@@ -464,8 +471,11 @@ def _rk_chunk(io, lo, hi, tab, cfg):
         while i < na:
             if status[i] != 0.0:
                 na -= 1
-                for row in range(scratch.shape[0]):
-                    scratch[row, i], scratch[row, na] = scratch[row, na], scratch[row, i]
+                for f in range(nf):
+                    par[f, i], par[f, na] = par[f, na], par[f, i]
+                for x in (kp[0], kw[0], tau, phi, w, hdes, t, lift, slip, err_sum, hforce, count,
+                          status, rejected, slot):  # what outlives an attempt
+                    x[i], x[na] = x[na], x[i]
             else:
                 i += 1
     for i in range(n):
