@@ -7,21 +7,33 @@ module                 what it holds
 ``equations``          each equation of ``docs/PHYSICS.md`` written once (floats, arrays, numba)
 ``forms``              the paper's forms of the theorem (Eqs. 15, 18, 24, 30), as references
 ``analysis``           kinematics, contact forces, energy, equilibria, linearization
-``integrators``        one control step at constant torque: RK4, semi-implicit Euler,
-                       implicit midpoint, DOP853; automatic substeps
+``integrators``        one control step at constant torque: the table of schemes (rk8, the
+                       default, and rk4 error-controlled; semi-implicit Euler and implicit
+                       midpoint at fixed substeps; scipy's DOP853), the steppers
 =====================  ================================================================
 """
 
 from roller_gym.physics import analysis
 from roller_gym.physics.analysis import *  # noqa: F403  (its __all__: kinematics, contact, energy, ...)
 from roller_gym.physics.forms import FORMS
-from roller_gym.physics.integrators import METHODS, StepResult, predicted_substeps, step
+from roller_gym.physics.integrators import (
+    METHODS,
+    SCHEMES,
+    BatchStepper,
+    Stepper,
+    StepResult,
+    predicted_substeps,
+    step,
+)
 from roller_gym.physics.scene import PRESETS, Scene, preset
 
 __all__ = [
     *analysis.__all__,
     "FORMS",
     "METHODS",
+    "SCHEMES",
+    "BatchStepper",
+    "Stepper",
     "PRESETS",
     "Scene",
     "StepResult",
