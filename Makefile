@@ -16,10 +16,10 @@ $(STAMP): pyproject.toml
 RG := $(VENV)/bin/roller-gym
 
 run: $(STAMP)  ## train the default agent (SAC, rl-zoo3) on the default task, evaluate it against LQR
-	$(RG) train --algo sac --env roller_gym/RollerStabilize-v0 --log-folder runs
-	$(RG) evaluate --env roller_gym/RollerStabilize-v0 --runs runs --algos sac --out results
+	$(RG) train --algo sac --env roller_gym/RollerStabilize-v1 --log-folder runs
+	$(RG) evaluate --env roller_gym/RollerStabilize-v1 --runs runs --algos sac --out results
 
-TASKS := roller_gym/RollerStabilize-v0 roller_gym/RollerHold-v0 roller_gym/RollerBalance-v0
+TASKS := roller_gym/RollerStabilize-v1 roller_gym/RollerHold-v1 roller_gym/RollerBalance-v1
 results: $(STAMP)  ## train SAC, TD3 and PPO on every task, evaluate all, write docs/RESULTS.md
 	set -e; for env in $(TASKS); do for algo in sac td3 ppo; do \
 		$(RG) train --algo $$algo --env $$env --log-folder runs; done; done

@@ -1,4 +1,4 @@
-"""roller_gym/RollerBalance-v0: swing the mass center up to an unstable rest position and
+"""roller_gym/RollerBalance-v1: swing the mass center up to an unstable rest position and
 keep it there.
 
 In the preset ``"balance"`` (R = 10 r, e = 0.8 r) the roller has an unstable rest
@@ -62,6 +62,7 @@ __all__ = ["BalanceTask"]
 @register
 class BalanceTask(Task):
     name = "RollerBalance"
+    version = 1  # v0's reward did not rank resting on target above resting near it
     default_scene = "balance"
     default_max_torque = 0.4
     max_episode_steps = 400

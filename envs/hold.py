@@ -1,4 +1,4 @@
-"""roller_gym/RollerHold-v0: hold the roller at rest at a target position on the wall.
+"""roller_gym/RollerHold-v1: hold the roller at rest at a target position on the wall.
 
 Each episode draws a target ψ* on the cylinder's wall, within the range where the
 torque limit and friction allow the roller to be held at rest (see
@@ -68,6 +68,7 @@ __all__ = ["HoldTask"]
 @register
 class HoldTask(Task):
     name = "RollerHold"
+    version = 1  # v0's reward did not rank resting on target above resting near it
     reward_threshold = 184.1  # LQR's mean return on seeds 0–99 (193.8) − 5 %
     observation = ("cos_psi", "sin_psi", "cos_phi", "sin_phi", "speed", "cos_psi_target",
                    "sin_psi_target", "cos_phi_target", "sin_phi_target")

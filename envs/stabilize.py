@@ -1,4 +1,4 @@
-"""roller_gym/RollerStabilize-v0: bring the roller to rest at the bottom.
+"""roller_gym/RollerStabilize-v1: bring the roller to rest at the bottom.
 
 A roller rolls without slipping inside a fixed cylinder (the scene of
 ``docs/PHYSICS.md``; by default the preset ``"paper"``). A torque drives it. It
@@ -49,7 +49,7 @@ resting one band-width outside it costs about 14 % (see ``envs/task.py``).
 
 ## Arguments
 
-``gymnasium.make("roller_gym/RollerStabilize-v0", scene=..., dt=..., max_torque=..., tolerance=...,
+``gymnasium.make("roller_gym/RollerStabilize-v1", scene=..., dt=..., max_torque=..., tolerance=...,
 integrator=..., substeps=..., randomize=..., render_mode=...)``: see
 :class:`roller_gym.roller_env.RollerEnv`.
 """
@@ -66,6 +66,7 @@ __all__ = ["StabilizeTask"]
 @register
 class StabilizeTask(Task):
     name = "RollerStabilize"
+    version = 1  # v0's reward did not rank resting on target above resting near it
     reward_threshold = 178.4  # LQR's mean return on seeds 0–99 (187.8) − 5 %
 
     def sample_targets(self, u: np.ndarray, scene: Scene) -> np.ndarray:

@@ -479,12 +479,12 @@ def measure_energy(cfg: Config, result: SceneResult) -> None:
 # Part 3: throughput (the environments)
 # ================================================================================================
 def envs_available() -> str | None:
-    """None if ``gymnasium.make("roller_gym/RollerStabilize-v0")`` works, else why not."""
+    """None if ``gymnasium.make("roller_gym/RollerStabilize-v1")`` works, else why not."""
     try:
         import gymnasium as gym
         import roller_gym  # noqa: F401
 
-        gym.make("roller_gym/RollerStabilize-v0").close()
+        gym.make("roller_gym/RollerStabilize-v1").close()
     except Exception as exc:  # the environments may not exist yet
         return f"{type(exc).__name__}: {exc}"
     return None
@@ -514,12 +514,12 @@ def time_vector_env(env, actions: np.ndarray) -> float:
 
 
 def env_episode_error(ref: np.ndarray, torques: np.ndarray) -> tuple[float, float]:
-    """The state error of ``gymnasium.make("roller_gym/RollerStabilize-v0")`` (default
+    """The state error of ``gymnasium.make("roller_gym/RollerStabilize-v1")`` (default
     settings) over the reference episode: the same start (rest at φ = 0) and the same
     torques, through the env."""
     import gymnasium as gym
 
-    env = gym.make("roller_gym/RollerStabilize-v0")
+    env = gym.make("roller_gym/RollerStabilize-v1")
     base = env.unwrapped
     base.reset(seed=SEED, options={"state": (0.0, 0.0)})
     states = [(0.0, 0.0)]
@@ -535,7 +535,7 @@ def vector_episode_error(ref: np.ndarray, torques: np.ndarray, n: int) -> tuple[
     episode, up to the first step at which one terminates (autoreset would restart it)."""
     import gymnasium as gym
 
-    env = gym.make_vec("roller_gym/RollerStabilize-v0", num_envs=n)
+    env = gym.make_vec("roller_gym/RollerStabilize-v1", num_envs=n)
     env.reset(seed=SEED, options={"state": (0.0, 0.0)})
     base = env.unwrapped
     worst = np.zeros(2)
@@ -592,7 +592,7 @@ def measure_throughput(cfg: Config, paper: SceneResult) -> Throughput:
     out = Throughput()
     rng = np.random.default_rng(SEED)
     # -- one environment through gymnasium.make, against Pendulum-v1 ------------------------
-    ours, pendulum = gym.make("roller_gym/RollerStabilize-v0"), gym.make("Pendulum-v1")
+    ours, pendulum = gym.make("roller_gym/RollerStabilize-v1"), gym.make("Pendulum-v1")
     actions = rng.uniform(-1.0, 1.0, (cfg.env_steps, 1)).astype(np.float32)
     pend_actions = 2.0 * actions  # Pendulum's action space is [−2, 2]
     for env in (ours, pendulum):  # warm up (compilation, first reset)
@@ -610,7 +610,7 @@ def measure_throughput(cfg: Config, paper: SceneResult) -> Throughput:
         # at 4096 and below the window passes step 200, where the episodes begun together
         # are truncated together and restarted by the autoreset
         steps = int(np.clip(1_000_000 // n, 20, 1000)) if not cfg.quick else 20
-        ours_v = gym.make_vec("roller_gym/RollerStabilize-v0", num_envs=n)
+        ours_v = gym.make_vec("roller_gym/RollerStabilize-v1", num_envs=n)
         cart = CartPoleVectorEnv(num_envs=n)
         a_ours = rng.uniform(-1.0, 1.0, (steps, n, 1)).astype(np.float32)
         a_cart = rng.integers(0, 2, (steps, n))
@@ -649,7 +649,7 @@ def measure_throughput(cfg: Config, paper: SceneResult) -> Throughput:
             env.close()
             return elapsed
 
-        t = best({"ours": lambda: train("roller_gym/RollerStabilize-v0"),
+        t = best({"ours": lambda: train("roller_gym/RollerStabilize-v1"),
                   "Pendulum-v1": lambda: train("Pendulum-v1")}, 1 if cfg.quick else 2)
         out.ppo = {k: cfg.ppo_steps / v for k, v in t.items()}
     except ImportError as exc:  # pragma: no cover - SB3 is an optional extra
@@ -867,7 +867,7 @@ def plot_throughput(tp: Throughput, path: Path) -> None:
     sizes = sorted(tp.vector)
     fig, ax = plt.subplots(figsize=(6, 4.2))
     for name, color, label in (
-        ("ours", "tab:green", "roller_gym/RollerStabilize-v0 (make_vec)"),
+        ("ours", "tab:green", "roller_gym/RollerStabilize-v1 (make_vec)"),
         ("kernel", "tab:olive", "our physics kernel alone (advance_batch)"),
         ("CartPoleVectorEnv", "tab:orange", "CartPoleVectorEnv"),
     ):
@@ -1150,17 +1150,17 @@ def write_report(cfg: Config, results: list[SceneResult], tp: Throughput | None,
         L += ["Random actions, the same for every repeat; best of repeats, interleaved. One "
               f"environment: `gymnasium.make` (with its wrappers) for both, {cfg.env_steps:,} "
               f"steps a repeat, best of {3 * cfg.repeats}, steps only (resets excluded). "
-              "Vector: `gymnasium.make_vec(\"roller_gym/RollerStabilize-v0\", num_envs=N)` "
+              "Vector: `gymnasium.make_vec(\"roller_gym/RollerStabilize-v1\", num_envs=N)` "
               "(the native vector environment, default settings) against "
               "`CartPoleVectorEnv(num_envs=N)`, `step()` with batched actions, "
               "environment steps per second = N × batched steps per second (autoresets "
               "inside step() count, the first reset does not).", ""]
         L += md_table(
             ["environment", "steps/s", "ratio"],
-            [["roller_gym/RollerStabilize-v0", f"{tp.single['ours']:,.0f}",
+            [["roller_gym/RollerStabilize-v1", f"{tp.single['ours']:,.0f}",
               f"**{tp.single['ours'] / tp.single['Pendulum-v1']:.2f} ×**"],
              ["Pendulum-v1", f"{tp.single['Pendulum-v1']:,.0f}", "1"]])
-        L += ["", "State error of `gymnasium.make(\"roller_gym/RollerStabilize-v0\")` itself "
+        L += ["", "State error of `gymnasium.make(\"roller_gym/RollerStabilize-v1\")` itself "
               "over the "
               f"{horizon:g}-s reference episode (default settings, stepped through the "
               f"environment): φ {fmt_err(tp.env_error[0])} rad, φ' {fmt_err(tp.env_error[1])} "
@@ -1194,7 +1194,7 @@ def write_report(cfg: Config, results: list[SceneResult], tp: Throughput | None,
         if tp.ppo:
             L += [f"stable-baselines3 PPO (MlpPolicy, n_steps {min(256, cfg.ppo_steps)}, "
                   f"batch 64, 4 epochs, torch on 1 thread), {cfg.ppo_steps:,} training steps: "
-                  f"**{tp.ppo['ours']:,.0f}** steps/s on roller_gym/RollerStabilize-v0 against "
+                  f"**{tp.ppo['ours']:,.0f}** steps/s on roller_gym/RollerStabilize-v1 against "
                   f"{tp.ppo['Pendulum-v1']:,.0f} on Pendulum-v1: "
                   f"**{tp.ppo['ours'] / tp.ppo['Pendulum-v1']:.2f} ×** (the network's updates "
                   "dominate both).", ""]

@@ -1,9 +1,9 @@
 """Evaluate trained agents and the baselines on the same seeded episodes; tables and plots.
 
-    roller-gym evaluate --env roller_gym/RollerStabilize-v0 \\
-        --models runs/sac/roller_gym-RollerStabilize-v0_1
-    roller-gym evaluate --env roller_gym/RollerStabilize-v0 roller_gym/RollerHold-v0 \\
-        roller_gym/RollerBalance-v0 \\
+    roller-gym evaluate --env roller_gym/RollerStabilize-v1 \\
+        --models runs/sac/roller_gym-RollerStabilize-v1_1
+    roller-gym evaluate --env roller_gym/RollerStabilize-v1 roller_gym/RollerHold-v1 \\
+        roller_gym/RollerBalance-v1 \\
         --runs runs --out docs/results --report docs/RESULTS.md --notes docs/results/notes.md
 
 The trained models are experiment folders of ``roller-gym train`` (or of ``python -m
@@ -64,12 +64,12 @@ SUCCESS_TARGET = 0.9
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], epilog=__doc__[
         __doc__.index("\n\n") + 2:], formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--env", nargs="+", default=["roller_gym/RollerStabilize-v0"],
+    p.add_argument("--env", nargs="+", default=["roller_gym/RollerStabilize-v1"],
                    choices=roller_gym.ENV_IDS,
-                   help="the task(s) (default roller_gym/RollerStabilize-v0)")
+                   help="the task(s) (default roller_gym/RollerStabilize-v1)")
     p.add_argument("--models", nargs="*", default=[],
                    help="experiment folders of roller-gym train to evaluate (one task), e.g. "
-                        "runs/sac/roller_gym-RollerStabilize-v0_1")
+                        "runs/sac/roller_gym-RollerStabilize-v1_1")
     p.add_argument("--runs", default=None, metavar="LOG_FOLDER",
                    help="for every task, take the latest experiment of each algorithm in this "
                         "log folder of roller-gym train (<LOG_FOLDER>/<algo>/<env name>_<N>)")

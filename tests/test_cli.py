@@ -116,26 +116,26 @@ def test_train_show_command_is_rl_zoo3_with_the_shipped_file():
 
 @NEEDS_RL_ZOO3
 def test_train_evaluate_replay_end_to_end(tmp_path):
-    env_id = "roller_gym/RollerStabilize-v0"
+    env_id = "roller_gym/RollerStabilize-v1"
     roller_gym("train", "--env", env_id, "--steps", "300", "--eval-freq", "150",
                "--eval-episodes", "1", "--verbose", "0", cwd=tmp_path)
     # rl-zoo3's experiment folder: no colon, no folder per namespace.
     (run_dir,) = (tmp_path / "runs" / "sac").iterdir()
-    assert run_dir.name == "roller_gym-RollerStabilize-v0_1"
+    assert run_dir.name == "roller_gym-RollerStabilize-v1_1"
 
     roller_gym("evaluate", "--env", env_id, "--runs", "runs", "--episodes", "3",
                "--out", "results", "--report", "RESULTS.md", cwd=tmp_path)
     out = tmp_path / "results"
-    table = (out / "RollerStabilize-v0.md").read_text()
+    table = (out / "RollerStabilize-v1.md").read_text()
     for label in ("SAC", "LQR", "zero torque", "random"):
         assert f"| {label} |" in table
     assert "| SAC | 300 |" in table  # the steps the run trained, read from its model
-    numbers = json.loads((out / "RollerStabilize-v0.json").read_text())
+    numbers = json.loads((out / "RollerStabilize-v1.json").read_text())
     assert [p["name"] for p in numbers["policies"]] == ["sac", "classical", "zero", "random"]
     lqr = numbers["policies"][1]
     assert lqr["success_rate"] == 1.0 and len(lqr["returns"]) == 3
     for plot in ("learning", "trajectories"):
-        assert (out / f"RollerStabilize-v0-{plot}.png").stat().st_size > 10_000
+        assert (out / f"RollerStabilize-v1-{plot}.png").stat().st_size > 10_000
     assert "Target:" in (tmp_path / "RESULTS.md").read_text()
 
     roller_gym("replay", str(run_dir), "--out", "replay.gif", cwd=tmp_path)

@@ -69,7 +69,7 @@ def test_resting_pays_most_inside_the_band_and_clearly_less_outside(env_id):
 def test_balance_pays_most_at_the_unstable_rest_position():
     """In Balance the target is the unstable rest position ±φ_b: resting there needs no
     torque at all, and its reward is the largest of all rest positions nearby."""
-    env = gym.make("roller_gym/RollerBalance-v0")
+    env = gym.make("roller_gym/RollerBalance-v1")
     task, scene = env.unwrapped.task, env.unwrapped.scene
     phi_b = task.default_target(scene)
     assert abs(holding(scene, phi_b)) < 1e-9

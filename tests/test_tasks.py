@@ -56,7 +56,7 @@ def test_the_registry_refuses_a_duplicate_name_and_unknown_fields():
         register(type("Odd", (Task,), {"name": "RollerOdd", "observation": ("cos_psi", "x")}))
     assert "RollerOdd" not in TASKS
     with pytest.raises(ValueError, match="not a registered task"):
-        gym.make("roller_gym/RollerHold-v0", task="RollerNope")
+        gym.make("roller_gym/RollerHold-v1", task="RollerNope")
 
 
 def test_a_new_task_through_the_registry_alone():

@@ -106,11 +106,11 @@ def test_per_env_scenes_and_autoreset_after_termination():
     scenes = ["paper", slippery, "floor"]
     sign = np.where((np.arange(24) // 4) % 2 == 0, 1.0, -1.0)
     actions = np.repeat(sign[:, None, None], 3, axis=1).astype(np.float32)
-    flags = lockstep("roller_gym/RollerStabilize-v0", 0, actions, {"scene": scenes},
+    flags = lockstep("roller_gym/RollerStabilize-v1", 0, actions, {"scene": scenes},
                      [{"scene": s} for s in scenes])
     terminated = np.array([te for te, _ in flags])
     assert terminated[:, 1].any() and not terminated[:, [0, 2]].any()
-    vec = gym.make_vec("roller_gym/RollerStabilize-v0", num_envs=3, scene=scenes)
+    vec = gym.make_vec("roller_gym/RollerStabilize-v1", num_envs=3, scene=scenes)
     obs, _ = vec.reset(seed=0)
     assert vec.unwrapped.scenes == [preset("paper"), slippery, preset("floor")]
     assert obs[2, 0] == 1.0 and obs[2, 1] == 0.0  # ψ stays 0 on the floor
@@ -122,28 +122,28 @@ def test_batch_scene_and_randomize_match_single_envs():
     scene from the sub-environment's own generator, as the single env seeded s + i."""
     batch = Scene.stack([preset("paper"), preset("paper").replace(m=2.0, e=0.02)])
     actions = np.random.default_rng(1).uniform(-1, 1, (6, 2, 1)).astype(np.float32)
-    lockstep("roller_gym/RollerHold-v0", 3, actions, {"scene": batch},
+    lockstep("roller_gym/RollerHold-v1", 3, actions, {"scene": batch},
              [{"scene": batch.item(0)}, {"scene": batch.item(1)}])
     ranges = {"m": (0.8, 1.2), "k": (0.08, 0.12)}
-    lockstep("roller_gym/RollerStabilize-v0", 11, actions[:, :2], {"randomize": ranges,
+    lockstep("roller_gym/RollerStabilize-v1", 11, actions[:, :2], {"randomize": ranges,
                                                         "max_episode_steps": 3},
              [{"randomize": ranges, "max_episode_steps": 3}] * 2)
-    vec = gym.make_vec("roller_gym/RollerStabilize-v0", num_envs=3, randomize=ranges)
+    vec = gym.make_vec("roller_gym/RollerStabilize-v1", num_envs=3, randomize=ranges)
     vec.reset(seed=11)
     drawn = vec.unwrapped.scenes
     assert len({float(s.m) for s in drawn}) == 3
     for i, s in enumerate(drawn):
-        single = gym.make("roller_gym/RollerStabilize-v0", randomize=ranges)
+        single = gym.make("roller_gym/RollerStabilize-v1", randomize=ranges)
         single.reset(seed=11 + i)
         assert single.unwrapped.scene == s
         assert 0.8 <= float(s.m) <= 1.2 and 0.08 <= float(s.k) <= 0.12
 
 
 def test_seed_list_and_reproducibility():
-    vec = gym.make_vec("roller_gym/RollerHold-v0", num_envs=3)
+    vec = gym.make_vec("roller_gym/RollerHold-v1", num_envs=3)
     obs_a, _ = vec.reset(seed=[4, 9, 2])
     for i, s in enumerate((4, 9, 2)):
-        o, _ = gym.make("roller_gym/RollerHold-v0").reset(seed=s)
+        o, _ = gym.make("roller_gym/RollerHold-v1").reset(seed=s)
         np.testing.assert_array_equal(obs_a[i], o)
     a = np.full((3, 1), 0.5, np.float32)
     run1 = [vec.reset(seed=1)[0]] + [vec.step(a)[0] for _ in range(3)]
@@ -154,7 +154,7 @@ def test_seed_list_and_reproducibility():
 
 
 def test_actions_are_clipped_and_nonfinite_rejected():
-    vec = gym.make_vec("roller_gym/RollerStabilize-v0", num_envs=2)
+    vec = gym.make_vec("roller_gym/RollerStabilize-v1", num_envs=2)
     vec.reset(seed=0, options={"state": (0.0, 0.0)})
     _, _, _, _, info = vec.step(np.array([[3.0], [-0.5]], np.float32))
     np.testing.assert_allclose(info["torque"], [0.5, -0.25])
@@ -166,7 +166,7 @@ def test_actions_are_clipped_and_nonfinite_rejected():
 
 
 def test_reset_options_and_mask():
-    vec = gym.make_vec("roller_gym/RollerStabilize-v0", num_envs=2)
+    vec = gym.make_vec("roller_gym/RollerStabilize-v1", num_envs=2)
     _, info = vec.reset(seed=0, options={"state": (0.2, 0.1)})
     np.testing.assert_array_equal(info["phi"], [0.2, 0.2])
     np.testing.assert_array_equal(info["phi_dot"], [0.1, 0.1])
@@ -188,10 +188,10 @@ def test_reset_options_and_mask():
 )
 def test_bad_vector_arguments_raise(kwargs, message):
     with pytest.raises(ValueError) as excinfo:
-        gym.make_vec("roller_gym/RollerStabilize-v0", **kwargs)
+        gym.make_vec("roller_gym/RollerStabilize-v1", **kwargs)
     assert message in str(excinfo.value)
 
 
 def test_balance_rejects_a_sub_scene_without_an_unstable_rest_position():
     with pytest.raises(ValueError, match="no unstable rest position"):
-        gym.make_vec("roller_gym/RollerBalance-v0", num_envs=2, scene=["balance", "tight_fit"])
+        gym.make_vec("roller_gym/RollerBalance-v1", num_envs=2, scene=["balance", "tight_fit"])

@@ -126,7 +126,7 @@ def test_python_m_rl_zoo3_train_uses_the_shipped_file(tmp_path):
     saves it as the run's config.yml, and saves a TD3 model with its settings that acts."""
     from stable_baselines3 import TD3
 
-    algo, env_id, env_name = "td3", "roller_gym/RollerHold-v0", "roller_gym-RollerHold-v0"
+    algo, env_id, env_name = "td3", "roller_gym/RollerHold-v1", "roller_gym-RollerHold-v1"
     with as_file(config_file(algo)) as conf:
         subprocess.run(
             [sys.executable, "-m", "rl_zoo3.train", "--algo", algo, "--env", env_id,
