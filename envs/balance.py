@@ -91,7 +91,7 @@ class BalanceTask(Task):
             )
         return phi_b
 
-    start_rule = "near rest at the bottom, |phi| and |phi_dot| <= 0.1, rolling there"
+    start_rule = "near rest at the bottom, |φ| <= 0.1 rad and |φ'| <= 0.1 rad/s"
 
     def sample_targets(self, u: np.ndarray, scene: Scene) -> np.ndarray:
         return np.broadcast_to(per_scene(self.default_target, scene), np.shape(u))

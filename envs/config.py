@@ -7,12 +7,13 @@ the same errors, draw scenes the same way and turn actions into torques the same
 
 from __future__ import annotations
 
-import math
+import itertools
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
+from roller_gym import validation
 from roller_gym.physics import METHODS, Scene, preset
 from roller_gym.physics.integrators import MAX_SUBSTEPS
 from roller_gym.task import Task
@@ -70,75 +71,131 @@ class EnvConfig:
         render_mode: str | None,
         render_modes: list[str],
     ) -> EnvConfig:
+        if max_torque is not None:
+            max_torque = validation.real("max_torque", max_torque, positive=True, unit="N·m")
         task = task_class(max_torque)
         scene = resolve_scene(scene, task.default_scene)
-        task.check_scene(scene)
-        if not (isinstance(dt, int | float) and math.isfinite(dt) and dt > 0):
-            raise ValueError(f"dt={dt!r} [s] must be a finite number > 0")
-        if not (isinstance(tolerance, int | float) and math.isfinite(tolerance) and tolerance > 0):
-            raise ValueError(f"tolerance={tolerance!r} must be a finite number > 0")
-        if integrator not in METHODS:
-            raise ValueError(f"integrator={integrator!r} is not one of {', '.join(METHODS)}")
-        if substeps is not None and not (
-            isinstance(substeps, int) and 1 <= substeps <= MAX_SUBSTEPS
-        ):
-            raise ValueError(
-                f"substeps={substeps!r} must be None (automatic) or an integer in "
-                f"[1, {MAX_SUBSTEPS}]"
-            )
-        ranges = {}
-        for name, bounds in (randomize or {}).items():
-            if name not in _SCENE_FIELDS:
-                raise ValueError(
-                    f"randomize names {name!r}, not a Scene field; allowed: "
-                    f"{', '.join(_SCENE_FIELDS)}"
-                )
-            try:
-                low, high = (float(b) for b in bounds)
-            except (TypeError, ValueError):
-                raise ValueError(
-                    f"randomize[{name!r}]={bounds!r} must be a (low, high) pair of numbers"
-                ) from None
-            if not (math.isfinite(low) and math.isfinite(high) and low <= high):
-                raise ValueError(f"randomize[{name!r}]={bounds!r} needs finite low <= high")
-            scene.replace(**{name: low})  # each end must make a valid scene
-            scene.replace(**{name: high})
-            ranges[name] = (low, high)
-        if render_mode is not None and render_mode not in render_modes:
-            raise ValueError(
-                f"render_mode={render_mode!r} is not one of {render_modes} (or None)"
-            )
-        return cls(task, scene, float(dt), float(tolerance), integrator, substeps or 0,
-                   ranges, render_mode)
-
-    def draw_scene(self, rng: np.random.Generator) -> Scene:
-        """The scene of a new episode: the base scene, with the randomized fields drawn."""
-        if not self.randomize:
-            return self.scene
-        return self.scene.replace(
-            **{name: rng.uniform(low, high) for name, (low, high) in self.randomize.items()}
-        )
+        dt = validation.real("dt", dt, positive=True, unit="s")
+        tolerance = validation.real("tolerance", tolerance, positive=True)
+        integrator = validation.choice("integrator", integrator, tuple(METHODS))
+        if substeps is not None:
+            substeps = validation.count("substeps", substeps, high=MAX_SUBSTEPS)
+        render_mode = validation.choice("render_mode", render_mode, (*render_modes, None))
+        validation.check_integrable(scene, dt, task.max_torque)
+        reason = task.infeasible(scene)
+        if reason is not None:
+            raise ValueError(reason)
+        ranges = check_randomize(task, scene, dt, randomize)
+        return cls(task, scene, dt, tolerance, integrator, substeps or 0, ranges, render_mode)
 
     def scene_row(self, scene: Scene) -> tuple[float, ...]:
         """The numbers the integrator kernels take: ``(*Scene.params, mu)`` as floats."""
         return (*(float(p) for p in scene.params), float(scene.mu))
 
-    @staticmethod
-    def action_values(action: Any, shape: tuple[int, ...]) -> np.ndarray:
-        """Actions as float64 in [−1, 1] of ``shape``: out-of-range values are clipped;
-        NaN, inf or a wrong shape raise ValueError."""
-        try:
-            a = np.asarray(action, dtype=np.float64).reshape(shape)
-        except (TypeError, ValueError):
-            raise ValueError(
-                f"action={action!r} must be numbers of shape {shape} in [-1, 1]"
-            ) from None
-        if not np.isfinite(a).all():
-            raise ValueError(
-                f"action={action!r} is not finite; actions must be finite numbers in [-1, 1] "
-                "(out-of-range values are clipped)"
-            )
-        return np.clip(a, -1.0, 1.0)
-
     def resolve_option_scene(self, value: Any) -> Scene:
         return resolve_scene(value, self.task.default_scene)
+
+
+#: Points per randomized field at which a range's feasibility is checked (and refined).
+RANGE_POINTS = 33
+
+
+def check_randomize(task: Task, scene: Scene, dt: float,
+                    randomize: Mapping[str, Any] | None) -> dict[str, tuple[float, float]]:
+    """The ``randomize`` ranges, checked: each names a Scene field and is a (low, high) pair
+    of finite reals with low <= high; every value in it gives a valid scene (each field's
+    rule holds on the whole interval: these rules are intervals, so the ends and, for R,
+    the forbidden band [0, r] decide); and the task can be posed in the scenes of the
+    ranges (:meth:`Task.infeasible`, and :func:`validation.check_integrable`). The last is
+    checked at every corner of the box of ranges and at RANGE_POINTS points along each
+    field with the others at their ends, so a narrow infeasible pocket between checked
+    points can escape it; where a check fails the error names the field and the feasible
+    part of its range found by bisection to 1e-6 of its width.
+    """
+    if randomize is None:
+        return {}
+    if not isinstance(randomize, Mapping):
+        raise ValueError(f"randomize={randomize!r} is not allowed: it must be a mapping "
+                         "{field: (low, high)} of Scene fields, e.g. {'m': (0.8, 1.2)}")
+    ranges: dict[str, tuple[float, float]] = {}
+    for name, bounds in randomize.items():
+        if name not in _SCENE_FIELDS:
+            raise ValueError(f"randomize names {name!r}, not a Scene field; allowed: "
+                             f"{', '.join(_SCENE_FIELDS)}")
+        if not (isinstance(bounds, tuple | list | np.ndarray) and len(bounds) == 2):
+            raise ValueError(f"randomize[{name!r}]={bounds!r} must be a (low, high) pair of "
+                             "finite real numbers")
+        low = validation.real(f"randomize[{name!r}][0]", bounds[0])
+        high = validation.real(f"randomize[{name!r}][1]", bounds[1])
+        if low > high:
+            raise ValueError(f"randomize[{name!r}]={bounds!r} needs finite low <= high")
+        ranges[name] = (low, high)
+    for name, (low, high) in ranges.items():  # each field's own rule, on the whole interval
+        for end in (low, high):
+            scene.replace(**{name: end})
+    if "R" in ranges:
+        low, high = ranges["R"]
+        r_high = ranges.get("r", (0.0, float(scene.r)))[1]
+        if not (high < 0 or low > r_high):
+            raise ValueError(
+                f"randomize['R']={ranges['R']!r} passes through R in [0, r] (r up to "
+                f"{r_high} m), which is no scene: R must stay > r (inside a cylinder) or < 0 "
+                "(on a drum) over the whole range"
+            )
+
+    def problem(values: dict[str, float]) -> str | None:
+        candidate = scene.replace(**values)
+        try:
+            validation.check_integrable(candidate, dt, task.max_torque)
+        except ValueError as error:
+            return str(error)
+        return task.infeasible(candidate)
+
+    names = list(ranges)
+    corners = [dict(zip(names, ends, strict=True))
+               for ends in itertools.product(*(ranges[n] for n in names))]
+    for name in names:
+        low, high = ranges[name]
+        for corner in corners:
+            for value in np.linspace(low, high, RANGE_POINTS):
+                reason = problem({**corner, name: float(value)})
+                if reason is not None:
+                    feasible = _feasible_part(lambda v, c=corner, n=name: problem(
+                        {**c, n: v}) is None, low, high, RANGE_POINTS)
+                    raise ValueError(
+                        f"randomize[{name!r}]={ranges[name]!r} cannot be used: at {name} = "
+                        f"{float(value):.6g} (other fields at {corner}) {reason}; feasible "
+                        f"part of the range: {feasible}"
+                    )
+    return ranges
+
+
+def _feasible_part(ok, low: float, high: float, points: int) -> str:
+    """The longest feasible run of a scan of [low, high], its ends refined by bisection."""
+    grid = np.linspace(low, high, points)
+    flags = [ok(float(v)) for v in grid]
+    best, start = None, None
+    for i, flag in enumerate([*flags, False]):
+        if flag and start is None:
+            start = i
+        if not flag and start is not None:
+            if best is None or i - start > best[1] - best[0]:
+                best = (start, i - 1)
+            start = None
+    if best is None:
+        return "none"
+    ends = []
+    for inside, step in ((best[0], -1), (best[1], 1)):
+        a = float(grid[inside])
+        outside = inside + step
+        if not 0 <= outside < points:
+            ends.append(a)
+            continue
+        b = float(grid[outside])
+        for _ in range(40):
+            if abs(b - a) <= 1e-6 * (high - low):
+                break
+            mid = 0.5 * (a + b)
+            a, b = (mid, b) if ok(mid) else (a, mid)
+        ends.append(a)
+    return f"[{min(ends):.6g}, {max(ends):.6g}]"

@@ -27,6 +27,7 @@ from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
+from roller_gym import validation
 from roller_gym.physics import Scene
 from roller_gym.physics import equations as eq
 
@@ -191,7 +192,10 @@ def start_episodes(
     task = config.task
     if options.get("scene") is not None:
         scene = config.resolve_option_scene(options["scene"])
-        task.check_scene(scene)
+        reason = task.infeasible(scene)
+        if reason is not None:
+            raise ValueError(f"options['scene']: {reason}")
+        validation.check_integrable(scene, config.dt, task.max_torque)
     elif config.randomize:
         fields_ = scene_rows(base, n)
         drawn = {
@@ -240,6 +244,14 @@ def _draw_states(task: Any, scene: Scene, target: np.ndarray, seed: np.ndarray,
         todo = todo[~found]
         if todo.size == 0:
             return phi, phi_dot
+    # The fallback the task's feasibility check guarantees (rare: every candidate failed).
+    for i in todo:
+        start = task.fallback_start(scene if scene.batch_size is None else scene.item(int(i)))
+        if start is None:
+            break
+        phi[i], phi_dot[i] = start
+    else:
+        return phi, phi_dot
     raise ValueError(
         f"no start state found for {todo.size} episode(s) after {ROUNDS * CANDIDATES} "
         f"candidates in {take(scene, todo[:1], n)!r}: {task.start_rule}"

@@ -15,7 +15,7 @@ from typing import Any, ClassVar
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
-from roller_gym import episode
+from roller_gym import episode, validation
 from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig
 from roller_gym.physics import Scene
 from roller_gym.physics.integrators import STEP_FIELDS, Stepper
@@ -125,10 +125,11 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         if self._stream_seed is None:
             raise RuntimeError("call reset() before step()")
-        if type(action) is np.ndarray and action.shape == (1,) and math.isfinite(action[0]):
+        if (type(action) is np.ndarray and action.shape == (1,) and action.dtype.kind == "f"
+                and math.isfinite(action[0])):
             a = min(1.0, max(-1.0, float(action[0])))  # the common case, without the checks' cost
         else:
-            a = float(self.config.action_values(action, (1,))[0])
+            a = float(validation.actions(action, (1,))[0])
         tau = a * self.task.max_torque
         result = StepFloats._make(self._stepper.advance(self.phi, self.phi_dot, tau))
         self.phi, self.phi_dot, self.torque = result.phi, result.phi_dot, tau

@@ -182,13 +182,39 @@ class Task:
 
     # -- per episode (arrays of rollers; the uniforms come from the episode core) ------
     #: The start-state rule, as the error message states it when no start state is found.
-    start_rule: ClassVar[str] = (
-        "within psi = ±60°, |phi_dot| <= 1 rad/s, rolling under every torque within the "
-        "limit; lower max_torque or raise mu"
-    )
+    start_rule: ClassVar[str] = "ψ within ±60° and |φ'| <= 1 rad/s"
 
     def check_scene(self, scene: Scene) -> None:
         """Raise ValueError if the task cannot be posed in ``scene`` (default: any scene)."""
+
+    def infeasible(self, scene: Scene) -> str | None:
+        """Why the task cannot be posed in the scalar ``scene``, or None if it can: the
+        task's own condition (:meth:`check_scene`), and a start state: one of the
+        :meth:`fallback_starts` must roll under every torque within the limit (the draw
+        falls back to it, so a start-state draw never fails where this holds)."""
+        try:
+            self.check_scene(scene)
+        except ValueError as error:
+            return str(error)
+        if self.fallback_start(scene) is None:
+            return (f"no start state of {scene!r} rolls under torques up to "
+                    f"{self.max_torque} N·m (the roller slips or lifts off at every state of "
+                    f"{self.start_rule}); lower max_torque or raise mu")
+        return None
+
+    def fallback_start(self, scene: Scene) -> tuple[float, float] | None:
+        """The start state (φ [rad], φ' [rad/s]) the draw falls back to when none of its
+        random candidates rolls: the accepted one nearest the bottom of a fixed grid of
+        states at rest over the start range (41 points, φ = 0 among them), or None."""
+        grid = np.linspace(0.0, 1.0, 41)
+        u = np.concatenate([[0.5], grid])[None, :]  # the middle (the bottom) first
+        phi, phi_dot = self.start_candidates(u, np.full_like(u, 0.5), scene)
+        ok = self.start_accepted(phi, phi_dot, scene)[0]
+        if not ok.any():
+            return None
+        order = np.argsort(np.abs(phi[0]), kind="stable")
+        best = order[np.argmax(ok[order])]
+        return float(phi[0, best]), float(phi_dot[0, best])
 
     def sample_targets(self, u: np.ndarray, scene: Scene) -> np.ndarray:
         """The rest positions φ* [rad] the episodes ask for, from uniforms ``u`` in [0, 1)

@@ -28,7 +28,7 @@ from gymnasium import spaces
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
-from roller_gym import episode
+from roller_gym import episode, validation
 from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig, resolve_scene
 from roller_gym.physics import Scene
 from roller_gym.physics.integrators import STEP_FIELDS, BatchStepper, StepResult
@@ -83,10 +83,7 @@ class RollerVectorEnv(VectorEnv):
         max_episode_steps: int | None = None,
         autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
     ) -> None:
-        if not (isinstance(num_envs, int | np.integer) and not isinstance(num_envs, bool)
-                and num_envs >= 1):
-            raise ValueError(f"num_envs={num_envs!r} must be an integer >= 1")
-        num_envs = int(num_envs)
+        num_envs = validation.count("num_envs", num_envs)
         per_env = self._per_env_scenes(scene, num_envs)
         self.config = EnvConfig.build(
             get_task(task), scene=None if per_env else scene, dt=dt, max_torque=max_torque,
@@ -103,21 +100,17 @@ class RollerVectorEnv(VectorEnv):
         if per_env:
             resolved = [resolve_scene(s, task.default_scene) for s in per_env]
             for s in {id(s): s for s in resolved}.values():
-                task.check_scene(s)
+                reason = task.infeasible(s)
+                if reason is not None:
+                    raise ValueError(reason)
+                validation.check_integrable(s, self.config.dt, task.max_torque)
             self._base = Scene.stack(resolved)
         else:
             self._base = self.config.scene
         self.num_envs = num_envs
         self.render_mode = render_mode
-        if max_episode_steps is None:
-            max_episode_steps = task.max_episode_steps
-        if not (isinstance(max_episode_steps, int | np.integer)
-                and not isinstance(max_episode_steps, bool) and max_episode_steps >= 1):
-            raise ValueError(
-                f"max_episode_steps={max_episode_steps!r} must be an integer >= 1 (or None: "
-                f"the task's, {task.max_episode_steps})"
-            )
-        self.max_episode_steps = int(max_episode_steps)
+        self.max_episode_steps = (task.max_episode_steps if max_episode_steps is None else
+                                  validation.count("max_episode_steps", max_episode_steps))
         self.single_action_space = spaces.Box(-1.0, 1.0, (1,), np.float32)
         self.action_space = batch_space(self.single_action_space, num_envs)
         size = task.observation_size
@@ -230,7 +223,7 @@ class RollerVectorEnv(VectorEnv):
     def step(
         self, actions: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
-        a = self.config.action_values(actions, (self.num_envs, 1))[:, 0]
+        a = validation.actions(actions, (self.num_envs, 1))[:, 0]
         if not self._seeded:
             raise RuntimeError("call reset() before step()")
         tau = a * self.task.max_torque

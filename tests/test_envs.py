@@ -390,16 +390,25 @@ def test_success_flag_is_the_documented_band():
 
 
 def test_terminated_when_the_roller_slips():
-    """μ = 0.05, at rest at the bottom, full torque: by PHYSICS.md, |F| > μN at once."""
-    scene = preset("paper").replace(mu=0.05)
+    """μ = 0.3: it rolls at rest at the bottom under full torque (|F| <= μN by PHYSICS.md),
+    but driven up the wall at full torque it needs more friction than μN and slips."""
+    scene = preset("paper").replace(mu=0.3)
+    ref = model(scene, 0.0, 0.0, 0.5)
+    assert abs(ref["friction"]) < 0.3 * ref["normal"]  # the precondition, independently
     env = gym.make("roller_gym/RollerStabilize-v1", scene=scene)
     _, info = env.reset(seed=0, options={"state": (0.0, 0.0)})
     assert not info["slipping"]
-    ref = model(scene, 0.0, 0.0, 0.5)
-    assert abs(ref["friction"]) > 0.05 * ref["normal"] > 0  # the precondition, independently
-    _, _, terminated, truncated, info = env.step(act(1.0))
+    for _ in range(60):
+        before = info
+        _, _, terminated, truncated, info = env.step(act(1.0))
+        if terminated:
+            break
     assert terminated and not truncated
     assert info["slipping"] and not info["lifting"] and info["slip_margin"] < 0
+    start = model(scene, before["phi"], before["phi_dot"], 0.5)
+    assert abs(start["friction"]) <= 0.3 * start["normal"]  # it rolled when the step began
+    end = model(scene, info["phi"], info["phi_dot"], 0.5)
+    assert abs(end["friction"]) > 0.3 * end["normal"]  # and slips at its end
 
 
 def test_terminated_when_the_roller_lifts_off():

@@ -7,6 +7,7 @@ which searches one scene at one torque.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -165,39 +166,69 @@ class Equilibrium:
     stable: bool
 
 
-def equilibria(scene: Scene, tau: float = 0.0, resolution: int = 4000) -> list[Equilibrium]:
-    """The rest positions under the constant torque τ [N·m] within one turn of ψ.
+#: Where one turn of ψ spans more turns of φ than this (a nearly flat surface), equilibria
+#: are searched within this many turns of φ either way: the cost stays bounded whatever R.
+MAX_TURNS = 64
 
-    Solves m g (r sin ψ + e sin φ) = τ for φ with ψ in [−π, π) (φ in [−π, π) on the floor,
-    where ψ stays 0), by bracketing sign changes on a grid of ``resolution`` points per
-    turn of the faster of φ and ψ and refining each with Brent's method. A rest position
-    is stable where d²V/dφ² > 0 (a minimum of V − τφ).
+
+def equilibria(scene: Scene, tau: float = 0.0, resolution: int = 4000) -> list[Equilibrium]:
+    """The rest positions under the constant torque τ [N·m], sorted by φ.
+
+    Solves f(φ) = m g (r sin ψ + e sin φ) − τ = 0 within one turn of ψ (ψ in [−π, π)), or,
+    where that spans more than :data:`MAX_TURNS` turns of φ (a nearly flat surface), within
+    that many turns of φ either way; on the floor, where ψ stays 0 and V is periodic in φ,
+    within one turn of φ (φ in [−π, π)). The critical points of f
+    (d²V/dφ² = 0) are bracketed on a grid of ``resolution`` points per turn of φ and
+    refined by Brent's method; between two consecutive ones f is monotone, so it has at
+    most one root there, found by Brent's method where f changes sign or vanishes. So
+    nearly coincident pairs of rest positions near an extremum of f are found too, and the
+    cost is bounded whatever R is. A rest position is stable where d²V/dφ² > 0 (a minimum
+    of V − τφ).
+
+    A scene without a restoring potential (a uniform disc on the floor: e = 0, κ = 0) has
+    no isolated rest positions (every position is neutral at τ = 0, none holds at τ ≠ 0):
+    the result is empty.
     """
     if scene.batch_size is not None:
         raise ValueError("equilibria() takes a scalar scene; call it per element of a batch")
     if not math.isfinite(tau):
         raise ValueError(f"tau={tau!r} [N·m] must be finite")
     m, r, kappa, e, _, g, _ = scene.params
+    if kappa == 0 and e == 0:
+        return []
     s = 1.0 - r * kappa
-    half = math.pi if kappa == 0 else math.pi * s / (r * abs(kappa))
-    turns = max(1.0, half / math.pi, half * r * abs(kappa) / (s * math.pi))
-    count = int(resolution * turns)
-    pad = 2.0 * half / count
-    grid = np.linspace(-half - pad, half + pad, count + 3)
+    rate = abs(r * kappa / s)  # dψ/dφ
+    half = math.pi if kappa == 0 else math.pi * min(1.0 / rate, MAX_TURNS)
+    count = int(resolution * half / math.pi) + 1
+    pad = 2.0 * half / count  # a root at the window's ends is bracketed from outside too
+    grid = np.linspace(-half - pad, half + pad, count + 2)
 
     def f(phi):
         return eq.dpotential(phi, m, r, kappa, e, g) - tau
 
-    values = f(grid)
-    roots = list(grid[:-1][values[:-1] == 0.0])
+    def stiffness(phi):
+        return eq.d2potential(phi, m, r, kappa, e, g)
+
+    values = stiffness(grid)
+    knots = [float(grid[0])]
     for a, b, fa, fb in zip(grid[:-1], grid[1:], values[:-1], values[1:], strict=True):
-        if fa * fb < 0:
+        if fa == 0.0:
+            knots.append(float(a))
+        elif fa * fb < 0:
+            knots.append(brentq(stiffness, a, b, xtol=1e-15, rtol=1e-15))
+    knots.append(float(grid[-1]))
+    roots: list[float] = []
+    for a, b in itertools.pairwise(knots):
+        fa, fb = f(a), f(b)
+        if fa == 0.0:
+            roots.append(a)
+        elif fa * fb < 0:
             roots.append(brentq(f, a, b, xtol=1e-15, rtol=1e-15))
     out = []
-    for phi in sorted(roots):
-        if not -half <= phi < half:
+    edge = 1e-9 * half  # the window is half-open: ψ = π is ψ = −π, counted once
+    for phi in sorted(set(roots)):
+        if not -half - edge <= phi < half - edge:
             continue
-        stiffness = eq.d2potential(phi, m, r, kappa, e, g)
         psi = r * kappa * phi / s
-        out.append(Equilibrium(float(phi), float(psi), bool(stiffness > 0)))
+        out.append(Equilibrium(float(phi), float(psi), bool(stiffness(phi) > 0)))
     return out

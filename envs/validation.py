@@ -1,0 +1,112 @@
+"""One rule for every argument, and the limits of what can be integrated.
+
+* Floats are real numbers: Python or NumPy, not ``bool``, not strings, not complex.
+* Counts are integers: Python or NumPy, not ``bool``.
+* Anything else is refused with a ``ValueError`` naming the argument, the value, what was
+  wrong and what is allowed.
+
+:func:`check_integrable` states the limits of a scene and a control step that the
+integrators can follow in float64; the environments call it at construction, so that a
+setting that cannot work fails there and not at a random step later.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from roller_gym.physics import Scene
+
+__all__ = ["actions", "check_integrable", "choice", "count", "real"]
+
+_REAL = (int, float, np.integer, np.floating)
+#: The largest magnitude [SI] of the scene's derived quantities (m g r, …): squares stay finite.
+LARGEST = 1e100
+#: The largest ω_max·dt: the scene's fastest linear oscillation, or the torque's spin-up,
+#: over one control step (the adaptive integrators take a few substeps per radian of it).
+LARGEST_PHASE_PER_STEP = 1e4
+
+
+def real(name: str, value: Any, *, positive: bool = False, nonnegative: bool = False,
+         unit: str = "") -> float:
+    """``value`` as a finite float, or ValueError naming ``name``."""
+    allowed = "a finite real number" + (" > 0" if positive else " >= 0" if nonnegative else "")
+    if not isinstance(value, _REAL) or isinstance(value, bool | np.bool_):
+        raise ValueError(f"{name}={value!r} is not allowed: it must be {allowed}"
+                         f"{f' [{unit}]' if unit else ''} (a Python or NumPy number, not "
+                         f"{type(value).__name__})")
+    x = float(value)
+    if not math.isfinite(x) or (positive and x <= 0) or (nonnegative and x < 0):
+        raise ValueError(f"{name}={value!r} is out of range: it must be {allowed}"
+                         f"{f' [{unit}]' if unit else ''}")
+    return x
+
+
+def count(name: str, value: Any, *, low: int = 1, high: int | None = None) -> int:
+    """``value`` as an int in [low, high], or ValueError naming ``name``."""
+    allowed = f"an integer >= {low}" + (f" and <= {high}" if high is not None else "")
+    if (not isinstance(value, int | np.integer) or isinstance(value, bool | np.bool_)
+            or value < low or (high is not None and value > high)):
+        raise ValueError(f"{name}={value!r} is not allowed: it must be {allowed} (a Python or "
+                         "NumPy integer)")
+    return int(value)
+
+
+def choice(name: str, value: Any, allowed: Any) -> Any:
+    """``value`` if it is one of ``allowed`` (hashable or not), else ValueError."""
+    if not isinstance(value, str | type(None)) or value not in allowed:
+        raise ValueError(f"{name}={value!r} is not allowed: it must be one of "
+                         f"{', '.join(repr(a) for a in allowed)}")
+    return value
+
+
+def actions(value: Any, shape: tuple[int, ...]) -> np.ndarray:
+    """Actions as float64 in [−1, 1] of ``shape``: real numbers only; out-of-range values
+    are clipped; NaN, inf, another shape, complex or text raise ValueError."""
+    a = np.asarray(value)
+    if a.dtype.kind not in "iuf" or a.size != math.prod(shape):
+        raise ValueError(f"action={value!r} is not allowed: it must be real numbers of shape "
+                         f"{shape} in [-1, 1] (out-of-range values are clipped)")
+    a = a.astype(np.float64).reshape(shape)
+    if not np.isfinite(a).all():
+        raise ValueError(f"action={value!r} is not finite; actions must be finite numbers in "
+                         "[-1, 1] (out-of-range values are clipped)")
+    return np.clip(a, -1.0, 1.0)
+
+
+def check_integrable(scene: Scene, dt: float, max_torque: float) -> None:
+    """Raise ValueError if the integrators cannot follow ``scene`` over steps of ``dt`` [s]
+    under torques up to ``max_torque`` [N·m] in float64.
+
+    With J_min = m (k² + (r − e)²) [kg·m²] the smallest moment of inertia about the contact,
+    the limits are: m g r, J_min and max_torque representable with room for their squares
+    (between 1e-100 and 1e100 in SI units), and the fastest phase per control step,
+    (ω_max + sqrt(max_torque / J_min)) · dt with ω_max² = m g (r²|κ|/(1 − rκ) + e)/J_min,
+    at most 1e4 rad: beyond it a control step spans more oscillations than the integrators'
+    substep budget can follow.
+    """
+    for i in range(scene.batch_size or 1):
+        one = scene.item(i) if scene.batch_size else scene
+        m, r, kappa, e, k, g = (float(x) for x in one.params[:6])
+        j_min = m * (k * k + (r - e) ** 2)
+        weight_arm = m * g * r
+        for label, x in (("m g r", weight_arm), ("J_min = m (k² + (r − e)²)", j_min),
+                         ("max_torque", max_torque)):
+            if not (math.isfinite(x) and 1e-100 <= abs(x) <= LARGEST):
+                raise ValueError(
+                    f"{one!r} cannot be integrated in float64: {label} = {x:.3g} (SI) lies "
+                    "outside [1e-100, 1e100]; rescale the scene's units"
+                )
+        s = 1.0 - r * kappa
+        omega = math.sqrt(m * g * (r * r * abs(kappa) / s + e) / j_min)
+        spin = math.sqrt(max_torque / j_min)
+        phase = (omega + spin) * dt
+        if not phase <= LARGEST_PHASE_PER_STEP:
+            raise ValueError(
+                f"dt={dt!r} s is too long for {one!r}: its fastest time scale is "
+                f"{1.0 / (omega + spin):.3g} s (ω_max = {omega:.3g} rad/s, torque spin-up "
+                f"{spin:.3g} rad/s), {phase:.3g} rad per step where at most "
+                f"{LARGEST_PHASE_PER_STEP:g} can be followed; use a shorter dt, a larger k or "
+                "a smaller e"
+            )

@@ -1,0 +1,172 @@
+"""What used to fail late or silently fails early and clearly: randomize ranges checked on
+their whole interval at construction, arguments by one type rule, settings that cannot be
+integrated, and the equilibria search at bounded cost (checked against independent
+computations)."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import roller_gym
+from roller_gym import Scene, preset
+from roller_gym.physics import analysis
+from scipy.optimize import brentq, minimize_scalar
+
+STABILIZE, HOLD, BALANCE = (f"roller_gym/Roller{t}-v1" for t in ("Stabilize", "Hold", "Balance"))
+
+
+# -- 1. randomize ranges --------------------------------------------------------------------
+@pytest.mark.parametrize(
+    ("env_id", "ranges", "message"),
+    [
+        (STABILIZE, {"R": (-1.0, 1.0)}, r"passes through R in \[0, r\]"),
+        (STABILIZE, {"mu": (0.2, 1.0)}, r"randomize\['mu'\].*feasible part of the range: \[0.2"),
+        (HOLD, {"mu": (0.3, 1.0)}, r"randomize\['mu'\].*feasible part of the range: \[0.4"),
+        (BALANCE, {"R": (0.5, 2.0)}, r"randomize\['R'\].*not reachable.*feasible part"),
+        (BALANCE, {"e": (0.03, 0.05)}, r"randomize\['e'\].*not reachable.*feasible part of "
+                                       r"the range: \[0.049"),
+        (STABILIZE, {"r": (0.05, 0.6)}, r"Scene.R=0.5 is not allowed with r=0.6"),
+    ],
+)
+def test_a_range_that_cannot_be_posed_is_refused_at_construction(env_id, ranges, message):
+    for make in (lambda: gym.make(env_id, randomize=ranges),
+                 lambda: gym.make_vec(env_id, num_envs=8, randomize=ranges)):
+        with pytest.raises(ValueError, match=message):
+            make()
+
+
+def test_the_feasible_part_it_names_is_feasible_and_its_edge_is_the_boundary():
+    """μ: the roller rolls at rest at the bottom under ±max_torque while μ g >= |F|/m, by
+    PHYSICS.md at φ = φ' = 0: F/m = (r − e) τ/(m (k² + (r − e)²)), N/m = g (with e sin θ = 0
+    there); the named lower end matches that threshold."""
+    scene = preset("paper")
+    m, r, e, k, g = (float(getattr(scene, f)) for f in ("m", "r", "e", "k", "g"))
+    tau = 0.5
+    threshold = (r - e) * tau / (m * (k * k + (r - e) ** 2)) / g
+    with pytest.raises(ValueError) as info:
+        gym.make(STABILIZE, randomize={"mu": (0.1, 1.0)})
+    low = float(str(info.value).split("feasible part of the range: [")[1].split(",")[0])
+    assert low == pytest.approx(threshold, rel=1e-4)
+    env = gym.make(STABILIZE, randomize={"mu": (low * 1.001, 1.0)})
+    vec = gym.make_vec(STABILIZE, num_envs=256, randomize={"mu": (low * 1.001, 1.0)})
+    env.reset(seed=0)
+    vec.reset(seed=0)  # every sub-environment starts: no late failure
+    for _ in range(3):
+        vec.step(np.zeros((256, 1), np.float32))
+
+
+def test_feasible_ranges_construct_and_start():
+    vec = gym.make_vec(BALANCE, num_envs=64, randomize={"R": (0.7, 1.5), "m": (0.8, 1.2)})
+    vec.reset(seed=1)
+    assert len({float(s.R) for s in vec.unwrapped.scenes}) == 64
+
+
+# -- 2. equilibria at bounded cost, checked independently --------------------------------------
+def test_equilibria_cost_is_bounded_and_near_floor_behaves_like_the_floor():
+    """On a nearly flat surface the rest positions nearest the bottom approach the floor's
+    (φ = 0 stable, φ = ±π unstable for e > 0); the search costs the same at R = 1e12."""
+    floor = analysis.equilibria(Scene(R=math.inf, e=0.08, k=0.1), 0.0)
+    assert [round(q.phi, 9) for q in floor] == [round(-math.pi, 9), 0.0]
+    for R in (100.0, 300.0, 1e6, 1e12):
+        start = time.process_time()
+        found = analysis.equilibria(Scene(R=R, e=0.08, k=0.1), 0.0)
+        assert time.process_time() - start < 5.0  # was MemoryError at 1e12
+        near = [q for q in found if abs(q.phi) < 4.0]
+        assert [q.stable for q in near] == [False, True, False]
+        # r sin ψ + e sin φ = 0 near φ = π, ψ = r φ/(R − r) (PHYSICS.md's cylinder form)
+        root = brentq(lambda x, R=R: 0.1 * math.sin(0.1 * x / (R - 0.1)) + 0.08 * math.sin(x),
+                      3.0, 3.3, xtol=1e-14)
+        assert near[2].phi == pytest.approx(root, abs=1e-9)
+    env = gym.make(BALANCE, scene=Scene(R=1e12, e=0.08, k=0.1))
+    assert env.unwrapped.target == pytest.approx(math.pi, abs=1e-9)
+
+
+def test_nearly_coincident_rest_positions_near_the_largest_holding_torque():
+    """Just below the largest holding torque two rest positions lie close together on each
+    side of the maximum of dV/dφ; both are found (checked by bracketing them around the
+    maximum, found here by a bounded minimization)."""
+    scene = preset("paper")
+    m, r, kappa, e, _, g, _ = scene.params
+
+    def moment(phi):
+        return m * g * (r * math.sin(r * kappa * phi / (1 - r * kappa)) + e * math.sin(phi))
+
+    top = minimize_scalar(lambda x: -moment(x), bounds=(7.5, 7.8), method="bounded",
+                          options={"xatol": 1e-12})
+    peak, largest = top.x, -top.fun
+    for gap in (1e-7, 1e-9):
+        tau = largest * (1 - gap)
+
+        def f(x, tau=tau):
+            return moment(x) - tau
+
+        expected = [brentq(f, peak - 0.3, peak, xtol=1e-15),
+                    brentq(f, peak, peak + 0.3, xtol=1e-15)]
+        found = [q for q in analysis.equilibria(scene, tau) if abs(q.phi - peak) < 0.3]
+        assert [q.phi for q in found] == pytest.approx(expected, abs=1e-7)
+        assert [q.stable for q in found] == [True, False]
+
+
+def test_a_uniform_disc_on_the_floor_has_no_isolated_rest_position():
+    assert analysis.equilibria(Scene(R=math.inf, e=0.0), 0.0) == []
+    assert analysis.equilibria(Scene(R=math.inf, e=0.0), 0.1) == []
+    with pytest.raises(ValueError, match="no unstable rest position"):
+        gym.make(BALANCE, scene=Scene(R=math.inf, e=0.0))
+
+
+# -- 3. types --------------------------------------------------------------------------------
+def test_numpy_numbers_are_numbers():
+    env = gym.make(STABILIZE, dt=np.float32(0.05), substeps=np.int64(3),
+                   max_torque=np.float64(0.4), tolerance=np.float32(1e-7))
+    _, info = env.reset(seed=0)
+    _, _, _, _, info = env.step(np.array([0.5], np.float32))
+    assert info["substeps"] == 3 and info["torque"] == pytest.approx(0.2)
+    vec = gym.make_vec(STABILIZE, num_envs=np.int64(2), max_episode_steps=np.int32(5))
+    assert vec.num_envs == 2
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "name"),
+    [({"max_torque": "1"}, "max_torque"), ({"dt": "0.05"}, "dt"), ({"dt": True}, "dt"),
+     ({"max_torque": [1, 2]}, "max_torque"), ({"integrator": []}, "integrator"),
+     ({"randomize": ["m"]}, "randomize"), ({"randomize": "m"}, "randomize"),
+     ({"randomize": {"m": (0.8, "1.2")}}, r"randomize\['m'\]\[1\]"),
+     ({"substeps": 2.0}, "substeps"), ({"substeps": True}, "substeps"),
+     ({"tolerance": complex(1e-8, 0)}, "tolerance")],
+)
+def test_wrong_types_are_refused_naming_the_argument(kwargs, name):
+    with pytest.raises(ValueError, match=rf"{name}=.*(not allowed|out of range)"):
+        gym.make(STABILIZE, **kwargs)
+
+
+@pytest.mark.parametrize("action", [np.array([1j]), np.array(["0.5"]), "0.5",
+                                    np.array([0.1, 0.2])])
+def test_actions_must_be_real_numbers_of_the_right_shape(action):
+    env = gym.make(STABILIZE).unwrapped
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="action="):
+        env.step(action)
+
+
+# -- 4. settings that cannot be integrated ----------------------------------------------------
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [({"dt": 1e6}, r"dt=1000000.0 s is too long"),
+     ({"scene": Scene(g=1e300)}, "cannot be integrated in float64"),
+     ({"scene": Scene(r=1e-300, R=1e-299, e=0, k=1e-300)}, "cannot be integrated in float64"),
+     ({"scene": Scene(e=0.1, k=1e-9)}, r"dt=0.05 s is too long")],
+)
+def test_settings_that_cannot_be_integrated_are_refused_at_construction(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        gym.make(STABILIZE, **kwargs)
+    with pytest.raises(ValueError, match=message):
+        gym.make_vec(STABILIZE, num_envs=2, **kwargs)
+
+
+def test_every_registered_task_constructs_with_its_defaults():
+    for env_id in roller_gym.ENV_IDS:
+        gym.make(env_id).reset(seed=0)
