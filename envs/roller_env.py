@@ -108,7 +108,9 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
             self.config, self.config.scene, np.array([self._stream_seed], np.uint64),
             np.array([self._episode], np.uint64), options,
         )
-        self._set_scene(start.scene if start.scene.batch_size is None else start.scene.item(0))
+        scene = start.scene if start.scene.batch_size is None else start.scene.item(0)
+        if scene is not self.scene:  # randomized, or set by the options: its numbers anew
+            self._set_scene(scene)
         self._target_params = start.target_params[0]
         self.target, self.target_rate = float(start.target[0]), float(start.target_rate[0])
         self._time = 0.0

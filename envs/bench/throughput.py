@@ -1,0 +1,316 @@
+"""The environments' speed against their peers, as ratios measured in one run.
+
+    python -m roller_gym.bench.throughput measure --out docs   # measure, write the JSON, render
+    python -m roller_gym.bench.throughput render --out docs    # render the JSON again, no measuring
+
+Measuring writes ``<out>/benchmarks/throughput.json`` (the results with the machine, the
+package versions and the command); rendering turns it into ``<out>/THROUGHPUT.md``. Each
+verdict against a target is one small function of the results (:data:`VERDICTS`). Every
+speed is a best-of-repeats time of a peer and of ours in the same run; the machine may be
+shared, so the ratios are the figures to read, not the absolute speeds.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import importlib.metadata
+import json
+import os
+import platform
+import sys
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+TASK = "roller_gym/RollerStabilize-v1"
+#: Targets: the vector env against CartPoleVectorEnv, the single env against Pendulum-v1,
+#: starting 65,536 sub-environments, the share of a vector step outside the physics kernel,
+#: the 10-s episode's state error.
+TARGETS = {"vector_vs_cartpole": 0.25, "single_vs_pendulum": 1.5, "reset_65536_s": 0.25,
+           "outside_kernel_share": 0.25, "episode_error_rad": 1e-6}
+
+
+def best_time(run: Callable[[], None], repeats: int) -> float:
+    """The shortest of ``repeats`` wall times [s] of ``run()``."""
+    best = float("inf")
+    for _ in range(repeats):
+        start = time.perf_counter()
+        run()
+        best = min(best, time.perf_counter() - start)
+    return best
+
+
+def vector_steps_per_s(env: Any, actions: np.ndarray, steps: int, repeats: int) -> float:
+    """Environment steps per second of ``env.step`` (all sub-environments counted)."""
+    env.step(actions)  # warm up
+
+    def run() -> None:
+        for _ in range(steps):
+            env.step(actions)
+
+    return env.num_envs * steps / best_time(run, repeats)
+
+
+def measure_vector(sizes: Sequence[int], steps: int, repeats: int) -> dict[str, Any]:
+    import gymnasium as gym
+
+    out: dict[str, Any] = {}
+    rng = np.random.default_rng(0)
+    for n in sizes:
+        ours = gym.make_vec(TASK, num_envs=n)
+        ours.reset(seed=0)
+        a = rng.uniform(-1, 1, (n, 1)).astype(np.float32)
+        cart = gym.make_vec("CartPole-v1", num_envs=n, vectorization_mode="vector_entry_point")
+        cart.reset(seed=0)
+        a_cart = rng.integers(0, 2, n)
+        ours_rate = vector_steps_per_s(ours, a, steps, repeats)
+        cart_rate = vector_steps_per_s(cart, a_cart, steps, repeats)
+        base = ours.unwrapped
+        tau = a[:, 0].astype(np.float64) * base.task.max_torque
+        stepper = base._stepper
+
+        def kernel(stepper=stepper, base=base, tau=tau) -> None:
+            for _ in range(steps):
+                stepper.advance(base.phi, base.phi_dot, tau)
+
+        kernel_rate = n * steps / best_time(kernel, repeats)
+        out[str(n)] = {"ours": ours_rate, "CartPoleVectorEnv": cart_rate,
+                       "kernel": kernel_rate, "outside_kernel_share": 1.0 - ours_rate / kernel_rate}
+    return out
+
+
+def measure_start(n: int, repeats: int) -> float:
+    """Seconds to construct and reset ``n`` sub-environments."""
+    import gymnasium as gym
+
+    def run() -> None:
+        gym.make_vec(TASK, num_envs=n).reset(seed=0)
+
+    return best_time(run, repeats)
+
+
+def measure_single(steps: int, repeats: int) -> dict[str, float]:
+    import gymnasium as gym
+
+    out = {}
+    for key, env_id in (("ours", TASK), ("Pendulum-v1", "Pendulum-v1")):
+        env = gym.make(env_id)
+        env.reset(seed=0)
+        a = np.array([0.1], np.float32)
+
+        def run(env=env, a=a) -> None:
+            for _ in range(steps):
+                _, _, terminated, truncated, _ = env.step(a)
+                if terminated or truncated:
+                    env.reset()
+
+        out[key] = steps / best_time(run, repeats)
+    return out
+
+
+def measure_ppo(n_envs: int, steps: int) -> dict[str, float]:
+    """SB3 PPO training steps per second, the native batch against DummyVecEnv."""
+    import torch
+    from roller_gym.sb3 import RollerVecEnv
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.env_util import make_vec_env
+
+    torch.set_num_threads(1)
+    out = {}
+    for key, env in (("RollerVecEnv", RollerVecEnv(TASK, n_envs=n_envs, seed=0)),
+                     ("DummyVecEnv", make_vec_env(TASK, n_envs=n_envs, seed=0))):
+        model = PPO("MlpPolicy", env, n_steps=128, batch_size=256, n_epochs=1, seed=0,
+                    device="cpu")
+        start = time.perf_counter()
+        model.learn(steps)
+        out[key] = steps / (time.perf_counter() - start)
+    return out
+
+
+def measure_episode_error(seconds: float = 10.0) -> float:
+    """The largest |φ − φ_ref| [rad] over an episode of random torques through
+    ``gymnasium.make`` at default settings, the reference DOP853 at rtol 1e-13."""
+    import gymnasium as gym
+    from roller_gym.physics import step
+
+    env = gym.make(TASK, max_episode_steps=10**6)
+    env.reset(seed=0, options={"state": (0.0, 0.0)})
+    base = env.unwrapped
+    rng = np.random.default_rng(1)
+    phi, phi_dot, worst = 0.0, 0.0, 0.0
+    for _ in range(round(seconds / base.config.dt)):
+        a = float(rng.uniform(-1, 1))
+        _, _, terminated, _, info = env.step(np.array([a], np.float32))
+        ref = step(base.scene, phi, phi_dot, a * base.task.max_torque, base.config.dt,
+                   method="dop853", tol=1e-13)
+        phi, phi_dot = ref.phi, ref.phi_dot
+        worst = max(worst, abs(info["phi"] - phi))
+        if terminated:
+            break
+    return worst
+
+
+def peers_missing() -> dict[str, str]:
+    """The optional peers that are not installed here, with why they are not measured."""
+    missing = {}
+    for name, module in (("EnvPool Pendulum-v1", "envpool"),
+                         ("Gymnasium phys2d/Pendulum-v0 (JAX)", "jax")):
+        try:
+            __import__(module)
+        except ImportError:
+            missing[name] = f"not measured: {module} is not installed in this environment"
+    return missing
+
+
+def machine() -> dict[str, Any]:
+    cpu = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    versions = {}
+    for dist in ("roller-gym", "gymnasium", "numpy", "numba", "stable-baselines3", "torch"):
+        try:
+            versions[dist] = importlib.metadata.version(dist)
+        except importlib.metadata.PackageNotFoundError:
+            versions[dist] = None
+    return {"cpu": cpu, "cores": os.cpu_count(), "os": platform.platform(),
+            "python": platform.python_version(), "versions": versions}
+
+
+def measure(quick: bool) -> dict[str, Any]:
+    sizes = (256, 1024) if quick else (4096, 65536)
+    steps, repeats = (5, 2) if quick else (20, 3)
+    start_n = 1024 if quick else 65536
+    return {
+        "machine": machine(),
+        "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        "command": " ".join([os.path.basename(sys.executable), "-m", __spec__.name
+                             if __spec__ else __name__, *sys.argv[1:]]),
+        "quick": quick,
+        "vector": measure_vector(sizes, steps, repeats),
+        "start_seconds": {str(start_n): measure_start(start_n, repeats)},
+        "single": measure_single(2000 if quick else 20000, repeats),
+        "ppo": measure_ppo(16, 2048 if quick else 16384),
+        "episode_error_rad": measure_episode_error(1.0 if quick else 10.0),
+        "peers_missing": peers_missing(),
+    }
+
+
+# -- verdicts: one small function each --------------------------------------------------------
+def verdict_vector(results: dict[str, Any]) -> list[tuple[str, float, float, bool]]:
+    """(what, value, target, met) of the vector env against CartPoleVectorEnv, per size."""
+    target = TARGETS["vector_vs_cartpole"]
+    return [(f"vector env ≥ {target} × CartPoleVectorEnv at {int(n):,}",
+             v["ours"] / v["CartPoleVectorEnv"], target,
+             v["ours"] / v["CartPoleVectorEnv"] >= target)
+            for n, v in results["vector"].items()]
+
+
+def verdict_outside_kernel(results: dict[str, Any]) -> list[tuple[str, float, float, bool]]:
+    n, v = max(results["vector"].items(), key=lambda item: int(item[0]))
+    target = TARGETS["outside_kernel_share"]
+    share = v["outside_kernel_share"]
+    return [(f"share of a vector step outside the kernel at {int(n):,} ≤ {target:.0%}", share,
+             target, share <= target)]
+
+
+def verdict_start(results: dict[str, Any]) -> list[tuple[str, float, float, bool]]:
+    target = TARGETS["reset_65536_s"]
+    return [(f"make_vec + reset of {int(n):,} ≤ {target} s", s, target, s <= target)
+            for n, s in results["start_seconds"].items()]
+
+
+def verdict_single(results: dict[str, Any]) -> list[tuple[str, float, float, bool]]:
+    target = TARGETS["single_vs_pendulum"]
+    ratio = results["single"]["ours"] / results["single"]["Pendulum-v1"]
+    return [(f"single env ≥ {target} × Pendulum-v1", ratio, target, ratio >= target)]
+
+
+def verdict_error(results: dict[str, Any]) -> list[tuple[str, float, float, bool]]:
+    target = TARGETS["episode_error_rad"]
+    err = results["episode_error_rad"]
+    return [(f"episode state error ≤ {target:g} rad", err, target, err <= target)]
+
+
+VERDICTS = (verdict_vector, verdict_outside_kernel, verdict_start, verdict_single,
+            verdict_error)
+
+
+def render(results: dict[str, Any]) -> str:
+    """The Markdown page of a results file (no measuring)."""
+    m = results["machine"]
+    lines = [
+        "# Throughput", "",
+        "The environments' speed against their peers, as ratios of best-of-repeats times "
+        "measured in the same run. Regenerate with "
+        "`python -m roller_gym.bench.throughput measure --out docs` (render the committed "
+        "results again with `render`).", "",
+        f"Measured {results['date']} on {m['cpu']} ({m['cores']} cores), {m['os']}, Python "
+        f"{m['python']}; " + ", ".join(f"{k} {v}" for k, v in m["versions"].items() if v)
+        + (" — a quick (smoke) run" if results["quick"] else "") + ".", "",
+        "## Targets", "", "| target | measured | met |", "|---|---:|:---:|",
+    ]
+    for verdict in VERDICTS:
+        for what, value, _target, met in verdict(results):
+            lines.append(f"| {what} | {value:.3g} | {'yes' if met else '**no**'} |")
+    lines += ["", "## The vector environment", "",
+              "| sub-environments | ours, steps/s | CartPoleVectorEnv, steps/s | ratio | "
+              "physics kernel alone, steps/s | share outside the kernel |",
+              "|---:|---:|---:|---:|---:|---:|"]
+    for n, v in results["vector"].items():
+        lines.append(f"| {int(n):,} | {v['ours']:,.0f} | {v['CartPoleVectorEnv']:,.0f} | "
+                     f"{v['ours'] / v['CartPoleVectorEnv']:.3f} | {v['kernel']:,.0f} | "
+                     f"{v['outside_kernel_share']:.0%} |")
+    single, ppo = results["single"], results["ppo"]
+    lines += ["", "## One environment and SB3", "",
+              f"- `gymnasium.make(\"{TASK}\")`: {single['ours']:,.0f} steps/s; Pendulum-v1 "
+              f"{single['Pendulum-v1']:,.0f} steps/s: "
+              f"{single['ours'] / single['Pendulum-v1']:.2f} ×.",
+              f"- SB3 PPO, 16 environments: {ppo['RollerVecEnv']:,.0f} training steps/s through "
+              f"`roller_gym.sb3.RollerVecEnv`, {ppo['DummyVecEnv']:,.0f} through `DummyVecEnv` "
+              f"of single environments: {ppo['RollerVecEnv'] / ppo['DummyVecEnv']:.2f} ×.",
+              f"- The state error of a 10-s episode of random torques through the environment "
+              f"at default settings, against DOP853 at rtol 1e-13: "
+              f"{results['episode_error_rad']:.2g} rad.", ""]
+    if results["peers_missing"]:
+        lines += ["## Peers not measured", ""]
+        lines += [f"- {name}: {why}." for name, why in results["peers_missing"].items()]
+        lines.append("")
+    return "\n".join(lines)
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description="The environments' throughput against "
+                                                 "their peers (ratios measured in one run).")
+    parser.add_argument("action", choices=("measure", "render"),
+                        help="measure (and render), or render the results file again")
+    parser.add_argument("--out", type=Path, default=Path("docs"),
+                        help="the docs folder: results go to OUT/benchmarks/throughput.json, "
+                             "the page to OUT/THROUGHPUT.md (default ./docs)")
+    parser.add_argument("--quick", action="store_true", help="a smoke run in seconds")
+    args = parser.parse_args(argv)
+    path = args.out / "benchmarks" / "throughput.json"
+    if args.action == "measure":
+        results = measure(args.quick)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(results, indent=2) + "\n")
+        print(f"wrote {path}")
+    results = json.loads(path.read_text())
+    page = args.out / "THROUGHPUT.md"
+    page.write_text(render(results))
+    print(f"wrote {page}")
+    for verdict in VERDICTS:
+        for what, value, _target, met in verdict(results):
+            print(f"{'met ' if met else 'MISS'} {what}: {value:.3g}")
+
+
+if __name__ == "__main__":
+    main()
