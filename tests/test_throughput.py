@@ -1,0 +1,53 @@
+"""The throughput benchmark's verdicts and page, on synthetic results (no measuring)."""
+
+from __future__ import annotations
+
+import copy
+
+import pytest
+from roller_gym.bench import throughput
+
+RESULTS = {
+    "machine": {"cpu": "a CPU", "cores": 2, "os": "an OS", "python": "3.11",
+                "versions": {"gymnasium": "1.4.0", "numba": None}},
+    "date": "2026-01-01T00:00:00+00:00", "command": "python -m roller_gym.bench.throughput",
+    "quick": False,
+    "vector": {"4096": {"ours": 3e6, "CartPoleVectorEnv": 10e6, "kernel": 4e6,
+                        "outside_kernel_share": 0.25},
+               "65536": {"ours": 1e6, "CartPoleVectorEnv": 10e6, "kernel": 2e6,
+                         "outside_kernel_share": 0.5}},
+    "start_seconds": {"65536": 0.3},
+    "single": {"ours": 150e3, "Pendulum-v1": 100e3},
+    "ppo": {"RollerVecEnv": 2000.0, "DummyVecEnv": 1000.0},
+    "episode_error_rad": 5e-7,
+    "peers_missing": {"EnvPool Pendulum-v1": "not measured: envpool is not installed"},
+}
+
+
+def test_verdicts_compare_each_ratio_with_its_target():
+    verdicts = {what: (value, met) for verdict in throughput.VERDICTS
+                for what, value, _target, met in verdict(RESULTS)}
+    vec = {what: v for what, v in verdicts.items() if "CartPoleVectorEnv" in what}
+    assert sorted(vec.values()) == [(0.1, False), (pytest.approx(0.3), True)]
+    assert [v for w, v in verdicts.items() if "outside the kernel" in w] == [(0.5, False)]
+    assert [v for w, v in verdicts.items() if "reset" in w] == [(0.3, False)]
+    assert [v for w, v in verdicts.items() if "Pendulum" in w] == [(1.5, True)]
+    assert [v for w, v in verdicts.items() if "episode" in w] == [(5e-7, True)]
+
+
+def test_a_verdict_turns_with_its_measurement():
+    better = copy.deepcopy(RESULTS)
+    better["vector"]["65536"]["ours"] = 5e6
+    better["single"]["ours"] = 140e3
+    (_, ratio, _, met), = [v for v in throughput.verdict_vector(better) if "65,536" in v[0]]
+    assert ratio == pytest.approx(0.5) and met
+    assert not throughput.verdict_single(better)[0][3]
+
+
+def test_render_has_every_section_and_no_gap():
+    page = throughput.render(RESULTS)
+    for heading in ("# Throughput", "## Targets", "## The vector environment",
+                    "## One environment and SB3", "## Peers not measured"):
+        assert heading in page
+    assert "| 65,536 | 1,000,000 | 10,000,000 | 0.100 | 2,000,000 | 50% |" in page
+    assert "{" not in page and "None" not in page
