@@ -30,8 +30,6 @@ from __future__ import annotations
 import argparse
 import datetime
 import math
-import os
-import platform
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, fields
@@ -39,6 +37,7 @@ from pathlib import Path
 
 import mujoco
 import numpy as np
+from roller_gym.bench.throughput import machine
 from roller_gym.physics import Scene, energy, preset
 from roller_gym.physics import integrators as integ
 from roller_gym.scripts import mujoco_roller as mjr
@@ -677,27 +676,13 @@ def fmt_time(seconds: float) -> str:
 
 def machine_info() -> list[str]:
     """CPU model, cores, library versions, date."""
-    cpu = platform.processor() or "unknown"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    versions = [f"Python {platform.python_version()}"]
-    for mod in ("numpy", "scipy", "numba", "gymnasium", "mujoco", "stable_baselines3", "torch"):
-        try:
-            versions.append(f"{mod} {__import__(mod).__version__}")
-        except ImportError:
-            versions.append(f"{mod} (not installed)")
-    load = ", ".join(f"{x:.2f}" for x in os.getloadavg()) if hasattr(os, "getloadavg") else "?"
+    m = machine()
+    versions = ", ".join(f"{k} {v or '(not installed)'}" for k, v in m["versions"].items())
     return [
-        f"- CPU: {cpu}, {os.cpu_count()} cores ({platform.system()} {platform.release()})",
-        f"- {', '.join(versions)}",
-        f"- Date: {datetime.datetime.now().astimezone():%Y-%m-%d %H:%M %Z}; load average at the "
-        f"end of the run: {load} (other processes share the machine: timings are best-of, "
-        "and only ratios measured in this run are compared)",
+        f"- CPU: {m['cpu']}, {m['cores']} cores ({m['os']}), Python {m['python']}",
+        f"- {versions}",
+        f"- Date: {datetime.datetime.now().astimezone():%Y-%m-%d %H:%M %Z} (timings are "
+        "best-of-repeats, and only ratios measured in this run are compared)",
     ]
 
 
@@ -1378,9 +1363,8 @@ def closing_notes(cfg: Config, results: list[SceneResult], comps: list[Compariso
                     "issue for the integrators."
                 )
     notes.append(
-        "- Timings are best-of-repeats on a shared 2-core machine (other agents' tests and "
-        "trainings ran at the same time): absolute figures are noisy, ratios measured in the "
-        "same run much less so."
+        "- Timings are best-of-repeats; if other processes share the machine, absolute "
+        "figures are noisy, ratios measured in the same run much less so."
     )
     return notes
 

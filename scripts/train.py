@@ -21,50 +21,19 @@ TensorBoard logs go to ``<log folder>/tensorboard``.
 from __future__ import annotations
 
 import argparse
-import ast
 import math
 import shlex
 import sys
 from importlib.resources import as_file
 from pathlib import Path
-from typing import Any
 
 import roller_gym  # registers the tasks
 from roller_gym.agents.hyperparams import ALGOS, config_file, hyperparams
 from roller_gym.agents.policies import ZOO_HINT, find_run
+from roller_gym.scripts.arguments import key_values
 
 #: Algorithms that learn from whole rollouts of n_envs x n_steps environment steps.
 ON_POLICY = ("ppo",)
-
-
-def parse_env_kwargs(items: list[str]) -> dict[str, Any]:
-    """``["max_torque=0.6", "scene=floor"]`` -> ``{"max_torque": 0.6, "scene": "floor"}``
-    (values are Python literals where they parse as one, else strings)."""
-    out = {}
-    for item in items:
-        key, sep, value = item.partition("=")
-        if not sep or not key:
-            raise SystemExit(f"--env-kwargs: {item!r} is not KEY=VALUE (e.g. max_torque=0.6)")
-        try:
-            out[key] = ast.literal_eval(value)
-        except (ValueError, SyntaxError):
-            out[key] = value
-    return out
-
-
-def parse_overrides(items: list[str]) -> dict[str, Any]:
-    """``["n_envs:2"]`` -> ``{"n_envs": 2}``: rl-zoo3's ``-params`` syntax, for the values
-    this front needs to know (a value that is not a Python literal is kept as a string)."""
-    out = {}
-    for item in items:
-        key, sep, value = item.partition(":")
-        if not sep or not key:
-            raise SystemExit(f"--hyperparams: {item!r} is not KEY:VALUE (e.g. learning_rate:3e-4)")
-        try:
-            out[key] = ast.literal_eval(value)
-        except (ValueError, SyntaxError):
-            out[key] = value
-    return out
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -109,7 +78,7 @@ def build_parser() -> argparse.ArgumentParser:
 def zoo_arguments(args: argparse.Namespace, conf: str) -> list[str]:
     """The arguments of ``python -m rl_zoo3.train`` for ``args``, with the hyperparameter
     file ``conf``."""
-    hp = {**hyperparams(args.algo, args.env), **parse_overrides(args.hyperparams)}
+    hp = {**hyperparams(args.algo, args.env), **key_values(args.hyperparams, "--hyperparams", ":")}
     steps = int(args.steps or hp["n_timesteps"])
     if args.algo in ON_POLICY:
         # rl-zoo3's linear schedules go negative past the end: never overshoot the steps.
@@ -127,7 +96,7 @@ def zoo_arguments(args: argparse.Namespace, conf: str) -> list[str]:
     ]
     if args.steps is not None or steps != int(hp["n_timesteps"]):
         out += ["--n-timesteps", str(steps)]
-    env_kwargs = parse_env_kwargs(args.env_kwargs)
+    env_kwargs = key_values(args.env_kwargs, "--env-kwargs")
     if env_kwargs:  # rl-zoo3 evaluates each value as Python: pass its repr
         out += ["--env-kwargs", *(f"{k}:{v!r}" for k, v in env_kwargs.items())]
     if args.hyperparams:

@@ -34,6 +34,7 @@ from typing import Any
 
 import gymnasium as gym
 from roller_gym import ENV_IDS
+from roller_gym.scripts.arguments import key_values
 
 VECTORIZE_MODES = {"sync": "sync", "async": "async", "native": "vector_entry_point"}
 
@@ -80,20 +81,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     return build_parser().parse_args(argv)
-
-
-def parse_env_kwargs(items: list[str]) -> dict[str, Any]:
-    """``["dt=0.02", "scene=paper"]`` -> ``{"dt": 0.02, "scene": "paper"}`` (values as JSON)."""
-    kwargs: dict[str, Any] = {}
-    for item in items:
-        key, sep, text = item.partition("=")
-        if not sep or not key:
-            raise SystemExit(f"--env-kwarg {item!r}: expected KEY=VALUE")
-        try:
-            kwargs[key] = json.loads(text)
-        except json.JSONDecodeError:
-            kwargs[key] = text
-    return kwargs
 
 
 def make_env(env_id: str, env_config: dict[str, Any]) -> gym.Env | gym.vector.VectorEnv:
@@ -195,7 +182,7 @@ def progress(result: dict[str, Any], env_steps_before: int) -> tuple[str, int]:
 
 def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
-    env_kwargs = parse_env_kwargs(args.env_kwarg)
+    env_kwargs = key_values(args.env_kwarg, "--env-kwarg")
     try:
         import ray
         import torch

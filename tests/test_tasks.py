@@ -34,6 +34,21 @@ def test_docstring_table_is_the_declared_observation(task):
 
 
 @pytest.mark.parametrize("task", TASK_CLASSES, ids=lambda t: t.name)
+def test_docstring_reward_and_success_are_the_declared_numbers(task):
+    """The reward formula and success band each task module states carry the task's own
+    band, margins and weights (the formula itself is checked in test_envs)."""
+    doc = importlib.import_module(task.__module__).__doc__
+    band, margin = task.success_band, task.position_margin
+    w = task.precision_weight
+    stated = (f"``({1 - w:g} tolerance(ε, {band:g} rad, {margin:g} rad) + {w:g} "
+              f"tolerance(ε, {band:g} rad, {3 * band:.3g} rad))")
+    assert stated in " ".join(doc.split()), stated
+    assert (f"(0.5 + 0.5 near(φ' − φ*', {task.speed_margin:g} rad/s))" in doc
+            and task.speed_weight == 0.5 and task.control_weight == 0.2)
+    assert f"|ε| <= {band:g} rad" in doc and f"<= {task.success_speed:g} rad/s" in doc
+
+
+@pytest.mark.parametrize("task", TASK_CLASSES, ids=lambda t: t.name)
 def test_every_registered_task_is_a_gymnasium_id_with_its_declarations(task):
     assert task.env_id() in roller_gym.ENV_IDS
     spec = gym.spec(task.env_id())

@@ -1,0 +1,29 @@
+"""What the command-line programs parse alike, written once."""
+
+from __future__ import annotations
+
+import ast
+from typing import Any
+
+__all__ = ["key_values"]
+
+
+def key_values(items: list[str], option: str, separator: str = "=") -> dict[str, Any]:
+    """``["max_torque=0.6", "scene=floor"]`` -> ``{"max_torque": 0.6, "scene": "floor"}``:
+    values are Python literals where they parse as one (``0.6``, ``(0.8, 1.2)``,
+    ``{"m": (0.8, 1.2)}``, ``None``), else strings.
+
+    Raises:
+        SystemExit: an item is not KEY<separator>VALUE; the message names ``option``.
+    """
+    out: dict[str, Any] = {}
+    for item in items:
+        key, sep, value = item.partition(separator)
+        if not sep or not key:
+            raise SystemExit(f"{option}: {item!r} is not KEY{separator}VALUE "
+                             f"(e.g. max_torque{separator}0.6)")
+        try:
+            out[key] = ast.literal_eval(value)
+        except (ValueError, SyntaxError):
+            out[key] = value
+    return out
