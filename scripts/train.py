@@ -119,12 +119,17 @@ def main(argv: list[str] | None = None) -> Path | None:
         if args.show_command:
             print(shlex.join([sys.executable, "-m", "rl_zoo3.train", *zoo_argv]))
             return None
-        saved = sys.argv
+        from rl_zoo3.exp_manager import ExperimentManager
+        from roller_gym.sb3 import from_env_fns
+
+        saved = sys.argv, ExperimentManager.default_vec_env_cls
         sys.argv = ["rl_zoo3.train", *zoo_argv]  # rl-zoo3 parses sys.argv
+        # rl-zoo3's hook for a vector env of one's own: the environments are the native batch.
+        ExperimentManager.default_vec_env_cls = staticmethod(from_env_fns)
         try:
             train()
         finally:
-            sys.argv = saved
+            sys.argv, ExperimentManager.default_vec_env_cls = saved
     run_dir = find_run(args.log_folder, args.algo, args.env)
     print(f"\nrun saved in {run_dir}; evaluate it against the baselines with\n"
           f"  roller-gym evaluate --env {args.env} --models {run_dir}")

@@ -10,7 +10,7 @@ import pytest
 pytest.importorskip("stable_baselines3")
 
 import roller_gym
-from roller_gym.sb3 import RollerVecEnv
+from roller_gym.sb3 import RollerVecEnv, from_env_fns
 from stable_baselines3 import PPO, SAC
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.vec_env import (
@@ -81,3 +81,26 @@ def test_sb3_wrappers_and_algorithms_run_on_it():
               batch_size=32, seed=0, device="cpu")
     sac.learn(64)
     assert sac.num_timesteps == 64
+
+
+def test_make_vec_env_builds_the_native_batch_with_the_same_episodes():
+    """``vec_env_cls=from_env_fns`` (what ``roller-gym train`` gives rl-zoo3): SB3's own
+    make_vec_env then steps the native batch, with DummyVecEnv's episodes."""
+    kwargs = {"max_episode_steps": 5}
+    ours = make_vec_env(IDS[1], n_envs=3, seed=7, env_kwargs=kwargs, vec_env_cls=from_env_fns)
+    ref = make_vec_env(IDS[1], n_envs=3, seed=7, env_kwargs=kwargs)
+    assert isinstance(ours, RollerVecEnv) and ours.monitor
+    np.testing.assert_array_equal(ours.reset(), ref.reset())
+    for a in np.random.default_rng(2).uniform(-1, 1, (12, 3, 1)).astype(np.float32):
+        obs, rew, done, info = ours.step(a)
+        obs_r, rew_r, done_r, info_r = ref.step(a)
+        np.testing.assert_array_equal(obs, obs_r)
+        np.testing.assert_array_equal(done, done_r)
+        np.testing.assert_allclose(rew, rew_r, rtol=1e-6)
+        for mine, theirs in zip(info, info_r, strict=True):  # Monitor's episode statistics
+            assert ("episode" in mine) == ("episode" in theirs)
+            if "episode" in theirs:
+                assert mine["episode"]["l"] == theirs["episode"]["l"] == 5
+                assert mine["episode"]["r"] == pytest.approx(theirs["episode"]["r"], abs=1e-5)
+    other = make_vec_env("Pendulum-v1", n_envs=2, vec_env_cls=from_env_fns)
+    assert not isinstance(other, RollerVecEnv)
