@@ -88,10 +88,6 @@ class EnvConfig:
         ranges = check_randomize(task, scene, dt, randomize)
         return cls(task, scene, dt, tolerance, integrator, substeps or 0, ranges, render_mode)
 
-    def scene_row(self, scene: Scene) -> tuple[float, ...]:
-        """The numbers the integrator kernels take: ``(*Scene.params, mu)`` as floats."""
-        return (*(float(p) for p in scene.params), float(scene.mu))
-
     def resolve_option_scene(self, value: Any) -> Scene:
         return resolve_scene(value, self.task.default_scene)
 
