@@ -116,6 +116,7 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         self._time = 0.0
         self.target_torque = float(episode.target_torque(self.scene, self.target))
         self.phi, self.phi_dot, self.torque = float(start.phi[0]), float(start.phi_dot[0]), 0.0
+        self._stepper.forget()  # a new episode does not continue the last one's substeps
         at_start = episode.at_start(start.scene, start.phi, start.phi_dot)
         out = episode.outcome(self.task, at_start, 0.0, start.target, self._q,
                               self._psi_rate, 0.0, start.target_rate, self.target_torque)

@@ -176,6 +176,7 @@ class RollerVectorEnv(VectorEnv):
         self.target[idx], self.target_rate[idx] = start.target, start.target_rate
         self.target_torque[idx] = episode.target_torque(start.scene, start.target)
         self.phi[idx], self.phi_dot[idx] = start.phi, start.phi_dot
+        self._stepper.forget(idx)  # a new episode does not continue the last one's substeps
         self.torque[idx] = 0.0
         self.steps[idx] = 0
         rest = episode.at_start(start.scene, start.phi, start.phi_dot)

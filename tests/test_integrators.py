@@ -441,12 +441,15 @@ def test_zero_torque_for_1e5_steps_keeps_the_energy(method):
     rest at φ = 1 rad (E0 ≈ 0.302 J). Measured energy error: rk4 1.28e-9 J, rk8 1.45e-8 J
     (a slow linear drift, ~1e-14 J and ~1.5e-13 J per step: 4e-9 and 5e-8 of E0); asserted
     within LONG_RUN_BOUND (about 4× margin): 5e-9 J (rk4), 6e-8 J (rk8). The motion stays
-    the same swing: |φ| <= 1 rad + 1e-9 throughout."""
+    the same swing: |φ| exceeds 1 rad by no more than that energy error allows."""
     scene = preset("paper")
     phi, w = _run(scene, 1.0, 0.0, 0.0, 100_000, method)
     energy = analysis.energy(scene, phi, w)
     assert np.max(np.abs(energy - energy[0])) <= LONG_RUN_BOUND[method]
-    assert np.max(np.abs(phi)) <= 1.0 + 1e-9
+    # the same swing: the turning points move by at most what the energy bound allows,
+    # ΔE / V'(1) (V'(φ) = the torque that holds φ)
+    slope = float(analysis.holding_torque(scene, 1.0))
+    assert np.max(np.abs(phi)) <= 1.0 + LONG_RUN_BOUND[method] / slope
 
 
 #: the largest torque of these tests: m g (r + e)/2, about half of the largest the weight can

@@ -1,9 +1,10 @@
 """The equations of the model, each written once.
 
-Every function here is plain arithmetic on NumPy ufuncs, so the same source serves a
-Python float, a NumPy array (a batch of states, torques and per-element scene
-parameters, broadcast together) and, compiled by numba (``register_jitable``), the
-integrators' inner loops.
+Every function here is plain arithmetic, so the same source serves a Python float, a NumPy
+array (a batch of states, torques and per-element scene parameters, broadcast together) and,
+compiled by numba (``register_jitable``), the integrators' inner loops. Sines and cosines are
+:mod:`roller_gym.physics.trig`'s (branch-free, within 1 ulp of libm's): a compiled loop over
+rollers then runs in SIMD lanes, and NumPy and the kernels give the same bits.
 
 Conventions (``docs/PHYSICS.md``): φ is the roller's rotation, positive clockwise,
 0 when C is straight below O1 and O1 straight below O. With the signed curvature
@@ -21,8 +22,8 @@ m/s², N·m·s/rad); φ in rad, φ' in rad/s, τ in N·m.
 
 from __future__ import annotations
 
-import numpy as np
 from numba.extending import register_jitable
+from roller_gym.physics import trig
 
 __all__ = [
     "accel",
@@ -44,72 +45,74 @@ __all__ = [
 ]
 
 
-@register_jitable
+@register_jitable(inline="always")
 def sinc(x):
     """sin(x)/x, with its limit 1 at x = 0."""
-    return np.sinc(x / np.pi)
+    nonzero = x != 0.0
+    safe = trig.select(nonzero, x, 1.0)
+    return trig.select(nonzero, trig.sin(safe) / safe, 1.0)
 
 
-@register_jitable
+@register_jitable(inline="always")
 def shape_factors(phi, r, kappa):
     """(s, ψ, θ): s = 1 − rκ, ψ = rκφ/s [rad], θ = φ/s [rad]."""
     s = 1.0 - r * kappa
     return s, r * kappa * phi / s, phi / s
 
 
-@register_jitable
+@register_jitable(inline="always")
 def ic_squared(phi, r, kappa, e):
     """|IC|² = r² + e² − 2re cos θ [m²], written (r − e)² + 4re sin²(θ/2) (no cancellation)."""
-    h = np.sin(0.5 * phi / (1.0 - r * kappa))
-    return (r - e) ** 2 + 4.0 * r * e * h * h
+    h = trig.sin(0.5 * phi / (1.0 - r * kappa))
+    return (r - e) * (r - e) + 4.0 * r * e * h * h
 
 
-@register_jitable
+@register_jitable(inline="always")
 def inertia(phi, m, r, kappa, e, k):
     """J_I = m (k² + |IC|²), the moment of inertia about the instant center I [kg·m²]."""
     return m * (k * k + ic_squared(phi, r, kappa, e))
 
 
-@register_jitable
+@register_jitable(inline="always")
 def dinertia(phi, m, r, kappa, e):
     """dJ_I/dφ = 2 m r e sin θ / s [kg·m²/rad]."""
     s = 1.0 - r * kappa
-    return 2.0 * m * r * e * np.sin(phi / s) / s
+    return 2.0 * m * r * e * trig.sin(phi / s) / s
 
 
-@register_jitable
+@register_jitable(inline="always")
 def d2inertia(phi, m, r, kappa, e):
     """d²J_I/dφ² = 2 m r e cos θ / s² [kg·m²/rad²]."""
     s = 1.0 - r * kappa
-    return 2.0 * m * r * e * np.cos(phi / s) / (s * s)
+    return 2.0 * m * r * e * trig.cos(phi / s) / (s * s)
 
 
-@register_jitable
+@register_jitable(inline="always")
 def potential(phi, m, r, kappa, e, g):
     """V = m g [(R − r)(1 − cos ψ) + e (1 − cos φ)] [J], zero at φ = 0.
 
     (R − r)(1 − cos ψ) is written r φ sin(ψ/2) sinc(ψ/2), exact and finite at κ = 0.
     """
     _, psi, _ = shape_factors(phi, r, kappa)
-    h = np.sin(0.5 * phi)
-    return m * g * (r * phi * np.sin(0.5 * psi) * sinc(0.5 * psi) + 2.0 * e * h * h)
+    h = trig.sin(0.5 * phi)
+    return m * g * (r * phi * trig.sin(0.5 * psi) * sinc(0.5 * psi) + 2.0 * e * h * h)
 
 
-@register_jitable
+@register_jitable(inline="always")
 def dpotential(phi, m, r, kappa, e, g):
     """dV/dφ = m g (r sin ψ + e sin φ) [N·m]: minus the moment of gravity about I."""
     psi = r * kappa * phi / (1.0 - r * kappa)
-    return m * g * (r * np.sin(psi) + e * np.sin(phi))
+    return m * g * (r * trig.sin(psi) + e * trig.sin(phi))
 
 
-@register_jitable
+@register_jitable(inline="always")
 def d2potential(phi, m, r, kappa, e, g):
     """d²V/dφ² = m g (r²κ/s cos ψ + e cos φ) [N·m/rad]."""
     s, psi, _ = shape_factors(phi, r, kappa)
-    return m * g * (r * r * kappa / s * np.cos(psi) + e * np.cos(phi))
+    return m * g * (r * r * kappa / s * trig.cos(psi) + e * trig.cos(phi))
 
 
-@register_jitable
+@register_jitable(inline="always")
 def accel(phi, phi_dot, tau, m, r, kappa, e, k, g, c):
     """φ'' [rad/s²] from the closed-form equation of motion (PHYSICS.md, the paper's example):
 
@@ -119,27 +122,27 @@ def accel(phi, phi_dot, tau, m, r, kappa, e, k, g, c):
     """
     s = 1.0 - r * kappa
     theta = phi / s
-    h = np.sin(0.5 * theta)
+    h = trig.sin(0.5 * theta)
     lhs = (
         (tau - c * phi_dot) / m
-        - e * r / s * phi_dot * phi_dot * np.sin(theta)
-        - g * (r * np.sin(r * kappa * theta) + e * np.sin(phi))
+        - e * r / s * phi_dot * phi_dot * trig.sin(theta)
+        - g * (r * trig.sin(r * kappa * theta) + e * trig.sin(phi))
     )
-    return lhs / (k * k + (r - e) ** 2 + 4.0 * r * e * h * h)
+    return lhs / (k * k + (r - e) * (r - e) + 4.0 * r * e * h * h)
 
 
-@register_jitable
+@register_jitable(inline="always")
 def accel_concentric(phi, phi_dot, tau, m, r, kappa, k, g, c):
     """φ'' [rad/s²] of :func:`accel` with e = 0, the terms that vanish left out:
 
     (k² + r²) φ'' + g r sin ψ = (τ − c φ')/m.
     """
-    return ((tau - c * phi_dot) / m - g * r * np.sin(r * kappa * phi / (1.0 - r * kappa))) / (
+    return ((tau - c * phi_dot) / m - g * r * trig.sin(r * kappa * phi / (1.0 - r * kappa))) / (
         k * k + r * r
     )
 
 
-@register_jitable
+@register_jitable(inline="always")
 def energy(phi, phi_dot, m, r, kappa, e, k, g):
     """E = ½ J_I φ'² + V [J]."""
     return 0.5 * inertia(phi, m, r, kappa, e, k) * phi_dot * phi_dot + potential(
@@ -147,13 +150,13 @@ def energy(phi, phi_dot, m, r, kappa, e, k, g):
     )
 
 
-@register_jitable
+@register_jitable(inline="always")
 def denergy_dt(phi_dot, tau, c):
     """dE/dt = τφ' − c φ'² [W]: the power balance (the drive in, the axle's damping out)."""
     return (tau - c * phi_dot) * phi_dot
 
 
-@register_jitable
+@register_jitable(inline="always")
 def positions(phi, r, kappa, e):
     """Positions [m] of O1, C and I: ``(o1x, o1y, cx, cy, ix, iy)``.
 
@@ -164,23 +167,23 @@ def positions(phi, r, kappa, e):
     """
     _, psi, _ = shape_factors(phi, r, kappa)
     o1x = r * phi * sinc(psi)
-    o1y = r + r * phi * np.sin(0.5 * psi) * sinc(0.5 * psi)
-    cx = o1x - e * np.sin(phi)
-    cy = o1y - e * np.cos(phi)
-    ix = o1x + r * np.sin(psi)
-    iy = o1y - r * np.cos(psi)
+    o1y = r + r * phi * trig.sin(0.5 * psi) * sinc(0.5 * psi)
+    cx = o1x - e * trig.sin(phi)
+    cy = o1y - e * trig.cos(phi)
+    ix = o1x + r * trig.sin(psi)
+    iy = o1y - r * trig.cos(psi)
     return o1x, o1y, cx, cy, ix, iy
 
 
-@register_jitable
+@register_jitable(inline="always")
 def instant_center_velocity(phi, phi_dot, r, kappa):
     """u [m/s], the velocity with which I runs along the space centrode: (rφ'/s)(cos ψ, sin ψ)."""
     s, psi, _ = shape_factors(phi, r, kappa)
     speed = r * phi_dot / s
-    return speed * np.cos(psi), speed * np.sin(psi)
+    return speed * trig.cos(psi), speed * trig.sin(psi)
 
 
-@register_jitable
+@register_jitable(inline="always")
 def contact_forces(phi, phi_dot, phi_ddot, m, r, kappa, e, g):
     """(N, F) [N], the contact force on the roller at I, from m a_C = N + F + m g.
 
@@ -192,7 +195,7 @@ def contact_forces(phi, phi_dot, phi_ddot, m, r, kappa, e, g):
     """
     s, psi, theta = shape_factors(phi, r, kappa)
     w2 = phi_dot * phi_dot
-    sin_t, cos_t = np.sin(theta), np.cos(theta)
-    normal = m * (g * np.cos(psi) + r * r * kappa / s * w2 + e * (phi_ddot * sin_t + w2 * cos_t))
-    friction = m * (g * np.sin(psi) + (r - e * cos_t) * phi_ddot + e * w2 * sin_t)
+    sin_t, cos_t = trig.sin(theta), trig.cos(theta)
+    normal = m * (g * trig.cos(psi) + r * r * kappa / s * w2 + e * (phi_ddot * sin_t + w2 * cos_t))
+    friction = m * (g * trig.sin(psi) + (r - e * cos_t) * phi_ddot + e * w2 * sin_t)
     return normal, friction

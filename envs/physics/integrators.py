@@ -24,9 +24,11 @@ follow its own trajectory: a substep of size h is accepted when its estimated lo
 (max over |Δφ| [rad] and |Δφ'| [rad/s], estimated as scipy's DOP853 does) is at most
 ``tol · h / dt``, so that the errors of the accepted substeps add up to at most ``tol`` over
 the control step. The next size is ``h · clip(0.9 (tol h/dt / err)^(1/8), 0.2, 10)``
-(exponent 1/4 for rk4; no growth right after a rejection). The first size of a control step
-is the prediction of :func:`predicted_substeps` (from the scene's fastest time scale), which
-only starts the controller.
+(exponent 1/4 for rk4; no growth right after a rejection). A roller's control step starts with the
+substep size the controller proposed at the end of its previous step (carried by the stepper,
+:data:`CARRY_FIELDS`); after a reset (:meth:`Stepper.forget`) or a new scene, with the
+prediction of :func:`predicted_substeps` (from the scene's fastest time scale). Either only
+starts the controller: the error estimates decide.
 
 **Unreachable tolerances** are reported per step, never looped on: a substep whose error
 estimate is at the level of float64 rounding (``ROUNDOFF_FACTOR · ε · max(|φ|, |φ'|)``) is
@@ -55,14 +57,18 @@ accepted substep and at the end of the step.
 (``numba.prange``) from ``PARALLEL_THRESHOLD`` rollers on. Within a chunk, the running rollers
 advance together, each with its own (t, h): every stage is one loop over contiguous lanes, and
 a roller that has finished swaps places with the last running one, so the loops shrink with
-the work left. The stage loops call ``equations.accel``, whose ``sin`` is libm's: LLVM
-vectorizes the loops that combine the stages but not the ones that evaluate φ'' (calls).
+the work left. The loops that evaluate the equations (``_accel_lanes``, ``_margin_lanes``,
+``_end_lanes``) and the one that accepts or rejects substeps have no branch and no call in
+their bodies (the sines are :mod:`roller_gym.physics.trig`'s, inlined; choices are selects),
+so LLVM runs them in SIMD lanes. The kernels are compiled with ``error_model="numpy"``: a
+division by zero gives inf or NaN, reported as a failed step, instead of raising.
 
 **Layout.** The kernels work on one float64 table per batch, ``io`` of shape
 ``(len(ROWS), n)``: one row per name of :data:`ROWS` (the scene's :data:`SCENE_FIELDS`, the
-inputs :data:`INPUT_FIELDS`, the outputs :data:`STEP_FIELDS`), one column per roller, so a
-roller's numbers never depend on the other columns: the scalar stepper is the batch kernel on
-one column and gives bit for bit what the batch gives for that roller.
+inputs :data:`INPUT_FIELDS`, what is carried :data:`CARRY_FIELDS`, the outputs
+:data:`STEP_FIELDS`), one column per roller, so a roller's numbers never depend on the other
+columns: the scalar stepper is the batch kernel on one column and gives bit for bit what the
+batch gives for that roller.
 """
 
 from __future__ import annotations
@@ -75,11 +81,13 @@ from dataclasses import dataclass, fields
 import numba
 import numpy as np
 from roller_gym.physics import equations as eq
+from roller_gym.physics import trig
 from roller_gym.physics.scene import Scene
 from scipy.integrate import solve_ivp
 from scipy.integrate._ivp import dop853_coefficients
 
 __all__ = [
+    "CARRY_FIELDS",
     "INPUT_FIELDS",
     "METHODS",
     "ROWS",
@@ -95,7 +103,9 @@ __all__ = [
     "step",
 ]
 
-_jit = numba.njit(cache=True, fastmath=False, nogil=True)
+# error_model="numpy": a division by zero gives inf or NaN (reported as a failed step) instead
+# of raising, so that the loops have no hidden branch and vectorize.
+_jit = numba.njit(cache=True, fastmath=False, nogil=True, error_model="numpy")
 
 # -- the layout, declared once ----------------------------------------------------------------
 
@@ -103,6 +113,10 @@ _jit = numba.njit(cache=True, fastmath=False, nogil=True)
 SCENE_FIELDS = ("m", "r", "kappa", "e", "k", "g", "damping", "mu")
 #: The per-roller inputs of a step: φ [rad], φ' [rad/s] at its start, τ [N·m].
 INPUT_FIELDS = ("phi_in", "phi_dot_in", "tau")
+#: What a stepper carries per roller from one step to the next: the substep size [s] the
+#: controller proposed at the end of the last step, where the next one starts (0: none, the
+#: first substep is predicted).
+CARRY_FIELDS = ("h_next",)
 
 
 @dataclass(frozen=True)
@@ -158,11 +172,12 @@ STEP_FIELDS = tuple(f.name for f in fields(StepResult))
 _KIND = {name: {"substeps": int, "finite": bool, "tol_met": bool}.get(name, float)
          for name in STEP_FIELDS}
 #: The rows of a kernel's ``io`` table.
-ROWS = SCENE_FIELDS + INPUT_FIELDS + STEP_FIELDS
+ROWS = SCENE_FIELDS + INPUT_FIELDS + CARRY_FIELDS + STEP_FIELDS
 _ROW = {name: i for i, name in enumerate(ROWS)}
 # Row numbers as compile-time constants of the kernels.
 (_M, _RR, _KAPPA, _E, _K, _G, _C, _MU) = (_ROW[f] for f in SCENE_FIELDS)
 (_PHI_IN, _W_IN, _TAU) = (_ROW[f] for f in INPUT_FIELDS)
+_H_NEXT = _ROW["h_next"]
 (_PHI, _W, _ACC, _NSUB, _FINITE, _NORMAL, _FRICTION, _ENERGY, _LIFT, _SLIP, _ERR,
  _TOL_MET) = (_ROW[f] for f in STEP_FIELDS)
 _OUT = _PHI  # the outputs are the last rows, in STEP_FIELDS order
@@ -286,21 +301,52 @@ _RK4 = _tableau(
 
 
 @numba.extending.register_jitable
+def _finite(x):
+    """True where x is finite (a comparison, no call)."""
+    return x - x == 0.0
+
+
+@numba.extending.register_jitable(inline="always")
 def _margins(phi, w, a, m, r, kappa, e, g, mu):
     """(N/(m g), (μN − |F|)/(m g)): the lift-off and slip margins at a state."""
     normal, friction = eq.contact_forces(phi, w, a, m, r, kappa, e, g)
     return normal / (m * g), (mu * normal - abs(friction)) / (m * g)
 
 
-@numba.extending.register_jitable
-def _finish(io, col, ok, phi, w, tau, nsub, lift, slip, err, tol_met):
-    """Write one roller's outputs: the end state's fields, or the failure's (see module docs)."""
-    m, r, kappa, e = io[_M, col], io[_RR, col], io[_KAPPA, col], io[_E, col]
-    k, g, c, mu = io[_K, col], io[_G, col], io[_C, col], io[_MU, col]
+# The loops over lanes that evaluate the equations: no branch and no call in their bodies (the
+# sines are trig's, inlined), so that LLVM runs them in SIMD lanes. They are functions of their
+# own so that the inlining stays within a few lines.
+
+
+@_jit
+def _accel_lanes(phi, w, tau, par, na, out):
+    """out[i] = φ'' of lane i at (phi[i], w[i]) under tau[i], for lanes 0..na−1."""
+    for i in range(na):
+        out[i] = eq.accel(phi[i], w[i], tau[i], par[0, i], par[1, i], par[2, i], par[3, i],
+                          par[4, i], par[5, i], par[6, i])
+
+
+@_jit
+def _margin_lanes(phi, w, a, par, na, lift, slip):
+    """Lower lift[i] and slip[i] to lane i's margins at (phi[i], w[i], a[i]) if smaller."""
+    for i in range(na):
+        li, si = _margins(phi[i], w[i], a[i], par[0, i], par[1, i], par[2, i], par[3, i],
+                          par[5, i], par[7, i])
+        lift[i], slip[i] = min(lift[i], li), min(slip[i], si)
+
+
+@numba.extending.register_jitable(inline="always")
+def _end_fields(phi, w, tau, m, r, kappa, e, k, g, c, mu):
+    """(φ'', N, F, E, N/(m g), (μN − |F|)/(m g)) at the end state (no branch)."""
     a = eq.accel(phi, w, tau, m, r, kappa, e, k, g, c)
     normal, friction = eq.contact_forces(phi, w, a, m, r, kappa, e, g)
     energy = eq.energy(phi, w, m, r, kappa, e, k, g)
-    lift_end, slip_end = normal / (m * g), (mu * normal - abs(friction)) / (m * g)
+    return a, normal, friction, energy, normal / (m * g), (mu * normal - abs(friction)) / (m * g)
+
+
+@numba.extending.register_jitable
+def _write(io, col, ok, phi, w, nsub, a, normal, friction, energy, lift, slip, err, tol_met):
+    """Write one roller's outputs: the end state's fields, or the failure's (see module docs)."""
     ok = ok and math.isfinite(a) and math.isfinite(energy) and math.isfinite(phi)
     ok = ok and math.isfinite(w)
     io[_NSUB, col] = nsub
@@ -308,13 +354,36 @@ def _finish(io, col, ok, phi, w, tau, nsub, lift, slip, err, tol_met):
         io[_PHI, col], io[_W, col], io[_ACC, col] = phi, w, a
         io[_FINITE, col] = 1.0
         io[_NORMAL, col], io[_FRICTION, col], io[_ENERGY, col] = normal, friction, energy
-        io[_LIFT, col], io[_SLIP, col] = min(lift, lift_end), min(slip, slip_end)
+        io[_LIFT, col], io[_SLIP, col] = lift, slip
         io[_ERR, col], io[_TOL_MET, col] = err, 1.0 if tol_met else 0.0
     else:
         io[_PHI, col], io[_W, col] = io[_PHI_IN, col], io[_W_IN, col]
         io[_FINITE, col], io[_TOL_MET, col] = 0.0, 0.0
         for row in (_ACC, _NORMAL, _FRICTION, _ENERGY, _LIFT, _SLIP, _ERR):
             io[row, col] = math.nan
+
+
+@numba.extending.register_jitable
+def _finish(io, col, ok, phi, w, tau, nsub, lift, slip, err, tol_met):
+    """One roller's end fields and outputs (lift, slip: the smallest margins met before)."""
+    m, r, kappa, e = io[_M, col], io[_RR, col], io[_KAPPA, col], io[_E, col]
+    k, g, c, mu = io[_K, col], io[_G, col], io[_C, col], io[_MU, col]
+    a, normal, friction, energy, lift_end, slip_end = _end_fields(phi, w, tau, m, r, kappa, e,
+                                                                  k, g, c, mu)
+    _write(io, col, ok, phi, w, nsub, a, normal, friction, energy, min(lift, lift_end),
+           min(slip, slip_end), err, tol_met)
+
+
+@_jit
+def _end_lanes(phi, w, tau, par, n, out):
+    """_end_fields of lanes 0..n−1 into the rows of ``out`` (lift and slip: the smaller of
+    out[4], out[5] and the end's)."""
+    for i in range(n):
+        a, normal, friction, energy, li, si = _end_fields(
+            phi[i], w[i], tau[i], par[0, i], par[1, i], par[2, i], par[3, i], par[4, i],
+            par[5, i], par[6, i], par[7, i])
+        out[0, i], out[1, i], out[2, i], out[3, i] = a, normal, friction, energy
+        out[4, i], out[5, i] = min(out[4, i], li), min(out[5, i], si)
 
 
 # -- the adaptive kernel: explicit Runge–Kutta pairs, a chunk of rollers together ----------------
@@ -341,7 +410,7 @@ def _rk_chunk(io, lo, hi, tab, cfg):
     fixed = nfixed > 0
     # one scratch block: the stages, then one row per per-roller quantity
     nf = len(SCENE_FIELDS)
-    scratch = np.empty((2 * (s + 1) + nf + 26, n))
+    scratch = np.empty((2 * (s + 1) + nf + 31, n))
     kp = scratch[: s + 1]  # stage velocities φ'
     kw = scratch[s + 1: 2 * (s + 1)]  # stage accelerations φ''
     par = scratch[2 * (s + 1): 2 * (s + 1) + nf]
@@ -353,8 +422,10 @@ def _rk_chunk(io, lo, hi, tab, cfg):
     status = rows[20]  # 0 running, 1 done, 2 failed
     rejected = rows[21]  # 0 or 1
     slot = rows[22]  # the roller (column lo + slot) whose numbers are in this lane
+    hwant, carry = rows[29], rows[30]  # the size wanted this attempt; the size carried on
     for i in range(n):
         hforce[i], count[i], status[i], rejected[i], slot[i] = 0.0, 0.0, 0.0, 0.0, i
+        carry[i] = 0.0
     # The running rollers are kept in lanes 0..na−1 (a finished one swaps places with the last
     # running one), so every per-lane loop runs over contiguous lanes.
     na = n
@@ -365,16 +436,16 @@ def _rk_chunk(io, lo, hi, tab, cfg):
         tau[i] = io[_TAU, col]
         phi[i], w[i] = io[_PHI_IN, col], io[_W_IN, col]
         kp[0, i] = w[i]
-        kw[0, i] = eq.accel(phi[i], w[i], tau[i], par[0, i], par[1, i], par[2, i], par[3, i],
-                            par[4, i], par[5, i], par[6, i])
         t[i], lift[i], slip[i], err_sum[i] = 0.0, np.inf, np.inf, 0.0
         if fixed:
             hdes[i] = dt / nfixed
+        elif io[_H_NEXT, col] > 0.0:  # where the last step's controller left off, split even
+            hdes[i] = dt / math.ceil(dt / io[_H_NEXT, col] * (1.0 - 1e-9))
         else:
             guess = _substeps(abs(w[i]), par[0, i], par[1, i], par[2, i], par[3, i], par[4, i],
                               par[5, i], par[6, i], dt, tol, cfg[4], cfg[5], cfg[6], cfg[7])
             hdes[i] = dt / guess
-    m, r, kappa, e, k, g, c, mu = par[0], par[1], par[2], par[3], par[4], par[5], par[6], par[7]
+    _accel_lanes(phi, w, tau, par, n, kw[0])
     for _attempt in range(_MAX_ATTEMPTS):
         if na == 0:
             break
@@ -388,8 +459,8 @@ def _rk_chunk(io, lo, hi, tab, cfg):
                 h = min(hdes[i], rest)
                 last[i] = 1.0 if hdes[i] >= rest else 0.0
             hh[i] = h if status[i] == 0 else 0.0
-            li, si = _margins(phi[i], w[i], kw[0, i], m[i], r[i], kappa[i], e[i], g[i], mu[i])
-            lift[i], slip[i] = min(lift[i], li), min(slip[i], si)
+            hwant[i] = hdes[i]
+        _margin_lanes(phi, w, kw[0], par, na, lift, slip)
         # the stages
         for st in range(1, s + 1):
             for i in range(na):
@@ -401,12 +472,12 @@ def _rk_chunk(io, lo, hi, tab, cfg):
                         acc_p[i] += a * kp[j, i]
                         acc_w[i] += a * kw[j, i]
             for i in range(na):
-                wi = w[i] + hh[i] * acc_w[i]
-                pi = phi[i] + hh[i] * acc_p[i]
-                kp[st, i] = wi
-                kw[st, i] = eq.accel(pi, wi, tau[i], m[i], r[i], kappa[i], e[i], k[i], g[i], c[i])
-                if st == s:  # the weights b: the new state, and f there (the last stage)
-                    phin[i], wn[i] = pi, wi
+                phin[i] = phi[i] + hh[i] * acc_p[i]
+                kp[st, i] = w[i] + hh[i] * acc_w[i]
+            _accel_lanes(phin, kp[st], tau, par, na, kw[st])
+        # the last stage's weights are b: its state is the new state
+        for i in range(na):
+            wn[i] = kp[s, i]
         # the error estimates (scipy's DOP853 form; E3 = 0 gives |h E5·K|)
         for i in range(na):
             e5p[i], e5w[i], e3p[i], e3w[i] = 0.0, 0.0, 0.0, 0.0
@@ -417,56 +488,44 @@ def _rk_chunk(io, lo, hi, tab, cfg):
                 e3w[i] += a3 * kw[j, i]
                 e5p[i] += a5 * kp[j, i]
                 e5w[i] += a5 * kw[j, i]
-        # accept or reject, and the next size, per roller
+        # accept or reject, and the next size, per roller: selects only, so it vectorizes too
         for i in range(na):
-            if status[i] != 0:
-                continue
             h = hh[i]
             dp = e5p[i] * e5p[i] + 0.01 * e3p[i] * e3p[i]
             dw = e5w[i] * e5w[i] + 0.01 * e3w[i] * e3w[i]
-            errp = h * e5p[i] * e5p[i] / math.sqrt(dp) if dp > 0.0 else 0.0
-            errw = h * e5w[i] * e5w[i] / math.sqrt(dw) if dw > 0.0 else 0.0
+            errp = h * e5p[i] * e5p[i] / math.sqrt(trig.select(dp > 0.0, dp, 1.0))
+            errw = h * e5w[i] * e5w[i] / math.sqrt(trig.select(dw > 0.0, dw, 1.0))
             err = max(errp, errw)
-            fin = (math.isfinite(phin[i]) and math.isfinite(wn[i])
-                   and math.isfinite(kw[s, i]) and math.isfinite(err))
+            fin = _finite(phin[i]) & _finite(wn[i]) & _finite(kw[s, i]) & _finite(err)
             # past MAX_ADAPTIVE_SUBSTEPS accepted substeps, the rest in as many more
-            if count[i] == MAX_ADAPTIVE_SUBSTEPS and hforce[i] == 0.0:
-                hforce[i] = (dt - t[i]) / MAX_ADAPTIVE_SUBSTEPS
+            start = (count[i] == MAX_ADAPTIVE_SUBSTEPS) & (hforce[i] == 0.0)
+            hforce[i] = trig.select(start, (dt - t[i]) / MAX_ADAPTIVE_SUBSTEPS, hforce[i])
             floor = max(1e-12 * dt, hforce[i])
-            ratio = err * dt / (share * h) if h > 0.0 else 0.0
-            ok = fin and ratio <= 1.0
+            ratio = trig.select(h > 0.0, err * dt / (share * h), 0.0)
             # an estimate at the level of float64 rounding: no smaller substep can do better
-            noise = ROUNDOFF_FACTOR * _EPS * max(abs(phi[i]), abs(w[i]), abs(phin[i]), abs(wn[i]))
-            forced = h <= floor or err <= noise
-            if fixed:
-                accept, fail = fin, not fin
-            else:
-                accept = ok or (forced and fin)
-                fail = forced and not fin
-            if accept:
-                phi[i], w[i] = phin[i], wn[i]
-                kp[0, i], kw[0, i] = kp[s, i], kw[s, i]
-                t[i] = dt if last[i] != 0.0 else t[i] + h
-                count[i] += 1
-                err_sum[i] += err
-                if last[i] != 0.0:
-                    status[i] = 1.0
-            elif fail:
-                status[i] = 2.0
-            if not fixed:
-                if not fin:
-                    factor = _MIN_FACTOR
-                elif ratio == 0.0:
-                    factor = _MAX_FACTOR
-                else:
-                    q = ratio
-                    for _ in range(halvings):
-                        q = math.sqrt(q)
-                    factor = min(_MAX_FACTOR, max(_MIN_FACTOR, _SAFETY / q))
-                if rejected[i] != 0.0:
-                    factor = min(factor, 1.0)
-                rejected[i] = 0.0 if accept else 1.0
-                hdes[i] = max(h * factor, floor)
+            big = max(max(abs(phi[i]), abs(w[i])), max(abs(phin[i]), abs(wn[i])))
+            forced = (h <= floor) | (err <= ROUNDOFF_FACTOR * _EPS * big)
+            accept = trig.select(fixed, fin, fin & ((ratio <= 1.0) | forced))
+            fail = (not fin) & (fixed | forced)
+            ends = accept & (last[i] != 0.0)
+            phi[i] = trig.select(accept, phin[i], phi[i])
+            w[i] = trig.select(accept, wn[i], w[i])
+            kp[0, i] = trig.select(accept, kp[s, i], kp[0, i])
+            kw[0, i] = trig.select(accept, kw[s, i], kw[0, i])
+            t[i] = trig.select(ends, dt, trig.select(accept, t[i] + h, t[i]))
+            count[i] += trig.select(accept, 1.0, 0.0)
+            err_sum[i] += trig.select(accept, err, 0.0)
+            status[i] = trig.select(ends, 1.0, trig.select(fail, 2.0, status[i]))
+            # the next size: h · clip(0.9 ratio^(−1/order), 0.2, 10), the root as square roots
+            q = math.sqrt(math.sqrt(ratio))
+            q = trig.select(halvings >= 3, math.sqrt(q), q)
+            factor = min(_MAX_FACTOR, max(_MIN_FACTOR, _SAFETY / q))  # ratio 0: the largest
+            factor = trig.select(fin, factor, _MIN_FACTOR)
+            factor = trig.select(rejected[i] != 0.0, min(factor, 1.0), factor)
+            rejected[i] = trig.select(accept, 0.0, 1.0)
+            hdes[i] = trig.select(fixed, hdes[i], max(h * factor, floor))
+            # carried to the next step: the size wanted, not the last one cut short at dt
+            carry[i] = trig.select(ends, max(hwant[i], hdes[i]), carry[i])
         i = 0
         while i < na:
             if status[i] != 0.0:
@@ -474,13 +533,19 @@ def _rk_chunk(io, lo, hi, tab, cfg):
                 for f in range(nf):
                     par[f, i], par[f, na] = par[f, na], par[f, i]
                 for x in (kp[0], kw[0], tau, phi, w, hdes, t, lift, slip, err_sum, hforce, count,
-                          status, rejected, slot):  # what outlives an attempt
+                          status, rejected, slot, carry):  # what outlives an attempt
                     x[i], x[na] = x[na], x[i]
             else:
                 i += 1
+    # the end states' fields, all lanes at once, then each roller's outputs to its column
+    end = rows[23:29]
+    end[4, :n], end[5, :n] = lift[:n], slip[:n]
+    _end_lanes(phi, w, tau, par, n, end)
     for i in range(n):
-        _finish(io, lo + int(slot[i]), status[i] == 1.0, phi[i], w[i], tau[i], count[i],
-                lift[i], slip[i], err_sum[i], err_sum[i] <= share)
+        io[_H_NEXT, lo + int(slot[i])] = 0.0 if fixed or status[i] != 1.0 else carry[i]
+        _write(io, lo + int(slot[i]), status[i] == 1.0, phi[i], w[i], count[i], end[0, i],
+               end[1, i], end[2, i], end[3, i], end[4, i], end[5, i], err_sum[i],
+               err_sum[i] <= share)
 
 
 @_jit
@@ -490,7 +555,7 @@ def _rk_serial(io, tab, cfg):
         _rk_chunk(io, lo, min(lo + CHUNK, n), tab, cfg)
 
 
-@numba.njit(cache=True, parallel=True, nogil=True)
+@numba.njit(cache=True, parallel=True, nogil=True, error_model="numpy")
 def _rk_parallel(io, tab, cfg):
     n = io.shape[1]
     for chunk in numba.prange((n + CHUNK - 1) // CHUNK):
@@ -508,7 +573,7 @@ PARALLEL_THRESHOLD = 2048
 def _make_fixed_kernel(substep: Callable) -> Callable:
     """The kernel of a fixed-substep scheme: each roller on its own, n equal substeps."""
 
-    @numba.njit(nogil=True)
+    @numba.njit(nogil=True, error_model="numpy")
     def kernel(io, tab, cfg):
         dt, tol, nfixed = cfg[0], cfg[1], int(cfg[2])
         for col in range(io.shape[1]):
@@ -591,7 +656,8 @@ class Scheme:
         constant: C of the substep prediction n = (C (λ dt)^(p+1) / tol)^(1/p), calibrated
             on the presets (for the adaptive schemes only the first step-size guess).
         sweep_exponent: the exponent of re/(k² + (r − e)²) in the prediction's sweep rate.
-        halvings: the adaptive controller takes the 2^halvings-th root of the error ratio.
+        halvings: the adaptive controller takes the 2^halvings-th root of the error ratio
+            (2 or 3: the kernel takes it as square roots, which vectorize).
         tol_share: the share of ``tol`` the accepted substeps' error estimates may add up to
             (below 1: room for what the estimates miss, measured in the tests).
     """
@@ -734,6 +800,13 @@ class Stepper(_Base):
             raise ValueError(f"scene has a batch of {scene.batch_size} rollers; Stepper takes "
                              "a scalar Scene (use BatchStepper for a batch)")
         self._io[: len(SCENE_FIELDS)] = scene_arrays(scene)
+        self.forget()
+
+    def forget(self) -> None:
+        """Start afresh: the next step predicts its first substep instead of continuing where
+        the last one left off. Call it where the state is set rather than stepped (a reset), so
+        that an episode's steps do not depend on the episodes before it."""
+        self._flat[_H_NEXT] = 0.0
 
     def advance(self, phi: float, phi_dot: float, tau: float) -> tuple:
         """One control step from (φ [rad], φ' [rad/s]) at torque τ [N·m]: the fields of
@@ -783,6 +856,11 @@ class BatchStepper(_Base):
             raise ValueError(f"scene has {size} rollers for {np.size(rows)} rows of index")
         self._io[: len(SCENE_FIELDS), rows] = scene_arrays(scene, np.size(rows)).reshape(
             len(SCENE_FIELDS), *np.shape(rows))
+        self.forget(rows)
+
+    def forget(self, index=None) -> None:
+        """Start rollers ``index`` (all if None) afresh, as :meth:`Stepper.forget` does."""
+        self._io[_H_NEXT, slice(None) if index is None else index] = 0.0
 
     def scene_table(self) -> np.ndarray:
         """The rollers' scene numbers, shape ``(len(SCENE_FIELDS), num)`` (a view)."""
