@@ -5,7 +5,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: run test test-rllib train-rllib bench results clean
+.PHONY: run test test-rllib train-rllib bench throughput results clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -21,11 +21,16 @@ run: $(STAMP)  ## train the default agent (SAC, rl-zoo3) on the default task, ev
 
 TASKS := roller_gym/RollerStabilize-v1 roller_gym/RollerHold-v1 roller_gym/RollerBalance-v1 \
 	roller_gym/RollerTrack-v0
-results: $(STAMP)  ## train SAC, TD3 and PPO on every task, evaluate all, write docs/RESULTS.md
-	set -e; for env in $(TASKS); do for algo in sac td3 ppo; do \
-		$(RG) train --algo $$algo --env $$env --log-folder runs; done; done
-	$(RG) evaluate --env $(TASKS) --runs runs --out docs/results \
-		--report docs/RESULTS.md --notes docs/results/notes.md
+SEEDS := 0 1 2 3 4
+# One seed's trainings, all tasks and algorithms, into runs/results/seed<S>.
+TRAIN_SEED = for env in $(TASKS); do for algo in sac td3 ppo; do \
+	$(RG) train --algo $$algo --env $$env --seed $$0 --log-folder runs/results/seed$$0 \
+	--verbose 0 --checkpoints 0 || exit 1; done; done
+results: $(STAMP)  ## train SAC, TD3 and PPO with 5 seeds on every task (two processes), evaluate, write docs/RESULTS.md
+	rm -rf runs/results
+	start=$$(date +%s); \
+	printf '%s\n' $(SEEDS) | xargs -P 2 -n 1 sh -c '$(TRAIN_SEED)' && \
+	$(RG) results --runs runs/results --train-wall-s $$(( $$(date +%s) - start ))
 
 test: $(STAMP)  ## the whole test suite and the linter
 	$(PY) -m ruff check .
@@ -51,8 +56,22 @@ test-rllib: $(RLLIB_STAMP)  ## the environment tests on RLlib's Gymnasium releas
 train-rllib: $(RLLIB_STAMP)  ## PPO on a local Ray
 	$(RLLIB_VENV)/bin/roller-gym train-rllib
 
+# The throughput page with its optional peers (EnvPool, Gymnasium's JAX Pendulum), in their
+# own environment: jax is large and not needed by anything else.
+PEERS_VENV := .venv-peers
+PEERS_STAMP := $(PEERS_VENV)/.installed
+
+$(PEERS_STAMP): pyproject.toml
+	$(PYTHON) -m venv $(PEERS_VENV)
+	$(PEERS_VENV)/bin/python -m pip install --quiet --upgrade pip
+	$(PEERS_VENV)/bin/python -m pip install --quiet -e ".[peers]"
+	touch $(PEERS_STAMP)
+
+throughput: $(PEERS_STAMP)  ## measure docs/THROUGHPUT.md against CartPole, Pendulum, EnvPool and JAX
+	$(PEERS_VENV)/bin/python -m roller_gym.bench.throughput measure --out docs
+
 bench: $(STAMP)
 	$(VENV)/bin/roller-gym benchmark
 
 clean:
-	rm -rf $(VENV) $(RLLIB_VENV) runs results
+	rm -rf $(VENV) $(RLLIB_VENV) $(PEERS_VENV) runs results

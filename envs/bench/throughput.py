@@ -2,6 +2,7 @@
 
     python -m roller_gym.bench.throughput measure --out docs   # measure, write the JSON, render
     python -m roller_gym.bench.throughput render --out docs    # render the JSON again, no measuring
+    make throughput     # measure in .venv-peers, with EnvPool and Gymnasium's JAX Pendulum
 
 Measuring writes ``<out>/benchmarks/throughput.json`` (the results with the machine, the
 package versions and the command); rendering turns it into ``<out>/THROUGHPUT.md``. Each
@@ -30,8 +31,8 @@ TASK = "roller_gym/RollerStabilize-v1"
 #: Targets: the vector env against CartPoleVectorEnv, the single env against Pendulum-v1,
 #: starting 65,536 sub-environments, the share of a vector step outside the physics kernel,
 #: the 10-s episode's state error.
-TARGETS = {"vector_vs_cartpole": 0.25, "single_vs_pendulum": 1.5, "reset_65536_s": 0.25,
-           "outside_kernel_share": 0.25, "episode_error_rad": 1e-6}
+TARGETS = {"vector_vs_cartpole": 0.25, "vector_vs_envpool": 1.0, "single_vs_pendulum": 1.5,
+           "reset_65536_s": 0.25, "outside_kernel_share": 0.25, "episode_error_rad": 1e-6}
 
 
 def best_time(run: Callable[[], None], repeats: int) -> float:
@@ -79,8 +80,67 @@ def measure_vector(sizes: Sequence[int], steps: int, repeats: int) -> dict[str, 
 
         kernel_rate = n * steps / best_time(kernel, repeats)
         out[str(n)] = {"ours": ours_rate, "CartPoleVectorEnv": cart_rate,
-                       "kernel": kernel_rate, "outside_kernel_share": 1.0 - ours_rate / kernel_rate}
+                       "kernel": kernel_rate, "outside_kernel_share": 1.0 - ours_rate / kernel_rate,
+                       **measure_arithmetic(stepper, base, tau, repeats)}
+        for name, make in PEERS.items():
+            try:
+                peer = make(n)
+            except ImportError:
+                continue  # reported by peers_missing
+            actions = rng.uniform(-2, 2, (n, 1)).astype(np.float32)
+            out[str(n)][name] = vector_steps_per_s(peer, actions, steps, repeats)
+            peer.close()
     return out
+
+
+#: Right-hand-side evaluations of an rk8 control step: 12 per attempted substep (the first
+#: stage reuses the last one's), the one at the start, and the one at the end (the outputs).
+RHS_PER_SUBSTEP, RHS_PER_STEP = 12, 2
+
+
+def measure_arithmetic(stepper: Any, base: Any, tau: np.ndarray, repeats: int) -> dict[str, Any]:
+    """How close the kernel is to its arithmetic: one right-hand-side evaluation per roller
+    (the kernel's own compiled lane loop over φ''), timed alone, and the kernel's cost in
+    such evaluations (its substeps counted, its rejected attempts not)."""
+    from roller_gym.physics import integrators as integ
+
+    n = base.num_envs
+    par = stepper.scene_table()
+    out = np.empty(n)
+
+    def rhs() -> None:
+        for _ in range(20):
+            integ._accel_lanes(base.phi, base.phi_dot, tau, par, n, out)
+
+    rhs_ns = best_time(rhs, repeats) / (20 * n) * 1e9
+    substeps = float(np.mean(stepper.advance(base.phi, base.phi_dot, tau).substeps))
+    import numba
+
+    threads = numba.get_num_threads() if n >= integ.PARALLEL_THRESHOLD else 1
+    return {"rhs_ns": rhs_ns, "substeps": substeps, "kernel_threads": threads,
+            "rhs_per_step": RHS_PER_SUBSTEP * substeps + RHS_PER_STEP}
+
+
+def _envpool(n: int) -> Any:
+    import envpool
+
+    env = envpool.make_gymnasium("Pendulum-v1", num_envs=n, seed=0)
+    env.reset()
+    return env
+
+
+def _jax_pendulum(n: int) -> Any:
+    import gymnasium as gym
+    import jax  # noqa: F401  (the vector env's backend)
+
+    env = gym.make_vec("phys2d/Pendulum-v0", num_envs=n, vectorization_mode="vector_entry_point")
+    env.reset(seed=0)
+    return env
+
+
+#: Optional peers of the vector environment (installed by the extra ``peers``).
+PEERS: dict[str, Callable[[int], Any]] = {"EnvPool Pendulum-v1": _envpool,
+                                          "Gymnasium phys2d/Pendulum-v0 (JAX)": _jax_pendulum}
 
 
 def measure_start(n: int, repeats: int) -> float:
@@ -162,7 +222,8 @@ def peers_missing() -> dict[str, str]:
         try:
             __import__(module)
         except ImportError:
-            missing[name] = f"not measured: {module} is not installed in this environment"
+            missing[name] = (f"not measured: {module} is not installed in this environment "
+                             "(the extra `peers`; `make throughput` measures with it)")
     return missing
 
 
@@ -214,6 +275,15 @@ def verdict_vector(results: dict[str, Any]) -> list[tuple[str, float, float, boo
             for n, v in results["vector"].items()]
 
 
+def verdict_envpool(results: dict[str, Any]) -> list[tuple[str, float, float, bool]]:
+    """The vector env against EnvPool's Pendulum-v1, per size (where measured)."""
+    target = TARGETS["vector_vs_envpool"]
+    peer = "EnvPool Pendulum-v1"
+    return [(f"vector env ≥ {target} × EnvPool Pendulum-v1 at {int(n):,}", v["ours"] / v[peer],
+             target, v["ours"] / v[peer] >= target)
+            for n, v in results["vector"].items() if peer in v]
+
+
 def verdict_outside_kernel(results: dict[str, Any]) -> list[tuple[str, float, float, bool]]:
     n, v = max(results["vector"].items(), key=lambda item: int(item[0]))
     target = TARGETS["outside_kernel_share"]
@@ -240,7 +310,7 @@ def verdict_error(results: dict[str, Any]) -> list[tuple[str, float, float, bool
     return [(f"episode state error ≤ {target:g} rad", err, target, err <= target)]
 
 
-VERDICTS = (verdict_vector, verdict_outside_kernel, verdict_start, verdict_single,
+VERDICTS = (verdict_vector, verdict_envpool, verdict_outside_kernel, verdict_start, verdict_single,
             verdict_error)
 
 
@@ -250,9 +320,9 @@ def render(results: dict[str, Any]) -> str:
     lines = [
         "# Throughput", "",
         "The environments' speed against their peers, as ratios of best-of-repeats times "
-        "measured in the same run. Regenerate with "
-        "`python -m roller_gym.bench.throughput measure --out docs` (render the committed "
-        "results again with `render`).", "",
+        "measured in the same run. Regenerate with `make throughput` (in an environment with "
+        "the optional peers, the extra `peers`) or `python -m roller_gym.bench.throughput "
+        "measure --out docs`; render the committed results again with `render`.", "",
         f"Measured {results['date']} on {m['cpu']} ({m['cores']} cores), {m['os']}, Python "
         f"{m['python']}; " + ", ".join(f"{k} {v}" for k, v in m["versions"].items() if v)
         + (" — a quick (smoke) run" if results["quick"] else "") + ".", "",
@@ -269,6 +339,28 @@ def render(results: dict[str, Any]) -> str:
         lines.append(f"| {int(n):,} | {v['ours']:,.0f} | {v['CartPoleVectorEnv']:,.0f} | "
                      f"{v['ours'] / v['CartPoleVectorEnv']:.3f} | {v['kernel']:,.0f} | "
                      f"{v['outside_kernel_share']:.0%} |")
+    peers = [p for p in PEERS if any(p in v for v in results["vector"].values())]
+    if peers:
+        lines += ["", "Optional peers, in the same run:", "",
+                  "| sub-environments | " + " | ".join(f"{p}, steps/s | ours / it" for p in peers)
+                  + " |", "|---:|" + "---:|---:|" * len(peers)]
+        for n, v in results["vector"].items():
+            lines.append(f"| {int(n):,} | " + " | ".join(
+                f"{v[p]:,.0f} | {v['ours'] / v[p]:.2f}" if p in v else "– | –" for p in peers)
+                + " |")
+    if all("rhs_ns" in v for v in results["vector"].values()):
+        lines += ["", "How close the kernel is to its arithmetic: one evaluation of φ'' per "
+                  "roller (the kernel's own compiled loop over rollers, timed alone on one "
+                  "core), and the kernel's cost per core against the evaluations its accepted "
+                  "substeps need (the rest is rejected attempts, error control, margins and "
+                  "outputs):", "",
+                  "| sub-environments | one φ'' evaluation, ns/roller | substeps per step | "
+                  "kernel, core-ns/roller-step | kernel / its evaluations |",
+                  "|---:|---:|---:|---:|---:|"]
+        for n, v in results["vector"].items():
+            kernel_ns = 1e9 / v["kernel"] * v["kernel_threads"]
+            lines.append(f"| {int(n):,} | {v['rhs_ns']:.2f} | {v['substeps']:.2f} | "
+                         f"{kernel_ns:.0f} | {kernel_ns / (v['rhs_ns'] * v['rhs_per_step']):.1f} |")
     single, ppo = results["single"], results["ppo"]
     lines += ["", "## One environment and SB3", "",
               f"- `gymnasium.make(\"{TASK}\")`: {single['ours']:,.0f} steps/s; Pendulum-v1 "
