@@ -35,6 +35,8 @@ COMMANDS: dict[str, Command] = {
     "train": Command("train", "train SAC, TD3 or PPO on a task with rl-zoo3", "zoo"),
     "evaluate": Command("evaluate", "evaluate trained agents and the classical baselines; "
                         "tables and plots", "zoo,plots"),
+    "results": Command("results", "evaluate every training seed, aggregate with rliable, "
+                       "write the results page", "results"),
     "replay": Command("replay", "render one episode of a policy to a GIF or MP4",
                       "zoo,render"),
     "benchmark": Command("benchmark", "speed against accuracy: integrators, MuJoCo, "

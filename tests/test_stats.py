@@ -1,0 +1,103 @@
+"""The statistics over training seeds (roller_gym.agents.stats) on input whose answer is known."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+stats = pytest.importorskip("roller_gym.agents.stats")
+
+
+def test_iqm_is_the_mean_of_the_middle_half():
+    rng = np.random.default_rng(0)
+    x = rng.permutation(np.arange(1.0, 9.0)).reshape(4, 2)  # 1..8 in a random order
+    assert stats.iqm(x) == pytest.approx(np.mean([3, 4, 5, 6]))
+    outlier = np.array([1.0, 2.0, 3.0, 4.0, 1e9])  # one seed far off moves the IQM by little
+    assert stats.iqm(outlier[:, None]) == pytest.approx(3.0)
+
+
+def test_intervals_are_degenerate_for_equal_runs_and_shift_with_the_scores():
+    assert stats.interval(np.full((5, 3), 0.7)) == pytest.approx((0.7, 0.7, 0.7))
+    scores = np.random.default_rng(1).normal(10.0, 2.0, size=(20, 2))
+    est, lo, hi = stats.interval(scores)
+    assert lo < est < hi
+    shifted = stats.interval(scores + 5.0)  # the same resamples: the same interval, moved
+    assert shifted == pytest.approx((est + 5.0, lo + 5.0, hi + 5.0), rel=1e-12)
+    assert stats.interval(scores) == (est, lo, hi)  # reproducible: seeded resamples
+
+
+def test_intervals_cover_the_mean_of_normal_samples_about_95_percent_of_the_time():
+    rng = np.random.default_rng(2)
+    hits = sum(lo <= 0.0 <= hi for lo, hi in (
+        stats.interval(rng.normal(0.0, 1.0, (40, 1)), statistic=np.mean, seed=s, reps=500)[1:]
+        for s in range(200)))
+    assert 0.88 <= hits / 200 <= 0.99  # 95 % nominal; the percentile bootstrap is a bit short
+
+
+def test_probability_of_improvement():
+    y = np.array([[1.0, 1.0]])  # one deterministic controller, two tasks
+    assert stats.probability_of_improvement(np.full((5, 2), 2.0), y) == pytest.approx(
+        (1.0, 1.0, 1.0))
+    assert stats.probability_of_improvement(np.full((5, 2), 1.0), y)[0] == pytest.approx(0.5)
+    # task 1: 3 of 4 runs above; task 2: 1 of 4 above: P = (0.75 + 0.25) / 2
+    x = np.array([[2.0, 0.0], [2.0, 0.0], [2.0, 0.0], [0.0, 2.0]])
+    assert stats.probability_of_improvement(x, y)[0] == pytest.approx(0.5)
+    x = np.array([[2.0, 2.0], [2.0, 2.0], [2.0, 0.0], [0.0, 2.0]])
+    assert stats.probability_of_improvement(x, y)[0] == pytest.approx(0.75)
+
+
+def test_performance_profile_counts_runs_above_each_tau():
+    out = stats.performance_profile({"a": np.array([[0.5, 1.5], [1.5, 2.5]])},
+                                    np.array([0.0, 1.0, 2.0, 3.0]))
+    assert out["a"]["profile"] == pytest.approx([1.0, 0.75, 0.25, 0.0])
+
+
+def test_steps_to_threshold():
+    t = np.array([100, 200, 300])
+    r = np.array([[1.0, 2.0], [4.0, 6.0], [3.0, 9.0]])  # means 1.5, 5, 6
+    assert stats.steps_to_threshold(t, r, 5.0) == 200
+    assert stats.steps_to_threshold(t, r, 7.0) == float("inf")
+
+
+def _synthetic_results(tmp_path):
+    """A results file of two tasks, SAC with five seeds, the baselines: answers known."""
+    tasks = {"roller_gym/RollerStabilize-v1": 100.0, "roller_gym/RollerHold-v1": 200.0}
+    evaluations = []
+    for task, classical in tasks.items():
+        for name, ret in (("classical", classical), ("zero", 10.0), ("random", 1.0)):
+            evaluations.append({"env": task, "name": name, "return_mean": ret,
+                                "success_rate": 1.0 if name == "classical" else 0.0})
+        for seed, offset in enumerate([-3.0, -1.0, 0.0, 1.0, 50.0]):  # one outlying seed
+            success = 1.0 if task.endswith("Stabilize-v1") else 0.5
+            evaluations.append({
+                "env": task, "name": "sac", "seed": seed, "run_dir": str(tmp_path),
+                "return_mean": classical + offset, "success_rate": success,
+                "trained_steps": 1000, "wall_time_s": 60.0,
+                "curve": {"timesteps": [100, 200, 300],
+                          "returns": [[0.0, 0.0], [classical, classical], [classical] * 2]}})
+    return {"date": "2026-01-01T00:00:00+00:00", "command": "roller-gym results",
+            "machine": "x86_64, 2 CPU cores, Linux", "versions": {"rliable": "1.2.0"},
+            "episodes": 100, "evaluation_s": 60.0, "train_wall_s": 600.0,
+            "tasks": {t: {"reward_threshold": 0.95 * c, "classical": "LQR"}
+                      for t, c in tasks.items()},
+            "evaluations": evaluations}
+
+
+def test_the_results_page_reports_what_the_synthetic_runs_hold(tmp_path):
+    results_mod = pytest.importorskip("roller_gym.scripts.results")
+    data = _synthetic_results(tmp_path)
+    summary = results_mod.summarize(data, ["sac"])
+    stab = summary["tasks"]["roller_gym/RollerStabilize-v1"]["algos"]["sac"]
+    # IQM of 97, 99, 100, 101, 150: the middle three (one trimmed each side of five)
+    assert stab["return_iqm"][0] == pytest.approx((99 + 100 + 101) / 3)
+    assert stab["steps_to_threshold"] == [200.0] * 5  # the first evaluation at ≥ 95
+    met, sentence = results_mod.target(summary["tasks"]["roller_gym/RollerStabilize-v1"])
+    assert met is True
+    met, sentence = results_mod.target(summary["tasks"]["roller_gym/RollerHold-v1"])
+    assert met is False and "short by 40%" in sentence  # success 50 % against 90 %
+    report = tmp_path / "RESULTS.md"
+    results_mod.render(data, report, tmp_path, ["sac"])
+    text = report.read_text()
+    assert "100.0 [" in text and "**missed**" in text and "**met**" in text
+    assert (tmp_path / "learning-curves.png").stat().st_size > 10_000
+    assert (tmp_path / "aggregate.png").stat().st_size > 10_000
