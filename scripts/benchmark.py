@@ -14,7 +14,7 @@ Read top to bottom; each part is a section:
    reference at rtol = atol = 1e-13 (global), and the largest error of one control step
    started from the reference state (local). Then the energy error at zero torque over a
    long horizon.
-2. **MuJoCo** on the same scene (``scripts/mujoco_roller.py``): at its default settings and
+2. **MuJoCo** on the same scene (``roller_gym.bench.mujoco_roller``): at its default settings and
    at settings tuned for accuracy, the same episodes and metric, timed interleaved with ours.
 3. **Throughput**: one environment through ``gymnasium.make`` against Pendulum-v1, the vector
    environment against Gymnasium's ``CartPoleVectorEnv``, stable-baselines3's PPO.
@@ -40,7 +40,7 @@ import numpy as np
 from roller_gym.bench.throughput import machine
 from roller_gym.physics import Scene, energy, preset
 from roller_gym.physics import integrators as integ
-from roller_gym.scripts import mujoco_roller as mjr
+from roller_gym.bench import mujoco_roller as mjr
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -1049,7 +1049,7 @@ def write_report(cfg: Config, results: list[SceneResult], tp: Throughput | None,
     # -- part 2 -------------------------------------------------------------------------------
     L += ["## 2. MuJoCo on the same scene", ""]
     L += [
-        "The model (`scripts/mujoco_roller.py`): MuJoCo has no rolling constraint between a "
+        "The model (`roller_gym.bench.mujoco_roller`): MuJoCo has no rolling constraint between a "
         "cylinder and a concave cylinder, so the roller is a body `arm` hinged at the axis O "
         "(angle ψ) carrying at R − r a body `roller` hinged to it (relative angle q), with the "
         "roller's mass m at e from its center and inertia m k² about C, and a joint equality "

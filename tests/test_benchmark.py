@@ -2,8 +2,8 @@
 
 * The quick run writes a report with every section and only finite numbers, and its RK4
   errors fall as the tolerance tightens and as the substeps grow.
-* The MuJoCo model of the scene (``scripts/mujoco_roller.py``) and our physics agree: at the
-  tuned settings MuJoCo's trajectory matches our DOP853 reference within a stated tolerance,
+* The MuJoCo model of the scene (``roller_gym.bench.mujoco_roller``) and our physics agree: at
+  the tuned settings MuJoCo's trajectory matches our DOP853 reference within a stated tolerance,
   and converges to it as the timestep shrinks. Two independent models of the same system
   agreeing is a cross-check of both.
 
@@ -29,7 +29,7 @@ mujoco = pytest.importorskip("mujoco")
 from roller_gym.physics import Scene, preset  # noqa: E402
 from roller_gym.physics import integrators as integ  # noqa: E402
 from roller_gym.scripts import benchmark  # noqa: E402
-from roller_gym.scripts import mujoco_roller as mjr  # noqa: E402
+from roller_gym.bench import mujoco_roller as mjr  # noqa: E402
 
 SECTIONS = ("## Summary", "## Machine and command", "## How it is measured",
             "## 1. Work-precision", "### Energy at zero torque", "## 2. MuJoCo on the same scene",
