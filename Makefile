@@ -51,8 +51,8 @@ test-rllib: $(RLLIB_STAMP)  ## the environment tests on RLlib's Gymnasium releas
 train-rllib: $(RLLIB_STAMP)  ## PPO on a local Ray
 	$(RLLIB_VENV)/bin/roller-gym train-rllib
 
-bench: $(STAMP)
-	$(VENV)/bin/roller-gym benchmark
+bench: $(STAMP)  ## measure the work-precision study: docs/benchmarks/workprecision.json, docs/BENCHMARKS.md
+	$(RG) benchmark
 
 clean:
 	rm -rf $(VENV) $(RLLIB_VENV) runs results
