@@ -70,8 +70,8 @@ $(PEERS_STAMP): pyproject.toml
 throughput: $(PEERS_STAMP)  ## measure docs/THROUGHPUT.md against CartPole, Pendulum, EnvPool and JAX
 	$(PEERS_VENV)/bin/python -m roller_gym.bench.throughput measure --out docs
 
-bench: $(STAMP)
-	$(VENV)/bin/roller-gym benchmark
+bench: $(STAMP)  ## measure the work-precision study: docs/benchmarks/workprecision.json, docs/BENCHMARKS.md
+	$(RG) benchmark
 
 clean:
 	rm -rf $(VENV) $(RLLIB_VENV) $(PEERS_VENV) runs results

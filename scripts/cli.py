@@ -3,7 +3,8 @@
     roller-gym train [options]        train SAC, TD3 or PPO with rl-zoo3
     roller-gym evaluate [options]     trained agents against the classical baselines
     roller-gym replay RUN [options]   one episode to a GIF
-    roller-gym benchmark [options]    speed against accuracy, peers in the same run
+    roller-gym benchmark [options]    speed against accuracy, peers in the same run (--render:
+                                      the page again from its results file)
     roller-gym train-rllib [options]  PPO or SAC on Ray RLlib
     roller-gym COMMAND --help         the options of a command
 
@@ -40,7 +41,8 @@ COMMANDS: dict[str, Command] = {
     "replay": Command("replay", "render one episode of a policy to a GIF or MP4",
                       "zoo,render"),
     "benchmark": Command("benchmark", "speed against accuracy: integrators, MuJoCo, "
-                         "throughput", "bench,plots"),
+                         "throughput; --render redraws docs/BENCHMARKS.md from its results",
+                         "bench,plots"),
     "train-rllib": Command("train_rllib", "train PPO or SAC on Ray RLlib (its own "
                            "environment)", "rllib"),
 }

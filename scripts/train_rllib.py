@@ -46,8 +46,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--env", choices=ENV_IDS, default="roller_gym/RollerStabilize-v1",
                    help="the task")
     p.add_argument("--env-kwarg", action="append", default=[], metavar="KEY=VALUE",
-                   help="a keyword argument of gymnasium.make (VALUE is JSON if it parses, "
-                        "else a string), e.g. dt=0.02, scene=paper; repeat for more")
+                   help="a keyword argument of gymnasium.make (VALUE is a Python literal if it "
+                        "parses, else a string), e.g. dt=0.02, scene=paper; repeat for more")
     p.add_argument("--iterations", type=int, default=10, help="training iterations")
     p.add_argument("--num-env-runners", type=int, default=2,
                    help="sampling actors (Ray processes), 1 CPU each; 0 samples in the driver")

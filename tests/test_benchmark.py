@@ -1,17 +1,21 @@
-"""The benchmark keeps working (``scripts/benchmark.py --quick``), and two real checks.
+"""The work-precision benchmark (``roller_gym.bench``): it measures, renders and judges.
 
-* The quick run writes a report with every section and only finite numbers, and its RK4
-  errors fall as the tolerance tightens and as the substeps grow.
-* The MuJoCo model of the scene (``scripts/mujoco_roller.py``) and our physics agree: at the
-  tuned settings MuJoCo's trajectory matches our DOP853 reference within a stated tolerance,
-  and converges to it as the timestep shrinks. Two independent models of the same system
-  agreeing is a cross-check of both.
+* The verdicts, each on synthetic results that meet and that miss its target.
+* Rendering: from a results file alone, with the measuring functions disabled and MuJoCo not
+  importable, the page has every section, table and plot.
+* ``roller-gym benchmark --quick`` (``--out`` a temporary folder) writes the results file, the
+  page and the plots; its RK4 errors fall as the tolerance tightens and as the substeps grow.
+* The MuJoCo model of the scene (``roller_gym.bench.mujoco_roller``) and our physics agree: at
+  the tuned settings MuJoCo's trajectory matches our DOP853 reference within a stated
+  tolerance, and converges to it as the timestep shrinks. Two independent models of the same
+  system agreeing is a cross-check of both.
 
 No timing is asserted: the targets are reported by the benchmark, not tested.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import re
 import subprocess
@@ -21,19 +25,18 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from roller_gym.bench import report, verdicts
+from roller_gym.physics import Scene, preset
+from roller_gym.physics import integrators as integ
+from roller_gym.scripts import benchmark
 
 ROOT = Path(__file__).resolve().parents[1]
-
-mujoco = pytest.importorskip("mujoco")
-
-from roller_gym.physics import Scene, preset  # noqa: E402
-from roller_gym.physics import integrators as integ  # noqa: E402
-from roller_gym.scripts import benchmark  # noqa: E402
-from roller_gym.scripts import mujoco_roller as mjr  # noqa: E402
 
 SECTIONS = ("## Summary", "## Machine and command", "## How it is measured",
             "## 1. Work-precision", "### Energy at zero torque", "## 2. MuJoCo on the same scene",
             "## 3. Throughput", "## 4. Hard cases", "## The targets: what is met")
+PLOTS = ("work_precision.png", "work_precision_local.png", "energy.png", "throughput.png")
+INF, NAN = math.inf, math.nan
 
 
 def _table_rows(text: str, heading: str) -> list[list[str]]:
@@ -48,36 +51,300 @@ def _table_rows(text: str, heading: str) -> list[list[str]]:
     return rows[2:]  # without the header and the separator
 
 
+# -- synthetic results ----------------------------------------------------------------------------
+def _run(family: str, label: str, setting: float, err: float, seconds: float,
+         local: float | None = None, ours: bool = True) -> dict:
+    return {"family": family, "label": label, "setting": setting, "ours": ours,
+            "seconds": seconds, "finite": math.isfinite(err), "error": [err, 10 * err],
+            "local_error": [err / 10 if local is None else local, err],
+            "substeps": {"min": 1, "median": 2.0, "mean": 2.5, "max": 6},
+            "lifting": 3 if ours else None, "slipping": 4 if ours else None}
+
+
+def _scene(name: str, default_err: float, default_seconds: float, own_error: float = 1e-12,
+           predictable_s: float = INF, blowup_s: float = INF) -> dict:
+    """A scene of 200 control steps of 0.05 s: ours, DOP853 and MuJoCo, whose tuned family's
+    error falls as cost⁻²."""
+    runs = [
+        _run("euler", "×1", 1, 0.5, 1e-4), _run("euler", "×10", 10, 0.05, 1e-3),
+        _run("rk4", "×1", 1, 1e-3, 2e-4), _run("rk4", "×4", 4, 4e-6, 8e-4),
+        _run("rk4 auto", "tol 1e-06", 1e-6, 1e-5, 3e-4),
+        _run("rk4 auto", "tol 1e-08", 1e-8, 1e-7, 6e-4),
+        _run("rk8", "×1", 1, 1e-6, 2e-4), _run("rk8", "×4", 4, INF, 8e-4),
+        _run("rk8 auto", "tol 1e-06", 1e-6, 1e-7, 2e-4),
+        _run("rk8 auto", "tol 1e-08", 1e-8, default_err, default_seconds),
+        _run("midpoint", "×1", 1, 1e-2, 5e-4),
+        _run("dop853", "tol 1e-06", 1e-6, 1e-6, 1e-2, local=NAN),
+        _run("MuJoCo default", "2 ms", 25, 0.5, 2e-3, local=1e-2, ours=False),
+        *(_run("MuJoCo tuned", f"{50 / n:g} ms", n, 1e-6 / (n / 25) ** 2, 0.02 * n / 25,
+               ours=False) for n in (25, 100, 400, 1600)),
+    ]
+    energy = [{"label": label, "seconds": 0.01, "finite": True,
+               "blowup_s": blow, "max": 1e-3, "end": 1e-4,
+               "curve": {"t": [0.05, 0.5, 5.0], "value": [1e-9, 1e-6, 1e-3]}}
+              for label, blow in (("euler ×1 (Pendulum's scheme)", INF),
+                                  ("rk8 auto tol 1e-08 (default)", blowup_s))]
+    return {"name": name, "note": f"the scene {name}", "mu": 1.0, "steps": 200,
+            "reference": {"seconds": 0.5, "steps": 4000, "own_error": [own_error, own_error],
+                          "predictable_s": predictable_s, "max_abs_phi": 1.2,
+                          "max_abs_phi_dot": 13.0},
+            "default": 9, "runs": runs, "energy": energy}
+
+
+def synthetic_results() -> dict:
+    """Results that meet the single-environment and MuJoCo targets, meet the vector target at
+    4,096 and miss it at 65,536; a second scene is chaotic and blows up at zero torque."""
+    return {
+        "study": "work-precision",
+        "machine": {"cpu": "a CPU", "cores": 2, "os": "an OS", "python": "3.11",
+                    "versions": {"roller-gym": "0.1.0", "mujoco": None}},
+        "date": "2026-01-01T00:00:00+00:00", "command": "roller-gym benchmark",
+        "elapsed_s": 700.0, "quick": False,
+        "settings": {"dt": 0.05, "tolerance": 1e-8, "method": "rk8", "max_torque": 0.5,
+                     "reference_tol": 1e-13, "target_error": 1e-6, "seed": 0, "slow_s": 1.0,
+                     "parallel_threshold": 2048,
+                     "mujoco": {"default": {"timestep": 0.002, "integrator": "Euler",
+                                            "solref": [0.02, 1.0],
+                                            "solimp": [0.9, 0.95, 0.001, 0.5, 2.0],
+                                            "tolerance": 1e-8, "iterations": 100,
+                                            "refsafe": True},
+                                "tuned": {"integrator": "RK4",
+                                          "solimp": [0.9999, 0.9999, 0.001, 0.5, 2.0],
+                                          "tolerance": 1e-15, "iterations": 200,
+                                          "refsafe": False, "timeconst_per_timestep": 0.5,
+                                          "dampratio": 1.0},
+                                "arm_mass": 1e-14}},
+        "config": {"quick": False, "horizon_s": 10.0, "repeats": 5, "energy_horizon_s": 1000.0,
+                   "env_steps": 4000, "ppo_steps": 2048},
+        "scenes": [_scene("paper", 1e-9, 4e-4),
+                   _scene("tight_fit", 1e-4, 1e-3, own_error=1.0, predictable_s=2.0,
+                          blowup_s=12.5)],
+        "throughput": {
+            "notes": [], "single": {"ours": 150e3, "Pendulum-v1": 100e3},
+            "env_error": [5e-10, 2e-9],
+            "vector": {"1": {"ours": 2e4, "CartPoleVectorEnv": 4e4, "kernel": 1e5},
+                       "4096": {"ours": 3e6, "CartPoleVectorEnv": 10e6, "kernel": 4e6},
+                       "65536": {"ours": 1e6, "CartPoleVectorEnv": 10e6, "kernel": 2e6}},
+            "resets": {n: {"ours": 1e-3, "CartPoleVectorEnv": 1e-4}
+                       for n in ("1", "4096", "65536")},
+            "vector_steps": {"1": 1000, "4096": 244, "65536": 20},
+            "vector_error": [5e-10, 2e-9], "vector_error_envs": 16,
+            "ppo": {"ours": 500.0, "Pendulum-v1": 600.0},
+            "ppo_settings": {"n_steps": 256, "batch_size": 64, "n_epochs": 4,
+                             "torch_threads": 1},
+        },
+    }
+
+
+@pytest.fixture
+def results() -> dict:
+    return synthetic_results()
+
+
+# -- the verdicts -------------------------------------------------------------------------------
+def test_verdict_single_meets_and_misses_on_speed_and_error(results: dict) -> None:
+    (v,) = verdicts.verdict_single(results)
+    assert v.met is True and v.sentence == "**met**" and "1.50 × Pendulum-v1" in v.measured
+    results["throughput"]["single"]["ours"] = 100e3
+    (v,) = verdicts.verdict_single(results)
+    assert v.met is False and v.miss == "speed 0.67 of the target"
+    results["throughput"]["env_error"][0] = 2e-6
+    (v,) = verdicts.verdict_single(results)
+    assert v.miss == "speed 0.67 of the target; error 2.0 × the bound"
+    assert v.sentence.startswith("**missed**")
+
+
+def test_verdict_single_judges_the_integrators_error_too(results: dict) -> None:
+    results["scenes"][0]["runs"][9]["error"][0] = 3e-6  # the default run on the paper scene
+    (v,) = verdicts.verdict_single(results)
+    assert v.met is False and v.miss == "error 3.0 × the bound"
+
+
+def test_verdict_vector_per_size(results: dict) -> None:
+    out = {v.target: v for v in verdicts.verdict_vector(results)}
+    target = verdicts.TARGETS["vector_vs_cartpole"]
+    assert list(out) == [f"vector env ≥ {target:g} × CartPoleVectorEnv at 4,096 "
+                         "sub-environments",
+                         f"vector env ≥ {target:g} × CartPoleVectorEnv at 65,536 "
+                         "sub-environments"]
+    at_4096, at_65536 = out.values()
+    assert at_4096.met is True and at_4096.measured.startswith("0.30 ×")
+    assert at_65536.met is False
+    assert at_65536.miss == f"{0.1 / target:.2f} of the target ({target / 0.1:.1f}× too slow)"
+    del results["throughput"]["vector"]["65536"]  # a size not measured is not judged
+    assert len(verdicts.verdict_vector(results)) == 1
+
+
+def test_verdict_mujoco_meets_misses_and_cannot_tell(results: dict) -> None:
+    # MuJoCo tuned reaches 1e-9 rad between its 400 and 1600 steps per control step, at
+    # 0.032 × 4^0.49 = 0.0632 s per simulated s (log-log interpolation), against our 4e-5.
+    (v,) = verdicts.verdict_mujoco(results)
+    assert v.met is True and v.measured.startswith("1,581 ×") and "interpolated" in v.measured
+    results["scenes"][0]["runs"][9]["seconds"] = 0.04  # ours 100 times slower: 16 ×
+    (v,) = verdicts.verdict_mujoco(results)
+    assert v.met is False and v.miss == "0.16 of the target"
+    for run in verdicts.family(results["scenes"][0], "MuJoCo tuned"):
+        run["error"][0] = 1e-3  # its error stops falling: no cost at our error
+    (v,) = verdicts.verdict_mujoco(results)
+    assert v.met is None and v.sentence == "**not judged**: not reached: its error stops falling"
+
+
+def test_every_verdict_is_in_the_list() -> None:
+    assert set(verdicts.VERDICTS) == {verdicts.verdict_single, verdicts.verdict_vector,
+                                      verdicts.verdict_mujoco}
+
+
+def test_cost_at_error_interpolates_and_extrapolates() -> None:
+    pts = [(1e-2, 1.0), (1e-4, 10.0), (1e-6, 100.0)]  # error falls 100 × per 10 × cost
+    cost, how = verdicts.cost_at_error(pts, 1e-5)
+    assert how == "interpolated" and cost == pytest.approx(10 ** 1.5)
+    cost, how = verdicts.cost_at_error(pts, 1e-8)
+    assert how == "extrapolated" and cost == pytest.approx(1000.0)
+    cost, how = verdicts.cost_at_error(pts, 1.0)
+    assert how == "reached at its cheapest setting" and cost == 1.0
+    cost, how = verdicts.cost_at_error([(1e-2, 1.0), (1e-2, 2.0)], 1e-3)
+    assert math.isnan(cost) and how.startswith("not reached")
+    cost, how = verdicts.cost_at_error(pts, 1e-20)  # too far to extrapolate
+    assert math.isnan(cost) and how.startswith("not reached")
+
+
+# -- rendering --------------------------------------------------------------------------------
+def test_results_file_is_strict_json_and_reads_back(results: dict, tmp_path: Path) -> None:
+    path = report.results_path(tmp_path)
+    report.save_results(results, path)
+    text = path.read_text()
+
+    def refuse(name: str) -> None:
+        raise AssertionError(f"{name} is not JSON")
+
+    json.loads(text, parse_constant=refuse)  # no NaN or Infinity literals
+    back = report.load_results(path)
+    assert back["scenes"][0]["runs"][7]["error"] == [INF, INF]
+    assert math.isnan(back["scenes"][0]["runs"][11]["local_error"][0])
+    assert back["throughput"] == results["throughput"]
+
+
+def test_render_from_the_results_file_alone(results: dict, tmp_path: Path,
+                                            monkeypatch: pytest.MonkeyPatch) -> None:
+    workprecision = pytest.importorskip("roller_gym.bench.workprecision")
+
+    def no_measuring(*args, **kwargs):
+        raise AssertionError("rendering measured")
+
+    for name in ("measure", "measure_scene", "measure_energy", "measure_throughput"):
+        monkeypatch.setattr(workprecision, name, no_measuring)
+    report.save_results(results, report.results_path(tmp_path))
+    benchmark.main(["--render", "--out", str(tmp_path)])
+    page = (tmp_path / "BENCHMARKS.md").read_text()
+    for section in SECTIONS:
+        assert section in page, section
+    for png in PLOTS:
+        assert (tmp_path / "benchmarks" / png).stat().st_size > 10_000
+        assert f"(benchmarks/{png})" in page
+    assert "{" not in page and "None" not in page and not re.search(r"\bnan\b", page)
+    summary = _table_rows(page, "## Summary")
+    assert [row[2] for row in summary] == ["**met**", "**met**", summary[2][2], "**met**"]
+    assert summary[2][2].startswith("**missed**")
+    rows = _table_rows(page, "### paper:")
+    assert len(rows) == len(results["scenes"][0]["runs"])
+    assert rows[9][:3] == ["rk8 auto ★", "tol 1e-08", "1.0e-09"]
+    assert rows[7][2] == "diverged" and rows[11][4] == ""
+    assert "**The motion is chaotic under these torques**" in page
+    assert "not comparable: chaotic after 2 s" in page
+    assert "**blew up** in tight_fit (rk8 auto tol 1e-08 (default) at t = 12.5 s)" in page
+    hard = _table_rows(page, "## 4. Hard cases")
+    assert [r[0] for r in hard] == ["paper", "tight_fit"]
+    assert hard[0][8] == "3 lift-off, 4 slip (μ = 1)"
+    assert "Generated by `roller-gym benchmark` in 700 s" in page
+
+
+def test_render_does_not_need_mujoco(results: dict, tmp_path: Path) -> None:
+    report.save_results(results, report.results_path(tmp_path))
+    code = ("import sys; sys.modules['mujoco'] = None\n"
+            "from roller_gym.scripts.benchmark import main\n"
+            f"main(['--render', '--out', {str(tmp_path)!r}])\n"
+            "assert 'roller_gym.bench.workprecision' not in sys.modules")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "## 4. Hard cases" in (tmp_path / "BENCHMARKS.md").read_text()
+    assert "missed: " in proc.stdout  # the verdicts printed
+
+
+def test_render_without_a_results_file_says_how_to_make_one(tmp_path: Path) -> None:
+    with pytest.raises(SystemExit, match=r"no results file at .*`roller-gym benchmark`"):
+        benchmark.main(["--render", "--out", str(tmp_path)])
+    with pytest.raises(SystemExit):
+        benchmark.main(["--render", "--quick", "--out", str(tmp_path)])
+    assert not (tmp_path / "BENCHMARKS.md").exists()
+
+
+# -- the quick run --------------------------------------------------------------------------------
 @pytest.fixture(scope="module")
-def quick_report(tmp_path_factory: pytest.TempPathFactory) -> str:
+def wp():
+    """roller_gym.bench.workprecision (it needs MuJoCo)."""
+    return pytest.importorskip("roller_gym.bench.workprecision")
+
+
+@pytest.fixture(scope="module")
+def mjr():
+    return pytest.importorskip("roller_gym.bench.mujoco_roller")
+
+
+@pytest.fixture(scope="module")
+def quick_run(wp, tmp_path_factory: pytest.TempPathFactory) -> tuple[dict, str]:
     out = tmp_path_factory.mktemp("bench")
     proc = subprocess.run(
         [sys.executable, "-m", "roller_gym.scripts.benchmark", "--quick", "--out", str(out)],
         capture_output=True, text=True, timeout=600, cwd=ROOT,
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
-    report = out / "BENCHMARKS.md"
-    assert report.exists()
-    for png in ("work_precision.png", "energy.png"):
+    for png in PLOTS:
         assert (out / "benchmarks" / png).stat().st_size > 10_000
-    return report.read_text()
+    return (report.load_results(report.results_path(out)),
+            (out / "BENCHMARKS.md").read_text())
 
 
-def test_quick_report_has_every_section_and_finite_numbers(quick_report: str) -> None:
+def test_quick_run_writes_the_results_with_machine_versions_and_command(wp, quick_run) -> None:
+    results, _ = quick_run
+    assert results["quick"] is True
+    assert results["command"].startswith("roller-gym benchmark --quick --out ")
+    assert results["machine"]["cores"] >= 1
+    versions = results["machine"]["versions"]
+    for dist in ("roller-gym", "numpy", "scipy", "mujoco"):
+        assert versions[dist], dist
+    assert [s["name"] for s in results["scenes"]] == list(results["config"]["scenes"])
+    paper = results["scenes"][0]
+    assert paper["steps"] == round(results["config"]["horizon_s"] / results["settings"]["dt"])
+    default = paper["runs"][paper["default"]]
+    assert default["family"] == f"{wp.DEFAULT_METHOD} auto"
+    assert default["finite"] and 0 < default["error"][0] < 1e-6
+    assert set(results["throughput"]["vector"]) == {
+        str(n) for n in results["config"]["vector_sizes"]}
+
+
+def test_quick_report_has_every_section_and_finite_numbers(quick_run) -> None:
+    _, page = quick_run
     for section in SECTIONS:
-        assert section in quick_report, section
-    assert not re.search(r"\b(nan|NaN)\b", quick_report)
-    assert not re.search(r"\binf\b", quick_report)
-    assert "A `--quick` run" in quick_report
+        assert section in page, section
+    assert not re.search(r"\b(nan|NaN)\b", page)
+    assert not re.search(r"\binf\b", page)
+    assert "A `--quick` run" in page
     # the default scene's table: every error of ours is a finite number or "diverged"
-    rows = _table_rows(quick_report, "### paper:")
+    rows = _table_rows(page, "### paper:")
     assert len(rows) >= 10
     for row in rows:
         assert row[2] == "diverged" or math.isfinite(float(row[2])), row
 
 
-def test_quick_report_rk4_errors_fall_as_the_tolerance_tightens(quick_report: str) -> None:
-    rows = _table_rows(quick_report, "### paper:")
+def test_render_of_the_quick_results_is_the_quick_page(quick_run, tmp_path: Path) -> None:
+    results, page = quick_run
+    assert report.render(results) == page
+
+
+def test_quick_report_rk4_errors_fall_as_the_tolerance_tightens(quick_run) -> None:
+    _, page = quick_run
+    rows = _table_rows(page, "### paper:")
     auto = [(float(r[1].split()[1]), float(r[2])) for r in rows if r[0].startswith("rk4 auto")]
     assert len(auto) >= 3
     auto.sort(reverse=True)  # loosest tolerance first
@@ -91,6 +358,7 @@ def test_quick_report_rk4_errors_fall_as_the_tolerance_tightens(quick_report: st
     assert all(b < a for a, b in pairwise(errors)), fixed
 
 
+# -- the real checks: our physics against MuJoCo and DOP853 ------------------------------------
 def step_through(scene: Scene, torques: np.ndarray, dt: float) -> float:
     """φ [rad] at the end of the torques, stepped by the default integrator from rest."""
     phi, phi_dot = 0.0, 0.0
@@ -100,18 +368,32 @@ def step_through(scene: Scene, torques: np.ndarray, dt: float) -> float:
     return phi
 
 
-def _reference(scene: Scene, torques: np.ndarray, dt: float) -> np.ndarray:
-    return benchmark.run_dop853(scene, [float(t) for t in torques], dt, 1e-13).states
+def _reference(wp, scene: Scene, torques: np.ndarray, dt: float) -> np.ndarray:
+    return wp.run_dop853(scene, [float(t) for t in torques], dt, 1e-13).states
+
+
+def test_stepper_episode_matches_the_reference(wp) -> None:
+    """An episode through the environments' stepper at default settings stays within 100 ×
+    the tolerance of the DOP853 reference, and a coarse fixed-substep one does not."""
+    scene, dt = preset("paper"), wp.DT
+    torques = [float(t) for t in wp.episode_torques(40, seed=1)]
+    ref = _reference(wp, scene, np.array(torques), dt)
+    fine = integ.Stepper(scene, dt=dt, tol=wp.DEFAULT_TOL)
+    coarse = integ.Stepper(scene, method="euler", dt=dt, tol=1e-8, substeps=1)
+    err_fine = wp.global_error(wp.run_kernel(fine, torques).states, ref)
+    err_coarse = wp.global_error(wp.run_kernel(coarse, torques).states, ref)
+    assert err_fine[0] <= 100 * wp.DEFAULT_TOL, err_fine
+    assert err_coarse[0] > 1e3 * err_fine[0], (err_coarse, err_fine)
 
 
 @pytest.mark.parametrize(("name", "tolerance"), [("paper", 1e-9), ("floor", 1e-8),
                                                   ("drum", 1e-9)])
-def test_mujoco_model_agrees_with_our_reference(name: str, tolerance: float) -> None:
+def test_mujoco_model_agrees_with_our_reference(wp, mjr, name: str, tolerance: float) -> None:
     """MuJoCo tuned (timestep 0.125 ms) stays within ``tolerance`` rad of our DOP853
     reference over 1 s of random torques, and its error falls as the timestep shrinks."""
     scene, dt = preset(name), 0.05
-    torques = benchmark.episode_torques(20, seed=1)
-    ref = _reference(scene, torques, dt)
+    torques = wp.episode_torques(20, seed=1)
+    ref = _reference(wp, scene, torques, dt)
     errors = []
     for n in (100, 400):
         sim = mjr.MujocoRoller(scene, mjr.tuned(dt / n))
@@ -125,13 +407,13 @@ def test_mujoco_model_agrees_with_our_reference(name: str, tolerance: float) -> 
     assert np.abs(ref[:, 0]).max() > 0.1  # the torques moved the roller
 
 
-def test_mujoco_defaults_are_a_different_regime() -> None:
+def test_mujoco_defaults_are_a_different_regime(wp, mjr) -> None:
     """At MuJoCo's defaults the soft constraint shows: over the same second of torques its
     error is at least 1000 × that of MuJoCo tuned (timestep 0.125 ms) and of our default
     integrator, both measured here against the DOP853 reference."""
     scene, dt = preset("paper"), 0.05
-    torques = benchmark.episode_torques(20, seed=1)
-    ref = _reference(scene, torques, dt)
+    torques = wp.episode_torques(20, seed=1)
+    ref = _reference(wp, scene, torques, dt)
     default = np.abs(mjr.MujocoRoller(scene, mjr.DEFAULT).run(0.0, 0.0, torques, dt)
                      - ref).max(axis=0)[0]
     tuned = np.abs(mjr.MujocoRoller(scene, mjr.tuned(1.25e-4)).run(0.0, 0.0, torques, dt)
@@ -140,15 +422,24 @@ def test_mujoco_defaults_are_a_different_regime() -> None:
     assert default > 1000 * max(tuned, ours), (default, tuned, ours)
 
 
-def test_cost_at_error_interpolates_and_extrapolates() -> None:
-    pts = [(1e-2, 1.0), (1e-4, 10.0), (1e-6, 100.0)]  # error falls 100 × per 10 × cost
-    cost, how = benchmark.cost_at_error(pts, 1e-5)
-    assert how == "interpolated" and cost == pytest.approx(10 ** 1.5)
-    cost, how = benchmark.cost_at_error(pts, 1e-8)
-    assert how == "extrapolated" and cost == pytest.approx(1000.0)
-    cost, how = benchmark.cost_at_error(pts, 1.0)
-    assert how == "reached at its cheapest setting" and cost == 1.0
-    cost, how = benchmark.cost_at_error([(1e-2, 1.0), (1e-2, 2.0)], 1e-3)
-    assert math.isnan(cost) and how.startswith("not reached")
-    cost, how = benchmark.cost_at_error(pts, 1e-20)  # too far to extrapolate
-    assert math.isnan(cost) and how.startswith("not reached")
+def test_synthetic_results_keep_the_shape_of_measured_ones(quick_run) -> None:
+    """The synthetic results above have the keys of real ones (so the render tests test the
+    real format)."""
+    measured, _ = quick_run
+    synthetic = synthetic_results()
+
+    def keys(x: object, depth: int) -> set[str]:
+        if not isinstance(x, dict) or depth == 0:
+            return set()
+        names = {k: "N" if k.isdigit() else k for k in x}  # sizes: the measured ones vary
+        return set(names.values()) | {f"{names[k]}.{k2}" for k, v in x.items()
+                                      for k2 in keys(v, depth - 1)}
+
+    for part in ("settings", "throughput"):
+        assert keys(synthetic[part], 3) == keys(measured[part], 3), part
+    assert set(synthetic["scenes"][0]) == set(measured["scenes"][0])
+    assert set(synthetic["scenes"][0]["runs"][0]) == set(measured["scenes"][0]["runs"][0])
+    assert set(synthetic["scenes"][0]["reference"]) == set(measured["scenes"][0]["reference"])
+    assert set(synthetic["scenes"][0]["energy"][0]) == set(measured["scenes"][0]["energy"][0])
+    assert set(synthetic["config"]) <= set(measured["config"])
+    assert set(synthetic) == set(measured)

@@ -142,3 +142,50 @@ def test_train_evaluate_replay_end_to_end(tmp_path):
     assert (tmp_path / "replay.gif").read_bytes()[:6] == b"GIF89a"
     bad = roller_gym("replay", "no-such-run", check=False, cwd=tmp_path)
     assert bad.returncode == 1 and "no-such-run" in bad.stderr and "classical" in bad.stderr
+
+
+@pytest.mark.parametrize(("item", "expected"), [
+    ("max_torque=0.6", {"max_torque": 0.6}),
+    ("scene=floor", {"scene": "floor"}),
+    ("randomize={'m': (0.8, 1.2)}", {"randomize": {"m": (0.8, 1.2)}}),
+    ('randomize={"m": [0.8, 1.2]}', {"randomize": {"m": [0.8, 1.2]}}),
+    ("substeps=None", {"substeps": None}),
+    ("name=a=b", {"name": "a=b"}),
+])
+def test_key_values_reads_python_literals_else_strings(item, expected):
+    from roller_gym.scripts.arguments import key_values
+
+    assert key_values([item], "--env-kwargs") == expected
+
+
+def test_key_values_refuses_an_item_that_is_not_key_value_naming_the_option():
+    from roller_gym.scripts.arguments import key_values
+
+    with pytest.raises(SystemExit, match="--env-kwarg: 'scene' is not KEY=VALUE"):
+        key_values(["scene"], "--env-kwarg")
+    with pytest.raises(SystemExit, match="--hyperparams: '=1' is not KEY:VALUE"):
+        key_values(["=1"], "--hyperparams", ":")
+    assert key_values(["n_envs:2"], "--hyperparams", ":") == {"n_envs": 2}
+
+
+def test_train_and_train_rllib_parse_env_kwargs_with_the_one_parser():
+    from roller_gym.scripts import arguments
+
+    for module in ("train", "train_rllib"):
+        try:
+            program = importlib.import_module(f"roller_gym.scripts.{module}")
+        except ImportError as exc:
+            pytest.skip(f"{module} needs {exc.name}, not installed here")
+        assert program.key_values is arguments.key_values, module
+
+
+@NEEDS_RL_ZOO3
+def test_train_passes_env_kwargs_to_rl_zoo3_as_python_literals():
+    from roller_gym.scripts import train
+
+    args = train.build_parser().parse_args(
+        ["--env-kwargs", "max_torque=0.6", "scene=floor", "randomize={'m': (0.8, 1.2)}"])
+    argv = train.zoo_arguments(args, "conf.yml")
+    at = argv.index("--env-kwargs")
+    assert argv[at + 1:at + 4] == ["max_torque:0.6", "scene:'floor'",
+                                   "randomize:{'m': (0.8, 1.2)}"]

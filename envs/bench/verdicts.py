@@ -1,0 +1,244 @@
+"""The work-precision study's targets, and what its results say about them.
+
+Each verdict is one small function of the results (the plain data of
+:func:`roller_gym.bench.workprecision.measure`, or of the JSON file it is saved to) returning
+:class:`Verdict` rows; :data:`VERDICTS` lists them. They measure nothing: the results hold
+every number they read. The helpers above them read the results (a scene's runs, its default
+run, MuJoCo's cost at a given error).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any, NamedTuple
+
+from roller_gym.bench import throughput
+
+__all__ = ["TARGETS", "VERDICTS", "Comparison", "Verdict", "compare_mujoco", "cost_at_error",
+           "verdict_mujoco", "verdict_single", "verdict_vector"]
+
+Results = dict[str, Any]
+
+#: Targets: one environment's steps/s against Pendulum-v1's, the episode's state error [rad],
+#: the vector environment's steps/s against CartPoleVectorEnv's (at the sizes of
+#: VECTOR_SIZES), and our speed against MuJoCo's at equal error on the default scene.
+TARGETS = {
+    "single_vs_pendulum": throughput.TARGETS["single_vs_pendulum"],
+    "episode_error_rad": throughput.TARGETS["episode_error_rad"],
+    "vector_vs_cartpole": throughput.TARGETS["vector_vs_cartpole"],
+    "mujoco_speedup": 100.0,
+}
+VECTOR_SIZES = (4096, 65536)
+
+
+# -- the numbers in words -------------------------------------------------------------------------
+def fmt_err(x: float) -> str:
+    """An error, or "diverged" where it is not finite."""
+    return "diverged" if not math.isfinite(x) else f"{x:.1e}"
+
+
+def fmt_time(seconds: float) -> str:
+    """A duration [s], in the unit that reads best ("–" where not finite)."""
+    if not math.isfinite(seconds):
+        return "–"
+    if seconds >= 1.0:
+        return f"{seconds:.2f} s"
+    if seconds >= 1e-3:
+        return f"{1e3 * seconds:.3g} ms"
+    return f"{1e6 * seconds:.3g} µs"
+
+
+# -- reading the results ------------------------------------------------------------------------
+def scene(results: Results, name: str) -> dict[str, Any]:
+    """The results of the scene called ``name``."""
+    return next(s for s in results["scenes"] if s["name"] == name)
+
+
+def horizon(results: Results, sc: dict[str, Any]) -> float:
+    """The episode's length [s] on a scene."""
+    return sc["steps"] * results["settings"]["dt"]
+
+
+def family(sc: dict[str, Any], name: str) -> list[dict[str, Any]]:
+    """A scene's runs of one family (e.g. ``"rk8 auto"``, ``"MuJoCo tuned"``), in order."""
+    return [r for r in sc["runs"] if r["family"] == name]
+
+
+def default_run(sc: dict[str, Any]) -> dict[str, Any]:
+    """A scene's run at the environments' default settings."""
+    return sc["runs"][sc["default"]]
+
+
+def chaotic(results: Results, sc: dict[str, Any]) -> bool:
+    """True where the reference's own error passes the target bound within the episode."""
+    return sc["reference"]["predictable_s"] < horizon(results, sc)
+
+
+def error_of(run: dict[str, Any], metric: str) -> float:
+    """The φ error [rad] of a run: ``"global"`` (along the episode) or ``"local"`` (one
+    control step from the reference state)."""
+    return run["error"][0] if metric == "global" else run["local_error"][0]
+
+
+def cost_at_error(points: list[tuple[float, float]], target: float) -> tuple[float, str]:
+    """The cost at which a family of (error, cost) points reaches ``target`` error.
+
+    Log-log interpolation between the last point above the target and the first at or below
+    it (points taken in order of cost); log-log extrapolation from the two finest points if
+    none reaches it; ``(nan, why)`` if that is not possible either.
+    """
+    pts = sorted((c, e) for e, c in points if math.isfinite(e) and e > 0)
+    for i, (c, e) in enumerate(pts):
+        if e <= target:
+            if i == 0:
+                return c, "reached at its cheapest setting"
+            c0, e0 = pts[i - 1]
+            if e0 <= e:
+                return c, "reached"
+            x = math.log(target / e0) / math.log(e / e0)
+            return math.exp(math.log(c0) + x * math.log(c / c0)), "interpolated"
+    if len(pts) >= 2:
+        (c0, e0), (c1, e1) = pts[-2], pts[-1]
+        if e1 < e0 / 2:  # a clear trend: extrapolate, but not beyond 100 times the finest cost
+            x = math.log(target / e0) / math.log(e1 / e0)
+            cost = math.exp(math.log(c0) + x * math.log(c1 / c0))
+            if cost <= 100 * c1:
+                return cost, "extrapolated"
+            return math.nan, f"not reached: would cost over 100 × its finest ({fmt_time(c1)})"
+    return math.nan, "not reached: its error stops falling"
+
+
+class Comparison(NamedTuple):
+    """Ours at default settings against MuJoCo (tuned) at equal error, on one scene."""
+
+    scene: str
+    metric: str  # "global" or "local"
+    our_err: float  # [rad]
+    our_cost: float  # [s per simulated s]
+    mj_cost: float  # [s per simulated s]
+    mj_how: str
+    mj_setting: str
+    ratio: float
+    default_err: float  # MuJoCo at its defaults [rad]
+    default_cost: float  # [s per simulated s]
+
+
+def compare_mujoco(results: Results, sc: dict[str, Any], metric: str = "global") -> Comparison:
+    """What MuJoCo (tuned) needs to reach the error of our default settings, and its cost."""
+    dt = results["settings"]["dt"]
+    hz = horizon(results, sc)
+    ours = default_run(sc)
+    floor = sc["reference"]["own_error"][0] if metric == "global" else 1e-14
+    target = max(error_of(ours, metric), floor)
+    tuned = family(sc, "MuJoCo tuned")
+    cost, how = cost_at_error([(error_of(r, metric), r["seconds"] / hz) for r in tuned], target)
+    # the MuJoCo timestep that reaches it: the error falls as timestep² along the tuned family
+    setting = "–"
+    finite = [r for r in tuned if math.isfinite(error_of(r, metric)) and error_of(r, metric) > 0]
+    if math.isfinite(cost) and finite:
+        reached = [r for r in finite if error_of(r, metric) <= target]
+        if reached:
+            r0 = min(reached, key=lambda r: r["seconds"])
+            setting = (f"timestep {1e3 * dt / r0['setting']:.3g} ms "
+                       f"({int(r0['setting'])} per step)")
+        else:
+            finest = min(finite, key=lambda r: error_of(r, metric))
+            ts = dt / finest["setting"] * math.sqrt(target / error_of(finest, metric))
+            setting = f"timestep ≈ {1e3 * ts:.2g} ms (≈ {dt / ts:.0f} per step)"
+    own_steps = round(dt / results["settings"]["mujoco"]["default"]["timestep"])
+    default = next((r for r in family(sc, "MuJoCo default") if r["setting"] == own_steps), None)
+    our_cost = ours["seconds"] / hz
+    return Comparison(
+        sc["name"], metric, error_of(ours, metric), our_cost, cost, how, setting,
+        cost / our_cost,
+        error_of(default, metric) if default else math.nan,
+        default["seconds"] / hz if default else math.nan,
+    )
+
+
+# -- the verdicts: one small function each ----------------------------------------------------
+class Verdict(NamedTuple):
+    """A target and what was measured against it.
+
+    Attributes:
+        target: what is asked, in words.
+        measured: what was measured, in words and numbers.
+        met: True or False; None where the results cannot tell.
+        miss: how far off, where not met (or why it cannot be told).
+    """
+
+    target: str
+    measured: str
+    met: bool | None
+    miss: str = ""
+
+    @property
+    def sentence(self) -> str:
+        """The verdict as the report writes it."""
+        if self.met is None:
+            return f"**not judged**: {self.miss}"
+        return "**met**" if self.met else f"**missed**: {self.miss}"
+
+
+def verdict_single(results: Results) -> list[Verdict]:
+    """One environment through ``gymnasium.make``: its steps/s at least
+    ``single_vs_pendulum`` × Pendulum-v1's, and its state error over the episode (and that of
+    the default integrator on the default scene) at most ``episode_error_rad`` [rad]."""
+    tp, speed, bound = results["throughput"], TARGETS["single_vs_pendulum"], \
+        TARGETS["episode_error_rad"]
+    single = tp["single"]
+    ratio = single["ours"] / single["Pendulum-v1"]
+    paper = scene(results, "paper")
+    error = max(tp["env_error"][0], default_run(paper)["error"][0])
+    misses = []
+    if ratio < speed:
+        misses.append(f"speed {ratio / speed:.2f} of the target")
+    if not error <= bound:
+        misses.append(f"error {error / bound:.1f} × the bound")
+    return [Verdict(
+        f"one environment ≥ {speed:g} × Pendulum-v1's steps/s, "
+        f"{horizon(results, paper):g}-s error ≤ {bound:g} rad",
+        f"{ratio:.2f} × Pendulum-v1 ({single['ours']:,.0f} against "
+        f"{single['Pendulum-v1']:,.0f} steps/s); error {fmt_err(tp['env_error'][0])} rad",
+        not misses, "; ".join(misses))]
+
+
+def verdict_vector(results: Results) -> list[Verdict]:
+    """The vector environment's steps/s at least ``vector_vs_cartpole`` × CartPoleVectorEnv's,
+    at each size of ``VECTOR_SIZES`` measured."""
+    target = TARGETS["vector_vs_cartpole"]
+    out = []
+    for n in VECTOR_SIZES:
+        v = results["throughput"]["vector"].get(str(n))
+        if v is None:
+            continue
+        r = v["ours"] / v["CartPoleVectorEnv"]
+        out.append(Verdict(
+            f"vector env ≥ {target:g} × CartPoleVectorEnv at {n:,} sub-environments",
+            f"{r:.2f} × ({v['ours']:,.0f} against {v['CartPoleVectorEnv']:,.0f} steps/s)",
+            r >= target, f"{r / target:.2f} of the target ({target / r:.1f}× too slow)"))
+    return out
+
+
+def verdict_mujoco(results: Results) -> list[Verdict]:
+    """Our default settings at least ``mujoco_speedup`` × faster than MuJoCo tuned at equal
+    global error on the default scene."""
+    target = TARGETS["mujoco_speedup"]
+    paper = scene(results, "paper")
+    c, c_local = compare_mujoco(results, paper), compare_mujoco(results, paper, "local")
+    what = f"≥ {target:g} × MuJoCo's speed at equal error (default scene)"
+    if not math.isfinite(c.ratio):
+        return [Verdict(what, "MuJoCo tuned does not reach our error", None, c.mj_how)]
+    local = (f"{c_local.ratio:,.0f} ×" if math.isfinite(c_local.ratio) else c_local.mj_how)
+    return [Verdict(
+        what,
+        f"{c.ratio:,.0f} × (MuJoCo tuned needs {fmt_time(c.mj_cost)} per simulated second to "
+        f"reach our {fmt_err(c.our_err)} rad, we take {fmt_time(c.our_cost)}; {c.mj_how}); "
+        f"at equal local error {local}",
+        c.ratio >= target, f"{c.ratio / target:.2f} of the target")]
+
+
+#: Every verdict, in the order of the report's summary.
+VERDICTS: tuple[Callable[[Results], list[Verdict]], ...] = (
+    verdict_single, verdict_vector, verdict_mujoco)
