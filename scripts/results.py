@@ -43,6 +43,7 @@ from roller_gym.agents import stats
 from roller_gym.agents.hyperparams import ALGOS
 from roller_gym.agents.policies import BASELINES, baseline, load_policy, read_config
 from roller_gym.scripts.evaluate import BASELINE_LABELS, classical_label, evaluate
+from roller_gym.task import get_task
 
 #: Targets, read from the intervals: SAC's success IQM at least this on every task ...
 SUCCESS_TARGET = 0.9
@@ -151,7 +152,9 @@ def measure(args: argparse.Namespace) -> dict[str, Any]:
         "evaluation_s": time.perf_counter() - start,
         "train_wall_s": args.train_wall_s,
         "tasks": {env_id: {"reward_threshold": gym.spec(env_id).reward_threshold,
-                           "classical": classical_label(env_id)} for env_id in args.env},
+                           "classical": classical_label(env_id),
+                           "success_band": get_task(env_id).success_band}
+                  for env_id in args.env},
         "evaluations": evaluations,
     }
 
@@ -192,6 +195,7 @@ def summarize(results: dict[str, Any], algos: list[str]) -> dict[str, Any]:
                      for e in runs if "curve" in e]
             row["algos"][algo] = {
                 "seeds": [e["seed"] for e in runs],
+                "final_error": [e["final_error_mean"] for e in runs],
                 "returns": returns.tolist(), "success": success.tolist(),
                 "return_iqm": stats.interval(returns),
                 "success_iqm": stats.interval(success),
@@ -365,28 +369,43 @@ def render(results: dict[str, Any], report: Path, folder: Path, algos: list[str]
     lines += ["", f"![IQM and performance profiles]({rel / 'aggregate.png'})", ""]
     for task, row in summary["tasks"].items():
         meta = results["tasks"][task]
-        _met, sentence = target(row)
+        met, sentence = target(row)
         lines += [f"## {task}", "",
                   f"Reward threshold {meta['reward_threshold']:.1f} (the classical controller's "
                   "return less 5 %). SAC's targets: " + sentence + ".", "",
                   "| policy | return, IQM [95 % CI] | success, IQM [95 % CI] | P(return > "
-                  "classical) | steps to the threshold, median [95 % CI] | per seed: return |",
+                  "classical) | steps to the threshold, median [95 % CI] | per seed: return "
+                  "(success) |",
                   "|---|---:|---:|---:|---|---|"]
         for algo, a in row["algos"].items():
+            per_seed = ", ".join(f"{r:.1f} ({x:.0%})"
+                                 for r, x in zip(a["returns"], a["success"], strict=True))
             lines.append(
                 f"| {algo.upper()} | {_fmt(a['return_iqm'])} | {_fmt(a['success_iqm'], True)} "
                 f"| {_fmt(a['poi_vs_classical'], True)} "
                 f"| {_steps(a['steps_median'], a['steps_to_threshold'])} "
-                f"| {', '.join(f'{r:.1f}' for r in a['returns'])} |")
+                f"| {per_seed} |")
         for name, b in row["baselines"].items():
             label = meta["classical"] if name == "classical" else BASELINE_LABELS[name]
             lines.append(f"| {label} | {b['return_mean']:.1f} | {b['success_rate']:.0%} | – "
                          "| – | – |")
         lines.append("")
+        if met is False:
+            sac = row["algos"]["sac"]
+            short = [(seed, ret, x, err) for seed, ret, x, err in zip(
+                sac["seeds"], sac["returns"], sac["success"], sac["final_error"], strict=True)
+                if x < SUCCESS_TARGET]
+            lines += ["SAC's seeds below the success target: " + "; ".join(
+                f"seed {seed}: return {ret:.1f}, success {x:.0%}, mean final |error| "
+                f"{err:.3f} rad" for seed, ret, x, err in short)
+                + f" (the success band is ±{meta.get('success_band', float('nan')):.3g} rad).", ""]
     lines += ["## Learning curves", "",
               "The periodic evaluations during training (10 episodes each, deterministic "
               "actions): the IQM over seeds and its 95 % interval.", "",
               f"![learning curves]({rel / 'learning-curves.png'})", ""]
+    notes = folder / "notes.md"  # written by hand: what the numbers mean
+    if notes.is_file():
+        lines += [notes.read_text().rstrip(), ""]
     report.parent.mkdir(parents=True, exist_ok=True)
     report.write_text("\n".join(lines))
 

@@ -72,13 +72,14 @@ def _synthetic_results(tmp_path):
             evaluations.append({
                 "env": task, "name": "sac", "seed": seed, "run_dir": str(tmp_path),
                 "return_mean": classical + offset, "success_rate": success,
+                "final_error_mean": 0.01 if success == 1.0 else 0.2,
                 "trained_steps": 1000, "wall_time_s": 60.0,
                 "curve": {"timesteps": [100, 200, 300],
                           "returns": [[0.0, 0.0], [classical, classical], [classical] * 2]}})
     return {"date": "2026-01-01T00:00:00+00:00", "command": "roller-gym results",
             "machine": "x86_64, 2 CPU cores, Linux", "versions": {"rliable": "1.2.0"},
             "episodes": 100, "evaluation_s": 60.0, "train_wall_s": 600.0,
-            "tasks": {t: {"reward_threshold": 0.95 * c, "classical": "LQR"}
+            "tasks": {t: {"reward_threshold": 0.95 * c, "classical": "LQR", "success_band": 0.05}
                       for t, c in tasks.items()},
             "evaluations": evaluations}
 
@@ -99,5 +100,7 @@ def test_the_results_page_reports_what_the_synthetic_runs_hold(tmp_path):
     results_mod.render(data, report, tmp_path, ["sac"])
     text = report.read_text()
     assert "100.0 [" in text and "**missed**" in text and "**met**" in text
+    # the missed task names its seeds below the target, with their final errors
+    assert "seed 4: return 250.0, success 50%, mean final |error| 0.200 rad" in text
     assert (tmp_path / "learning-curves.png").stat().st_size > 10_000
     assert (tmp_path / "aggregate.png").stat().st_size > 10_000

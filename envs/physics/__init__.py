@@ -5,6 +5,7 @@ module                 what it holds
 =====================  ================================================================
 ``scene``              :class:`Scene` (parameters, validation, shapes) and the presets
 ``equations``          each equation of ``docs/PHYSICS.md`` written once (floats, arrays, numba)
+``trig``               sine and cosine without branches, so compiled loops over rollers vectorize
 ``forms``              the paper's forms of the theorem (Eqs. 15, 18, 24, 30), as references
 ``analysis``           kinematics, contact forces, energy, equilibria, linearization
 ``integrators``        one control step at constant torque: the table of schemes (rk8, the
