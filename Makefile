@@ -22,15 +22,18 @@ run: $(STAMP)  ## train the default agent (SAC, rl-zoo3) on the default task, ev
 TASKS := roller_gym/RollerStabilize-v1 roller_gym/RollerHold-v1 roller_gym/RollerBalance-v1 \
 	roller_gym/RollerTrack-v0
 SEEDS := 0 1 2 3 4
+# Options of roller-gym train for every run: `make results SEEDS="0 1" TRAIN_ARGS="--steps 2000"`
+# is a smoke run of the whole pipeline in minutes.
+TRAIN_ARGS ?=
 # One seed's trainings, all tasks and algorithms, into runs/results/seed<S>.
 TRAIN_SEED = for env in $(TASKS); do for algo in sac td3 ppo; do \
 	$(RG) train --algo $$algo --env $$env --seed $$0 --log-folder runs/results/seed$$0 \
-	--verbose 0 --checkpoints 0 || exit 1; done; done
+	--verbose 0 --checkpoints 0 $(TRAIN_ARGS) || exit 1; done; done
 results: $(STAMP)  ## train SAC, TD3 and PPO with 5 seeds on every task (two processes), evaluate, write docs/RESULTS.md
 	rm -rf runs/results
 	start=$$(date +%s); \
 	printf '%s\n' $(SEEDS) | xargs -P 2 -n 1 sh -c '$(TRAIN_SEED)' && \
-	$(RG) results --runs runs/results --train-wall-s $$(( $$(date +%s) - start ))
+	$(RG) results --runs runs/results --env $(TASKS) --train-wall-s $$(( $$(date +%s) - start ))
 
 test: $(STAMP)  ## the whole test suite and the linter
 	$(PY) -m ruff check .
