@@ -389,7 +389,7 @@ def _end_lanes(phi, w, tau, par, n, out):
 # -- the adaptive kernel: explicit Runge–Kutta pairs, a chunk of rollers together ----------------
 
 #: Rollers advanced together (each with its own step size) by one task.
-CHUNK = 64
+CHUNK = 256
 _SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0
 #: Attempts (accepted or rejected substeps) after which a roller still running is failed.
 _MAX_ATTEMPTS = 4 * MAX_SUBSTEPS
