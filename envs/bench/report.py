@@ -124,16 +124,37 @@ def _pyplot() -> Any:
     return plt
 
 
+def _scene_panels(count: int, panel_height: float, legend_in: float) -> tuple[Any, Any]:
+    """A figure of ``count`` panels, three to a row, ``panel_height`` inches each, with
+    ``legend_in`` inches below them for the legend."""
+    plt = _pyplot()
+    cols = min(3, count)
+    rows = math.ceil(count / cols)
+    height = panel_height * rows + legend_in
+    return plt.subplots(rows, cols, figsize=(5.2 * cols, height), squeeze=False)
+
+
+def _save_panels(fig: Any, axes: Any, count: int, legend_in: float, legend_columns: int,
+                 title: str, path: Path) -> None:
+    """Blank the unused panels, put the first panel's legend in the ``legend_in`` inches under
+    them, title, save, close."""
+    for ax in axes.flat[count:]:
+        ax.axis("off")
+    handles, labels = axes.flat[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=legend_columns, fontsize=8)
+    fig.suptitle(title)
+    height = fig.get_figheight()
+    fig.tight_layout(rect=(0, legend_in / height, 1, 1 - 0.4 / height))
+    fig.savefig(path, dpi=110)
+    _pyplot().close(fig)
+
+
 def plot_work_precision(results: Results, path: Path, metric: str) -> None:
     """Cost against error, one panel per scene: the global or the local error."""
-    plt = _pyplot()
     st = results["settings"]
     scenes = results["scenes"]
-    cols = min(3, len(scenes))
-    rows = math.ceil(len(scenes) / cols)
     legend_in = 1.3  # inches under the plots for the legend
-    height = 4.2 * rows + legend_in
-    fig, axes = plt.subplots(rows, cols, figsize=(5.2 * cols, height), squeeze=False)
+    fig, axes = _scene_panels(len(scenes), panel_height=4.2, legend_in=legend_in)
     for ax, sc in zip(axes.flat, scenes, strict=False):
         hz = horizon(results, sc)
         for fam in (*OUR_FAMILIES, *MJ_FAMILIES):
@@ -165,26 +186,16 @@ def plot_work_precision(results: Results, path: Path, metric: str) -> None:
                       else "largest |φ error| of one control step [rad]")
         ax.set_ylabel("wall time per simulated second [s]")
         ax.grid(True, which="major", alpha=0.3)
-    for ax in axes.flat[len(scenes):]:
-        ax.axis("off")
-    handles, labels = axes.flat[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=6, fontsize=8)
-    fig.suptitle(f"Work-precision, {metric} error: cost against error (lower left is better), "
-                 "all measured in the same run")
-    fig.tight_layout(rect=(0, legend_in / height, 1, 1 - 0.4 / height))
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _save_panels(fig, axes, len(scenes), legend_in, 6,
+                 f"Work-precision, {metric} error: cost against error (lower left is better), "
+                 "all measured in the same run", path)
 
 
 def plot_energy(results: Results, path: Path) -> None:
     """The energy error at zero torque against time, one panel per scene."""
-    plt = _pyplot()
     scenes = results["scenes"]
-    cols = min(3, len(scenes))
-    rows = math.ceil(len(scenes) / cols)
     legend_in = 1.0
-    height = 3.8 * rows + legend_in
-    fig, axes = plt.subplots(rows, cols, figsize=(5.2 * cols, height), squeeze=False)
+    fig, axes = _scene_panels(len(scenes), panel_height=3.8, legend_in=legend_in)
     for ax, sc in zip(axes.flat, scenes, strict=False):
         for item in sc["energy"]:
             t, value = item["curve"]["t"], item["curve"]["value"]
@@ -195,15 +206,9 @@ def plot_energy(results: Results, path: Path) -> None:
         ax.set_xlabel("time [s]")
         ax.set_ylabel("|E − E0| / E0 (largest in each interval)")
         ax.grid(True, alpha=0.3)
-    for ax in axes.flat[len(scenes):]:
-        ax.axis("off")
-    handles, labels = axes.flat[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=4, fontsize=8)
-    fig.suptitle(f"Energy error at zero torque over {results['config']['energy_horizon_s']:g} s "
-                 "(from rest at φ0)")
-    fig.tight_layout(rect=(0, legend_in / height, 1, 1 - 0.4 / height))
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _save_panels(fig, axes, len(scenes), legend_in, 4,
+                 f"Energy error at zero torque over {results['config']['energy_horizon_s']:g} s "
+                 "(from rest at φ0)", path)
 
 
 def plot_throughput(results: Results, path: Path) -> None:
