@@ -7,11 +7,15 @@ STAMP := $(VENV)/.installed
 
 .PHONY: run test test-rllib train-rllib bench throughput results clean
 
-$(STAMP): pyproject.toml
-	$(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e ".[all]"
-	touch $(STAMP)
+# Every environment is made by one recipe: a venv in the stamp's folder, the project installed
+# editable there with the extras that environment's stamp names (EXTRAS below).
+%/.installed: pyproject.toml
+	$(PYTHON) -m venv $(@D)
+	$(@D)/bin/python -m pip install --quiet --upgrade pip
+	$(@D)/bin/python -m pip install --quiet -e ".[$(EXTRAS)]"
+	touch $@
+
+$(STAMP): EXTRAS := all
 
 RG := $(VENV)/bin/roller-gym
 
@@ -43,11 +47,7 @@ test: $(STAMP)  ## the whole test suite and the linter
 RLLIB_VENV := .venv-rllib
 RLLIB_STAMP := $(RLLIB_VENV)/.installed
 
-$(RLLIB_STAMP): pyproject.toml
-	$(PYTHON) -m venv $(RLLIB_VENV)
-	$(RLLIB_VENV)/bin/python -m pip install --quiet --upgrade pip
-	$(RLLIB_VENV)/bin/python -m pip install --quiet -e ".[train,render,dev,rllib]"
-	touch $(RLLIB_STAMP)
+$(RLLIB_STAMP): EXTRAS := train,render,dev,rllib
 
 # The environments' tests on RLlib's Gymnasium release (the physics knows no Gymnasium: its
 # tests run once, in `make test`), and the RLlib training test.
@@ -64,11 +64,7 @@ train-rllib: $(RLLIB_STAMP)  ## PPO on a local Ray
 PEERS_VENV := .venv-peers
 PEERS_STAMP := $(PEERS_VENV)/.installed
 
-$(PEERS_STAMP): pyproject.toml
-	$(PYTHON) -m venv $(PEERS_VENV)
-	$(PEERS_VENV)/bin/python -m pip install --quiet --upgrade pip
-	$(PEERS_VENV)/bin/python -m pip install --quiet -e ".[peers]"
-	touch $(PEERS_STAMP)
+$(PEERS_STAMP): EXTRAS := peers
 
 throughput: $(PEERS_STAMP)  ## measure docs/THROUGHPUT.md against CartPole, Pendulum, EnvPool and JAX
 	$(PEERS_VENV)/bin/python -m roller_gym.bench.throughput measure --out docs
