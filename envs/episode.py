@@ -377,13 +377,12 @@ def at_start(scene: Scene, phi: np.ndarray, phi_dot: np.ndarray) -> RestState:
     mu = scene.mu
     a = eq.accel(phi, phi_dot, 0.0, m, r, kappa, e, k, g, c)
     normal, friction = eq.contact_forces(phi, phi_dot, a, m, r, kappa, e, g)
-    weight = m * g
+    lift, slip = eq.margins(normal, friction, m, g, mu)
     n = len(phi)
     energy = eq.energy(phi, phi_dot, m, r, kappa, e, k, g)
     return RestState(
         phi, phi_dot, a, np.zeros(n, np.int64), np.ones(n, bool), normal, friction,
-        energy, np.broadcast_to(normal / weight, (n,)),
-        np.broadcast_to((mu * normal - np.abs(friction)) / weight, (n,)),
+        energy, np.broadcast_to(lift, (n,)), np.broadcast_to(slip, (n,)),
     )
 
 

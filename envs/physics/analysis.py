@@ -100,9 +100,7 @@ def contact(scene: Scene, phi: Array, phi_dot: Array, tau: Array) -> Contact:
     m, r, kappa, e, _, g, _ = scene.params
     phi_ddot = acceleration(scene, phi, phi_dot, tau)
     normal, friction = eq.contact_forces(phi, phi_dot, phi_ddot, m, r, kappa, e, g)
-    weight = m * g
-    liftoff = normal / weight
-    slip = (scene.mu * normal - np.abs(friction)) / weight
+    liftoff, slip = eq.margins(normal, friction, m, g, scene.mu)
     return Contact(normal, friction, liftoff, slip, liftoff <= 0, slip < 0)
 
 

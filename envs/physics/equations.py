@@ -3,8 +3,9 @@
 Every function here is plain arithmetic, so the same source serves a Python float, a NumPy
 array (a batch of states, torques and per-element scene parameters, broadcast together) and,
 compiled by numba (``register_jitable``), the integrators' inner loops. Sines and cosines are
-:mod:`roller_gym.physics.trig`'s (branch-free, within 1 ulp of libm's): a compiled loop over
-rollers then runs in SIMD lanes, and NumPy and the kernels give the same bits.
+:mod:`roller_gym.physics.trig`'s: compiled, a branch-free form (so a loop over rollers runs in
+SIMD lanes); from Python, NumPy's. Both are within 1 ulp of the exact value, so the two can
+differ in the last bit.
 
 Conventions (``docs/PHYSICS.md``): φ is the roller's rotation, positive clockwise,
 0 when C is straight below O1 and O1 straight below O. With the signed curvature
@@ -38,6 +39,7 @@ __all__ = [
     "ic_squared",
     "inertia",
     "instant_center_velocity",
+    "margins",
     "positions",
     "potential",
     "shape_factors",
@@ -199,3 +201,11 @@ def contact_forces(phi, phi_dot, phi_ddot, m, r, kappa, e, g):
     normal = m * (g * trig.cos(psi) + r * r * kappa / s * w2 + e * (phi_ddot * sin_t + w2 * cos_t))
     friction = m * (g * trig.sin(psi) + (r - e * cos_t) * phi_ddot + e * w2 * sin_t)
     return normal, friction
+
+
+@register_jitable(inline="always")
+def margins(normal, friction, m, g, mu):
+    """(N/(m g), (μN − |F|)/(m g)): the lift-off margin (<= 0: the roller leaves the surface)
+    and the slip margin (< 0: the friction needed exceeds μN), from the contact forces [N]."""
+    weight = m * g
+    return normal / weight, (mu * normal - abs(friction)) / weight

@@ -310,7 +310,7 @@ def _finite(x):
 def _margins(phi, w, a, m, r, kappa, e, g, mu):
     """(N/(m g), (μN − |F|)/(m g)): the lift-off and slip margins at a state."""
     normal, friction = eq.contact_forces(phi, w, a, m, r, kappa, e, g)
-    return normal / (m * g), (mu * normal - abs(friction)) / (m * g)
+    return eq.margins(normal, friction, m, g, mu)
 
 
 # The loops over lanes that evaluate the equations: no branch and no call in their bodies (the
@@ -341,7 +341,8 @@ def _end_fields(phi, w, tau, m, r, kappa, e, k, g, c, mu):
     a = eq.accel(phi, w, tau, m, r, kappa, e, k, g, c)
     normal, friction = eq.contact_forces(phi, w, a, m, r, kappa, e, g)
     energy = eq.energy(phi, w, m, r, kappa, e, k, g)
-    return a, normal, friction, energy, normal / (m * g), (mu * normal - abs(friction)) / (m * g)
+    lift, slip = eq.margins(normal, friction, m, g, mu)
+    return a, normal, friction, energy, lift, slip
 
 
 @numba.extending.register_jitable
@@ -628,7 +629,7 @@ def _dop853_kernel(io: np.ndarray, tab: None, cfg: np.ndarray) -> None:
         y = sol.y[:, -1] if sol.success else np.full(2 * n, np.nan)
         a0 = eq.accel(phi, w, tau, m, r, kappa, e, k, g, c)
         normal, friction = eq.contact_forces(phi, w, a0, m, r, kappa, e, g)
-        lift, slip = normal / (m * g), (mu * normal - np.abs(friction)) / (m * g)
+        lift, slip = eq.margins(normal, friction, m, g, mu)
     for col in range(n):
         _finish_py(io, col, bool(sol.success), float(y[col]), float(y[n + col]),
                    float(tau[col]), sol.t.size - 1, float(lift[col]), float(slip[col]),
