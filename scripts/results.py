@@ -42,13 +42,15 @@ import roller_gym
 from roller_gym.agents import stats
 from roller_gym.agents.hyperparams import ALGOS
 from roller_gym.agents.policies import BASELINES, baseline, load_policy, read_config
-from roller_gym.scripts.evaluate import BASELINE_LABELS, classical_label, evaluate
+from roller_gym.bench.throughput import package_versions
+from roller_gym.scripts.evaluate import (  # its targets, read here from the intervals
+    BASELINE_LABELS,
+    RETURN_TOLERANCE,
+    SUCCESS_TARGET,
+    classical_label,
+    evaluate,
+)
 from roller_gym.task import get_task
-
-#: Targets, read from the intervals: SAC's success IQM at least this on every task ...
-SUCCESS_TARGET = 0.9
-#: ... and the lower end of its return's interval within this share of the classical return.
-RETURN_TOLERANCE = 0.05
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -140,9 +142,8 @@ def measure(args: argparse.Namespace) -> dict[str, Any]:
     start = time.perf_counter()
     with multiprocessing.get_context("spawn").Pool(args.workers) as pool:
         evaluations = pool.map(_evaluate_job, jobs, chunksize=1)
-    versions = {name: _version(name) for name in ("roller-gym", "gymnasium",
-                                                  "stable-baselines3", "rl_zoo3", "torch",
-                                                  "rliable", "numpy")}
+    versions = package_versions(("roller-gym", "gymnasium", "stable-baselines3", "rl_zoo3",
+                                 "torch", "rliable", "numpy"))
     return {
         "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         "command": "roller-gym results " + " ".join(sys.argv[1:]),
@@ -157,15 +158,6 @@ def measure(args: argparse.Namespace) -> dict[str, Any]:
                   for env_id in args.env},
         "evaluations": evaluations,
     }
-
-
-def _version(name: str) -> str:
-    from importlib import metadata
-
-    try:
-        return metadata.version(name)
-    except metadata.PackageNotFoundError:
-        return "not installed"
 
 
 # -- 4. render -------------------------------------------------------------------------------
@@ -199,7 +191,6 @@ def summarize(results: dict[str, Any], algos: list[str]) -> dict[str, Any]:
                 "returns": returns.tolist(), "success": success.tolist(),
                 "return_iqm": stats.interval(returns),
                 "success_iqm": stats.interval(success),
-                "normalized_iqm": stats.interval(returns / classical),
                 "steps_to_threshold": steps,
                 "steps_median": (stats.interval(np.array(steps), statistic=np.median)
                                  if steps else None),
@@ -352,7 +343,7 @@ def render(results: dict[str, Any], report: Path, folder: Path, algos: list[str]
         + (f" ({results['train_wall_s'] / 3600:.1f} h of wall time, two at a time)"
            if results.get("train_wall_s") else "")
         + f", the evaluation {results['evaluation_s'] / 60:.0f} min. "
-        "Versions: " + ", ".join(f"{k} {v}" for k, v in results["versions"].items()) + ".",
+        "Versions: " + ", ".join(f"{k} {v}" for k, v in results["versions"].items() if v) + ".",
         "",
         "## Over all tasks",
         "",

@@ -236,14 +236,21 @@ def machine() -> dict[str, Any]:
                 break
     except OSError:
         pass
-    versions = {}
-    for dist in ("roller-gym", "gymnasium", "numpy", "numba", "stable-baselines3", "torch"):
+    versions = package_versions(("roller-gym", "gymnasium", "numpy", "numba",
+                                 "stable-baselines3", "torch"))
+    return {"cpu": cpu, "cores": os.cpu_count(), "os": platform.platform(),
+            "python": platform.python_version(), "versions": versions}
+
+
+def package_versions(dists: Sequence[str]) -> dict[str, str | None]:
+    """The installed version of each distribution, None where it is not installed."""
+    versions: dict[str, str | None] = {}
+    for dist in dists:
         try:
             versions[dist] = importlib.metadata.version(dist)
         except importlib.metadata.PackageNotFoundError:
             versions[dist] = None
-    return {"cpu": cpu, "cores": os.cpu_count(), "os": platform.platform(),
-            "python": platform.python_version(), "versions": versions}
+    return versions
 
 
 def measure(quick: bool) -> dict[str, Any]:

@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import dataclasses
 import datetime
-import importlib.metadata
 import inspect
 import math
 import time
@@ -40,7 +39,7 @@ from typing import Any
 import mujoco
 import numpy as np
 from roller_gym.bench import mujoco_roller as mjr
-from roller_gym.bench.throughput import TARGETS, machine
+from roller_gym.bench.throughput import TARGETS, machine, package_versions
 from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE
 from roller_gym.physics import Scene, energy, preset
 from roller_gym.physics import integrators as integ
@@ -634,13 +633,7 @@ def scene_record(res: SceneResult) -> dict[str, Any]:
 
 def versions() -> dict[str, str | None]:
     """The versions of the packages measured: roller-gym, its peers and its dependencies."""
-    out = dict(machine()["versions"])
-    for dist in ("scipy", "mujoco"):
-        try:
-            out[dist] = importlib.metadata.version(dist)
-        except importlib.metadata.PackageNotFoundError:
-            out[dist] = None
-    return out
+    return {**machine()["versions"], **package_versions(("scipy", "mujoco"))}
 
 
 def settings() -> dict[str, Any]:
