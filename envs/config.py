@@ -8,12 +8,13 @@ the same errors, draw scenes the same way and turn actions into torques the same
 from __future__ import annotations
 
 import itertools
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
 from roller_gym import validation
+from roller_gym.episode import INFO_KEYS
 from roller_gym.physics import METHODS, Scene, preset
 from roller_gym.physics.integrators import MAX_SUBSTEPS
 from roller_gym.task import Task
@@ -55,6 +56,7 @@ class EnvConfig:
     substeps: int
     randomize: Mapping[str, tuple[float, float]]
     render_mode: str | None
+    info_keys: tuple[str, ...]
 
     @classmethod
     def build(
@@ -70,6 +72,7 @@ class EnvConfig:
         randomize: Mapping[str, tuple[float, float]] | None,
         render_mode: str | None,
         render_modes: list[str],
+        info_keys: Sequence[str] | None = None,
     ) -> EnvConfig:
         if max_torque is not None:
             max_torque = validation.real("max_torque", max_torque, positive=True, unit="N·m")
@@ -81,12 +84,14 @@ class EnvConfig:
         if substeps is not None:
             substeps = validation.count("substeps", substeps, high=MAX_SUBSTEPS)
         render_mode = validation.choice("render_mode", render_mode, (*render_modes, None))
+        info_keys = validation.subset("info_keys", info_keys, tuple(INFO_KEYS))
         validation.check_integrable(scene, dt, task.max_torque)
         reason = task.infeasible(scene)
         if reason is not None:
             raise ValueError(reason)
         ranges = check_randomize(task, scene, dt, randomize)
-        return cls(task, scene, dt, tolerance, integrator, substeps or 0, ranges, render_mode)
+        return cls(task, scene, dt, tolerance, integrator, substeps or 0, ranges, render_mode,
+                   info_keys)
 
     def resolve_option_scene(self, value: Any) -> Scene:
         return resolve_scene(value, self.task.default_scene)

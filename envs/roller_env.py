@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from collections import namedtuple
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -47,6 +47,11 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         randomize: ``{field: (low, high)}``: Scene fields drawn uniformly at each reset
             (domain randomization), e.g. ``{"m": (0.8, 1.2), "e": (0.03, 0.05)}``.
         render_mode: ``"human"``, ``"rgb_array"`` or None.
+        info_keys: the keys of the step's and reset's info, among
+            :data:`roller_gym.episode.INFO_KEYS` (default None: all of them). Building the
+            info is a notable share of a single environment's step; ask only for what you
+            read (e.g. ``["is_success"]``) to step faster. Reward and termination are the
+            same whatever the keys.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array"], "render_fps": 20}
@@ -62,13 +67,17 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         substeps: int | None = None,
         randomize: Mapping[str, tuple[float, float]] | None = None,
         render_mode: str | None = None,
+        info_keys: Sequence[str] | None = None,
     ) -> None:
         self.config = EnvConfig.build(
             get_task(task), scene=scene, dt=dt, max_torque=max_torque, tolerance=tolerance,
             integrator=integrator, substeps=substeps, randomize=randomize,
             render_mode=render_mode, render_modes=self.metadata["render_modes"],
+            info_keys=info_keys,
         )
         self.task = self.config.task
+        self._info_types = tuple((key, _NUMPY[episode.INFO_KEYS[key][0]])
+                                 for key in self.config.info_keys)
         self.render_mode = render_mode
         self.action_space = spaces.Box(-1.0, 1.0, (1,), np.float32)
         size = self.task.observation_size
@@ -123,7 +132,7 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         if self.render_mode == "human":
             self.render()
         first = {k: v[0] if isinstance(v, np.ndarray) else v for k, v in out.info.items()}
-        return self._observation(), _scalars(first)
+        return self._observation(), _scalars(first, self._info_types)
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         if self._stream_seed is None:
@@ -146,7 +155,7 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         if self.render_mode == "human":
             self.render()
         return self._observation(), float(out.reward), bool(out.terminated), False, \
-            _scalars(out.info)
+            _scalars(out.info, self._info_types)
 
     def _observation(self) -> np.ndarray:
         return np.array(
@@ -182,10 +191,10 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
 
 
 _NUMPY = {float: np.float64, int: np.int64, bool: np.bool_}
-_INFO_TYPES = tuple((key, _NUMPY[kind]) for key, (kind, _) in episode.INFO_KEYS.items())
 
 
-def _scalars(info: dict[str, Any]) -> dict[str, Any]:
-    """The info of one roller as NumPy scalars (``np.float64``, ``np.int64``, ``np.bool_``):
-    every value has a ``dtype``, as array-based clients (TorchRL) expect."""
-    return {key: kind(info[key]) for key, kind in _INFO_TYPES}
+def _scalars(info: dict[str, Any], types: tuple[tuple[str, type], ...]) -> dict[str, Any]:
+    """The info of one roller, the keys of ``types``, as NumPy scalars (``np.float64``,
+    ``np.int64``, ``np.bool_``): every value has a ``dtype``, as array-based clients
+    (TorchRL) expect."""
+    return {key: kind(info[key]) for key, kind in types}

@@ -49,7 +49,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 from roller_gym import rewards
-from roller_gym.physics import Scene, contact, equations, equilibria, holding_torque
+from roller_gym.physics import Scene, contact, equations, equilibria, holding_torque, trig
 
 __all__ = ["NAMESPACE", "OBSERVATION_FIELDS", "SPEED_SCALE", "TASKS", "Task", "get_task",
            "hold_range", "per_scene", "psi_rate", "register", "unstable_rest_positions",
@@ -291,13 +291,14 @@ class Task:
         """The observed fields by name (the formulas of :data:`OBSERVATION_FIELDS`)."""
         psi = rate * phi
         f = rewards.xp(psi)
-        out = {"cos_psi": f.cos(psi), "sin_psi": f.sin(psi), "cos_phi": f.cos(phi),
-               "sin_phi": f.sin(phi), "speed": f.tanh(phi_dot / SPEED_SCALE)}
+        t = _trig(psi)
+        out = {"cos_psi": t.cos(psi), "sin_psi": t.sin(psi), "cos_phi": t.cos(phi),
+               "sin_phi": t.sin(phi), "speed": f.tanh(phi_dot / SPEED_SCALE)}
         if self.observes_target:
             psi_t = rate * target
-            f = rewards.xp(psi_t)
-            out.update(cos_psi_target=f.cos(psi_t), sin_psi_target=f.sin(psi_t),
-                       cos_phi_target=f.cos(target), sin_phi_target=f.sin(target))
+            t = _trig(psi_t)
+            out.update(cos_psi_target=t.cos(psi_t), sin_psi_target=t.sin(psi_t),
+                       cos_phi_target=t.cos(target), sin_phi_target=t.sin(target))
         if "target_speed" in self.observation:
             out["target_speed"] = rewards.xp(psi).tanh(target_rate / SPEED_SCALE)
         return out
@@ -321,6 +322,12 @@ class Task:
         """Inside the success band, moving with the target (at rest for a rest position)."""
         return ((abs(step["position_error"]) <= self.success_band)
                 & (abs(step["phi_dot"] - step["target_phi_dot"]) <= self.success_speed))
+
+
+def _trig(x):
+    """sin and cos for ``x``: :mod:`math` for a Python float (the single environment's fast
+    path), else :mod:`roller_gym.physics.trig` (a compiled loop over float64 arrays)."""
+    return math if type(x) is float else trig
 
 
 def per_scene(function, scene: Scene) -> np.ndarray:

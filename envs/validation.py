@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 from roller_gym.physics import Scene
 
-__all__ = ["actions", "check_integrable", "choice", "count", "real"]
+__all__ = ["actions", "check_integrable", "choice", "count", "real", "subset"]
 
 _REAL = (int, float, np.integer, np.floating)
 #: The largest magnitude [SI] of the scene's derived quantities (m g r, …): squares stay finite.
@@ -59,6 +59,22 @@ def choice(name: str, value: Any, allowed: Any) -> Any:
         raise ValueError(f"{name}={value!r} is not allowed: it must be one of "
                          f"{', '.join(repr(a) for a in allowed)}")
     return value
+
+
+def subset(name: str, value: Any, allowed: tuple[str, ...]) -> tuple[str, ...]:
+    """``value``, a sequence of distinct names among ``allowed``, as a tuple in the order of
+    ``allowed`` (None: all of them), or ValueError naming ``name``."""
+    if value is None:
+        return allowed
+    names = list(value) if isinstance(value, list | tuple | set | frozenset) else None
+    if names is None or not all(isinstance(x, str) for x in names):
+        raise ValueError(f"{name}={value!r} is not allowed: it must be None (all) or a list of "
+                         f"names among {', '.join(allowed)}")
+    unknown = [x for x in names if x not in allowed]
+    if unknown or len(set(names)) != len(names):
+        what = f"unknown names {unknown}" if unknown else "repeated names"
+        raise ValueError(f"{name}={value!r} has {what}; allowed: {', '.join(allowed)}")
+    return tuple(x for x in allowed if x in names)
 
 
 def actions(value: Any, shape: tuple[int, ...]) -> np.ndarray:

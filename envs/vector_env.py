@@ -59,8 +59,8 @@ class RollerVectorEnv(VectorEnv):
         max_episode_steps: truncation; default the task's.
         autoreset_mode: ``AutoresetMode.NEXT_STEP`` (default), ``SAME_STEP`` or
             ``DISABLED`` (or their names as strings), as in Gymnasium's vector envs.
-        dt, max_torque, tolerance, integrator, substeps, randomize, render_mode: as in
-            :class:`roller_gym.roller_env.RollerEnv`, for every sub-environment.
+        dt, max_torque, tolerance, integrator, substeps, randomize, render_mode, info_keys:
+            as in :class:`roller_gym.roller_env.RollerEnv`, for every sub-environment.
     """
 
     metadata: ClassVar[dict[str, Any]] = {
@@ -82,6 +82,7 @@ class RollerVectorEnv(VectorEnv):
         render_mode: str | None = None,
         max_episode_steps: int | None = None,
         autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
+        info_keys: Sequence[str] | None = None,
     ) -> None:
         num_envs = validation.count("num_envs", num_envs)
         per_env = self._per_env_scenes(scene, num_envs)
@@ -89,7 +90,7 @@ class RollerVectorEnv(VectorEnv):
             get_task(task), scene=None if per_env else scene, dt=dt, max_torque=max_torque,
             tolerance=tolerance, integrator=integrator, substeps=substeps,
             randomize=randomize, render_mode=render_mode,
-            render_modes=self.metadata["render_modes"],
+            render_modes=self.metadata["render_modes"], info_keys=info_keys,
         )
         if integrator == "dop853":
             raise ValueError("integrator='dop853' is a reference for the single environment; "
@@ -243,7 +244,7 @@ class RollerVectorEnv(VectorEnv):
         reward = np.asarray(out.reward, dtype=np.float64)
         terminated = np.asarray(out.terminated, dtype=bool)
         truncated = self.steps >= self.max_episode_steps
-        info = out.info
+        info = {key: out.info[key] for key in self.config.info_keys}
         everyone = np.ones(self.num_envs, dtype=bool)
         info.update({f"_{k}": everyone for k in list(info)})
 
@@ -267,7 +268,7 @@ class RollerVectorEnv(VectorEnv):
                                   else v) for k, v in info.items()}
                 ended_mask = np.zeros(self.num_envs, dtype=bool)
                 ended_mask[ended] = True
-                final_info.update({f"_{k}": ended_mask for k in episode.INFO_KEYS})
+                final_info.update({f"_{k}": ended_mask for k in self.config.info_keys})
                 self._restart(ended, info)
                 info.update({"final_obs": final_obs, "_final_obs": ended_mask,
                              "final_info": final_info, "_final_info": ended_mask})
@@ -277,9 +278,9 @@ class RollerVectorEnv(VectorEnv):
         """Autoreset: new episodes in ``idx``, their reset info written into ``info``."""
         self._episodes[idx] += np.uint64(1)
         rows = self._start(idx, None)
-        for key, value in rows.items():
+        for key in self.config.info_keys:
             info[key] = np.array(info[key], copy=True)
-            info[key][idx] = value
+            info[key][idx] = rows[key]
 
     # -- observation and info ------------------------------------------------------------
     def _observation(self) -> np.ndarray:
@@ -292,8 +293,8 @@ class RollerVectorEnv(VectorEnv):
         mask = np.zeros(self.num_envs, dtype=bool)
         mask[idx] = True
         info: dict[str, Any] = {}
-        for key, (kind, _) in episode.INFO_KEYS.items():
-            column = np.zeros(self.num_envs, dtype=kind)
+        for key in self.config.info_keys:
+            column = np.zeros(self.num_envs, dtype=episode.INFO_KEYS[key][0])
             column[idx] = rows[key]
             info[key] = column
             info[f"_{key}"] = mask

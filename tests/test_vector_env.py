@@ -195,3 +195,52 @@ def test_bad_vector_arguments_raise(kwargs, message):
 def test_balance_rejects_a_sub_scene_without_an_unstable_rest_position():
     with pytest.raises(ValueError, match="no unstable rest position"):
         gym.make_vec("roller_gym/RollerBalance-v1", num_envs=2, scene=["balance", "tight_fit"])
+
+
+def test_info_keys_choose_what_the_info_holds():
+    """info_keys=[...] in both environments: exactly those keys (and, in the vector env,
+    their masks, also in final_info), each with the value the full info has; observations,
+    rewards and flags are those of the full environment, across autoresets."""
+    env_id, keys = IDS[0], ["energy", "substeps", "is_success"]
+    actions = np.random.default_rng(1).uniform(-1, 1, (12, 3, 1)).astype(np.float32)
+    for mode in (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP):
+        kw = {"num_envs": 3, "max_episode_steps": 5, "autoreset_mode": mode}
+        full, part = gym.make_vec(env_id, **kw), gym.make_vec(env_id, info_keys=keys, **kw)
+        (o1, i1), (o2, i2) = full.reset(seed=3), part.reset(seed=3)
+        outputs = [((o1, i1), (o2, i2))]
+        for a in actions:
+            one, two = full.step(a), part.step(a)
+            for x, y in zip(one[:4], two[:4], strict=True):
+                np.testing.assert_array_equal(x, y)
+            outputs.append(((one[0], one[4]), (two[0], two[4])))
+        for (_, info1), (_, info2) in outputs:
+            extra = {"final_obs", "_final_obs", "final_info", "_final_info"} & set(info2)
+            assert set(info2) - extra == set(keys) | {f"_{k}" for k in keys}
+            for key in keys:
+                np.testing.assert_array_equal(info2[key], info1[key])
+                np.testing.assert_array_equal(info2[f"_{key}"], info1[f"_{key}"])
+            if "final_info" in info2:
+                assert set(info2["final_info"]) == set(keys) | {f"_{k}" for k in keys}
+    single_full, single = gym.make(env_id), gym.make(env_id, info_keys=keys)
+    (o1, i1), (o2, i2) = single_full.reset(seed=4), single.reset(seed=4)
+    for a in actions[:, 0]:
+        assert set(i2) == set(keys)
+        assert all(i2[k] == i1[k] and type(i2[k]) is type(i1[k]) for k in keys)
+        np.testing.assert_array_equal(o1, o2)
+        *rest1, i1 = single_full.step(a)
+        *rest2, i2 = single.step(a)
+        o1, o2 = rest1[0], rest2[0]
+        assert rest1[1:] == rest2[1:]
+
+
+@pytest.mark.parametrize(("value", "message"), [
+    (["nope"], r"info_keys=\['nope'\] has unknown names \['nope'\]; allowed: phi, "),
+    ("energy", r"info_keys='energy' is not allowed: it must be None \(all\) or a list"),
+    (["energy", "energy"], r"info_keys=.* has repeated names"),
+    ([1], r"info_keys=\[1\] is not allowed"),
+])
+def test_bad_info_keys_are_refused_naming_the_argument(value, message):
+    for make in (lambda: gym.make(IDS[0], info_keys=value),
+                 lambda: gym.make_vec(IDS[0], num_envs=2, info_keys=value)):
+        with pytest.raises(ValueError, match=message):
+            make()

@@ -58,9 +58,10 @@ accepted substep and at the end of the step.
 advance together, each with its own (t, h): every stage is one loop over contiguous lanes, and
 a roller that has finished swaps places with the last running one, so the loops shrink with
 the work left. The loops that evaluate the equations (``_accel_lanes``, ``_margin_lanes``,
-``_end_lanes``) and the one that accepts or rejects substeps have no branch and no call in
+``_end_lanes``) and the three that accept or reject substeps have no branch and no call in
 their bodies (the sines are :mod:`roller_gym.physics.trig`'s, inlined; choices are selects),
-so LLVM runs them in SIMD lanes. The kernels are compiled with ``error_model="numpy"``: a
+so LLVM runs them in SIMD lanes. Accepting is three loops rather than one because LLVM
+vectorizes a loop only if the rows it touches need few pairwise overlap checks. The kernels are compiled with ``error_model="numpy"``: a
 division by zero gives inf or NaN, reported as a failed step, instead of raising.
 
 **Layout.** The kernels work on one float64 table per batch, ``io`` of shape
@@ -489,7 +490,10 @@ def _rk_chunk(io, lo, hi, tab, cfg):
                 e3w[i] += a3 * kw[j, i]
                 e5p[i] += a5 * kp[j, i]
                 e5w[i] += a5 * kw[j, i]
-        # accept or reject, and the next size, per roller: selects only, so it vectorizes too
+        # Accept or reject, and the next size, per roller: selects only, in three loops that
+        # each touch few rows, so that LLVM can vectorize them (it gives up on a loop whose
+        # rows it would have to check pairwise for overlap too many times).
+        accepted, err_now, h_new = acc_p, e3p, e3w  # rows free until the next attempt
         for i in range(na):
             h = hh[i]
             dp = e5p[i] * e5p[i] + 0.01 * e3p[i] * e3p[i]
@@ -509,13 +513,6 @@ def _rk_chunk(io, lo, hi, tab, cfg):
             accept = trig.select(fixed, fin, fin & ((ratio <= 1.0) | forced))
             fail = (not fin) & (fixed | forced)
             ends = accept & (last[i] != 0.0)
-            phi[i] = trig.select(accept, phin[i], phi[i])
-            w[i] = trig.select(accept, wn[i], w[i])
-            kp[0, i] = trig.select(accept, kp[s, i], kp[0, i])
-            kw[0, i] = trig.select(accept, kw[s, i], kw[0, i])
-            t[i] = trig.select(ends, dt, trig.select(accept, t[i] + h, t[i]))
-            count[i] += trig.select(accept, 1.0, 0.0)
-            err_sum[i] += trig.select(accept, err, 0.0)
             status[i] = trig.select(ends, 1.0, trig.select(fail, 2.0, status[i]))
             # the next size: h · clip(0.9 ratio^(−1/order), 0.2, 10), the root as square roots
             q = math.sqrt(math.sqrt(ratio))
@@ -523,10 +520,25 @@ def _rk_chunk(io, lo, hi, tab, cfg):
             factor = min(_MAX_FACTOR, max(_MIN_FACTOR, _SAFETY / q))  # ratio 0: the largest
             factor = trig.select(fin, factor, _MIN_FACTOR)
             factor = trig.select(rejected[i] != 0.0, min(factor, 1.0), factor)
-            rejected[i] = trig.select(accept, 0.0, 1.0)
-            hdes[i] = trig.select(fixed, hdes[i], max(h * factor, floor))
+            h_new[i] = trig.select(fixed, hdes[i], max(h * factor, floor))
+            accepted[i] = trig.select(accept, 1.0, 0.0)
+            err_now[i] = err
+        for i in range(na):  # the state of the accepted
+            accept = accepted[i] != 0.0
+            phi[i] = trig.select(accept, phin[i], phi[i])
+            w[i] = trig.select(accept, wn[i], w[i])
+            kp[0, i] = trig.select(accept, kp[s, i], kp[0, i])
+            kw[0, i] = trig.select(accept, kw[s, i], kw[0, i])
+        for i in range(na):  # the clocks and counts
+            accept = accepted[i] != 0.0
+            ends = accept & (last[i] != 0.0)
+            t[i] = trig.select(ends, dt, trig.select(accept, t[i] + hh[i], t[i]))
+            count[i] += accepted[i]
+            err_sum[i] += trig.select(accept, err_now[i], 0.0)
+            rejected[i] = 1.0 - accepted[i]
+            hdes[i] = h_new[i]
             # carried to the next step: the size wanted, not the last one cut short at dt
-            carry[i] = trig.select(ends, max(hwant[i], hdes[i]), carry[i])
+            carry[i] = trig.select(ends, max(hwant[i], h_new[i]), carry[i])
         i = 0
         while i < na:
             if status[i] != 0.0:
