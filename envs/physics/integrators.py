@@ -61,8 +61,9 @@ the work left. The loops that evaluate the equations (``_accel_lanes``, ``_margi
 ``_end_lanes``) and the three that accept or reject substeps have no branch and no call in
 their bodies (the sines are :mod:`roller_gym.physics.trig`'s, inlined; choices are selects),
 so LLVM runs them in SIMD lanes. Accepting is three loops rather than one because LLVM
-vectorizes a loop only if the rows it touches need few pairwise overlap checks. The kernels are compiled with ``error_model="numpy"``: a
-division by zero gives inf or NaN, reported as a failed step, instead of raising.
+vectorizes a loop only if the rows it touches need few pairwise overlap checks. The kernels
+are compiled with ``error_model="numpy"``: a division by zero gives inf or NaN, reported as a
+failed step, instead of raising.
 
 **Layout.** The kernels work on one float64 table per batch, ``io`` of shape
 ``(len(ROWS), n)``: one row per name of :data:`ROWS` (the scene's :data:`SCENE_FIELDS`, the
