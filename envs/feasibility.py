@@ -257,6 +257,12 @@ def _check_ranges_cached(task_class: type[Task], max_torque: float,
     def fails(values: Mapping[str, float]) -> str | None:
         return problem(task, scene.replace(**values), dt)
 
+    if (type(task).check_scene is not Task.check_scene
+            and type(task).scene_proven is Task.scene_proven):
+        return (f"randomize={ranges!r} cannot be used with {task.name}: the task has its own "
+                "condition on the scene (check_scene) and no proof of it over a range of "
+                "scenes (scene_proven), so that every scene of the range can pose it cannot be "
+                "shown; use a fixed scene")
     names = list(ranges)
     for ends in itertools.product(*(ranges[n] for n in names)):  # a quick look first
         corner = dict(zip(names, ends, strict=True))
@@ -266,9 +272,11 @@ def _check_ranges_cached(task_class: type[Task], max_torque: float,
     width = {n: hi - lo for n, (lo, hi) in ranges.items()}
     stack: list[Box] = [dict(ranges)]
     proven: list[Box] = []
+    examined = 0
     while stack:
         box = stack.pop()
-        if len(proven) + len(stack) + 1 > MAX_BOXES:
+        examined += 1
+        if examined > MAX_BOXES:
             return _not_proven(ranges, proven, box, f"within {MAX_BOXES} boxes")
         if _box_proven(task, scene, dt, box, ranges):
             proven.append(box)
@@ -303,16 +311,34 @@ def _counterexample(ranges: Mapping[str, tuple[float, float]], point: Mapping[st
     _, name, part = best
     others = {n: v for n, v in point.items() if n != name}
     where = f"{name} = {point[name]:.6g}" + (f" (other fields at {others})" if others else "")
-    feasible = "none" if part is None else f"[{part[0]:.6g}, {part[1]:.6g}]"
+    feasible = "none" if part is None else _inward(*part)
     return (f"randomize[{name!r}]={ranges[name]!r} cannot be used: at {where} {reason}; "
             f"feasible part of the range: {feasible}")
+
+
+def _inward(low: float, high: float, digits: int = 6) -> str:
+    """[low, high] with its ends rounded inward to ``digits`` significant digits (more where
+    that would empty it)."""
+    for n in range(digits, 18):
+        a, b = (_round_to(x, n, up) for x, up in ((low, True), (high, False)))
+        if a <= b:
+            return f"[{a:.{n}g}, {b:.{n}g}]"
+    return f"[{low!r}, {high!r}]"
+
+
+def _round_to(x: float, digits: int, up: bool) -> float:
+    if x == 0 or not math.isfinite(x):
+        return x
+    scale = 10.0 ** (digits - 1 - math.floor(math.log10(abs(x))))
+    y = (math.ceil if up else math.floor)(x * scale) / scale
+    return y if (y >= x if up else y <= x) else x  # keep the direction despite rounding
 
 
 def _not_proven(ranges: Mapping[str, tuple[float, float]], proven: list[Box], box: Box,
                 how: str) -> str:
     """The refusal when the proof does not close (no counterexample found either)."""
     def show(b: Mapping[str, tuple[float, float]]) -> str:
-        return ", ".join(f"{n} in [{lo:.6g}, {hi:.6g}]" for n, (lo, hi) in b.items())
+        return ", ".join(f"{n} in {_inward(lo, hi)}" for n, (lo, hi) in b.items())
 
     if len(ranges) == 1 and proven:  # the longest run of proven intervals
         (name,) = ranges
@@ -323,7 +349,7 @@ def _not_proven(ranges: Mapping[str, tuple[float, float]], proven: list[Box], bo
             else:
                 runs.append([lo, hi])
         lo, hi = max(runs, key=lambda run: run[1] - run[0])
-        done = f"{name} in [{lo:.6g}, {hi:.6g}]"
+        done = f"{name} in {_inward(lo, hi)}"
     elif proven:
         def share(b: Box) -> float:
             return math.prod((hi - lo) / (ranges[n][1] - ranges[n][0]) for n, (lo, hi)

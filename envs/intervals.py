@@ -6,7 +6,8 @@ over their intervals. It supports what :mod:`roller_gym.physics.equations` needs
 functions evaluate on intervals unchanged: ``+ − × ÷``, unary minus, ``abs``, ``** 2``, and
 the ufuncs ``np.sin``, ``np.cos`` and ``np.sqrt`` (which :mod:`roller_gym.physics.trig` calls
 from Python) through ``__array_ufunc__``. Python floats and NumPy numbers or arrays mix in as
-exact (degenerate) intervals.
+exact (degenerate) intervals. ``x * x`` of one Interval object is its square (never
+negative), as the equations write squares (``h * h``, ``phi_dot * phi_dot``).
 
 Rounding: each result of ``+ − × ÷ sqrt`` is correctly rounded in float64, so moving each
 end one ulp outward (``np.nextafter``) encloses the exact result. ``sin`` and ``cos`` are
@@ -84,6 +85,8 @@ class Interval:
         return Interval(-self.hi, -self.lo)
 
     def __mul__(self, other: Any) -> Interval:
+        if other is self:  # x · x, one variable: its square, never negative
+            return self ** 2
         if not isinstance(other, Interval):
             if isinstance(other, float | int):
                 a, b = self.lo * other, self.hi * other
