@@ -96,12 +96,15 @@ def check_randomize(task: Task, scene: Scene, dt: float,
     """The ``randomize`` ranges, checked: each names a Scene field and is a (low, high) pair
     of finite reals with low <= high; every value in it gives a valid scene (each field's
     rule holds on the whole interval: these rules are intervals, so the ends and, for R,
-    the forbidden band [0, r] decide); and the task can be posed in the scenes of the
-    ranges (:meth:`Task.infeasible`, and :func:`validation.check_integrable`). The last is
-    checked at every corner of the box of ranges and at RANGE_POINTS points along each
-    field with the others at their ends, so a narrow infeasible pocket between checked
-    points can escape it; where a check fails the error names the field and the feasible
-    part of its range found by bisection to 1e-6 of its width.
+    the forbidden band [0, r] decide); and the task can be posed in every scene of the box
+    of ranges (:meth:`Task.infeasible`, and :func:`validation.check_integrable`). The last
+    is proven over the whole box, not sampled (:mod:`roller_gym.feasibility`: branch and
+    bound, the equations evaluated on intervals), so a range that constructs cannot fail
+    at a later reset. Where a scene of the box fails the check, the error names the field,
+    the scene and a feasible part of the field's range (found by bisection to 1e-6 of its
+    width, through the failing scene); where the proof does not close (as at an isolated
+    infeasible value), the range is refused all the same, naming the part that was proven.
+    The result is cached per (task, scene, dt, ranges).
     """
     if randomize is None:
         return {}

@@ -151,13 +151,51 @@ def unstable_rest_proven(p: Params, estimates: Sequence[Scene]) -> bool:
       the intervals from counting m's and g's range twice.
 
     The mirror image −φ_b counts as well and is not needed: the rule takes the positive one.
+    Where the rule gives φ_b = 0 instead (no unstable rest position > 0, an unstable one at
+    0), :func:`_unstable_bottom_proven` shows that.
     A box where any of this fails is not proven (split, or refused where that does not end).
     """
     for scene in estimates:
         estimate = unstable_rest_positions(scene)
         if estimate and estimate[0] > 0 and _unstable_rest_proven_near(p, estimate[0]):
             return True
+        if estimate == (0.0,) and _unstable_bottom_proven(p):
+            return True
     return False
+
+
+def _window(p: Params) -> tuple[Interval, float]:
+    """(dψ/dφ as an interval, the largest φ [rad] the search window of
+    :func:`roller_gym.physics.equilibria` reaches over the box)."""
+    rate = abs(p.r * p.kappa / (1.0 - p.r * p.kappa))
+    if rate.hi == 0.0:  # the floor
+        return rate, math.pi
+    return rate, math.pi * min(1.0 / float(rate.lo), MAX_TURNS) if rate.lo > 0 else math.inf
+
+
+def _unstable_bottom_proven(p: Params) -> bool:
+    """The rule's other case: φ_b = 0 (the rule then takes the unstable rest position at
+    φ = 0, as on top of a drum with the mass center high): d²V/dφ² < 0 at 0 and no
+    unstable rest position in (0, the window's end] (as in :func:`unstable_rest_proven`);
+    the roller rests at 0 (N = m g, F = 0) and is checked as well."""
+    m, r, kappa, e, g = p.m, p.r, p.kappa, p.e, p.g
+    zero = Interval(0.0)
+    _, end = _window(p)
+    if not (equations.d2potential(zero, m, r, kappa, e, g).hi < 0 and math.isfinite(end)
+            and _nearer_excluded(p, end)):
+        return False
+    return _rests(p, zero)
+
+
+def _rests(p: Params, phi: Interval) -> bool:
+    """N > 0 and μN − |F| >= 0 at rest under τ = 0 at every φ of ``phi``, for every scene
+    of the box; m and g at their least values (the margins do not depend on them, see
+    :func:`unstable_rest_proven`)."""
+    m, g = Interval(p.m.lo), Interval(p.g.lo)
+    acc = equations.accel(phi, 0.0, 0.0, m, p.r, p.kappa, p.e, p.k, g, p.c)
+    normal, friction = equations.contact_forces(phi, 0.0, acc, m, p.r, p.kappa, p.e, g)
+    liftoff, slip = equations.margins(normal, friction, m, g, p.mu)
+    return bool(liftoff.lo > 0 and slip.lo >= 0)
 
 
 def _unstable_rest_proven_near(p: Params, estimate: float) -> bool:
@@ -178,18 +216,11 @@ def _unstable_rest_proven_near(p: Params, estimate: float) -> bool:
     else:
         return False
     big = Interval(b)
-    rate = abs(r * kappa / (1.0 - r * kappa))
+    rate, _ = _window(p)
     inside = (big.hi < MAX_TURNS * math.pi * (1.0 - 2e-9)
               and ((rate.hi == 0.0 and big.hi < math.pi * (1.0 - 2e-9))
                    or (big * rate).hi < math.pi * (1.0 - 2e-9)))
-    if not (inside and _nearer_excluded(p, a)):
-        return False
-    rest = Interval(a, b)
-    m, g = Interval(m.lo), Interval(g.lo)  # the margins do not depend on them (see above)
-    acc = equations.accel(rest, 0.0, 0.0, m, r, kappa, e, p.k, g, p.c)
-    normal, friction = equations.contact_forces(rest, 0.0, acc, m, r, kappa, e, g)
-    liftoff, slip = equations.margins(normal, friction, m, g, p.mu)
-    return bool(liftoff.lo > 0 and slip.lo >= 0)
+    return inside and _nearer_excluded(p, a) and _rests(p, Interval(a, b))
 
 
 def _roots_at_corners(p: Params, start: float) -> np.ndarray | None:

@@ -270,3 +270,21 @@ def test_a_task_condition_without_a_proof_is_refused():
 
     with pytest.raises(ValueError, match=r"no proof.*scene_proven"):
         feasibility.check_ranges(Picky(), Scene(), 0.05, {"m": (0.5, 1.5)})
+
+
+def test_balance_at_the_top_of_a_drum_and_the_isolated_value_where_it_cannot_be_posed():
+    """On top of a drum (R < 0) a mass center near the axle (e < e* = r²/(|R| + r), where
+    d²V/dφ²(0) = m g (r²κ/(1 − rκ) + e) changes sign) leaves φ = 0 unstable and the rule
+    takes φ_b = 0; above e* an unstable rest position φ_b > 0 appears. At e = e* itself
+    there is none (d²V/dφ²(0) = 0), an isolated value no scan finds: a range across it is
+    refused as not proven, and the proven part ends below e*."""
+    scene = Scene(R=-0.5, e=0.01)
+    e_star = scene.r ** 2 / (abs(scene.R) + scene.r)
+    vec = gym.make_vec(BALANCE, num_envs=16, scene=scene, randomize={"e": (0.0, 0.5 * e_star)})
+    _, info = vec.reset(seed=0)
+    assert np.all(np.abs(info["target_phi"]) < 1e-12)  # φ_b = 0, up to the root finder
+    with pytest.raises(ValueError, match=r"could not be proven however finely") as error:
+        gym.make(BALANCE, scene=scene, randomize={"e": (0.0, 1.8 * e_star)})
+    part = re.search(r"proven: e in \[([^,]+), ([^\]]+)\]", str(error.value))
+    assert float(part[1]) == 0.0 and 0.99 * e_star < float(part[2]) <= e_star
+    gym.make(BALANCE, scene=scene, randomize={"e": (1.2 * e_star, 1.8 * e_star)})
