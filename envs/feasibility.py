@@ -152,7 +152,8 @@ def unstable_rest_proven(p: Params, estimates: Sequence[Scene]) -> bool:
 
     The mirror image −φ_b counts as well and is not needed: the rule takes the positive one.
     Where the rule gives φ_b = 0 instead (no unstable rest position > 0, an unstable one at
-    0), :func:`_unstable_bottom_proven` shows that.
+    0), :func:`_unstable_bottom_proven` shows that; on the floor, where the unstable rest
+    position is at the window's edge (φ = −π), :func:`_floor_top_proven`.
     A box where any of this fails is not proven (split, or refused where that does not end).
     """
     for scene in estimates:
@@ -161,7 +162,23 @@ def unstable_rest_proven(p: Params, estimates: Sequence[Scene]) -> bool:
             return True
         if estimate == (0.0,) and _unstable_bottom_proven(p):
             return True
+        if estimate and estimate[0] < 0 and _floor_top_proven(p):
+            return True
     return False
+
+
+def _floor_top_proven(p: Params) -> bool:
+    """The rule on the floor (κ = 0), whose window is φ in [−π, π): dV/dφ = m g e sin φ
+    vanishes at 0 (stable: d²V/dφ² = m g e > 0) and at −π (unstable), and at no unstable
+    point of (0, π) (shown as in :func:`unstable_rest_proven`; by symmetry none in
+    (−π, 0) either), so the rule takes φ_b = |−π| = π, the mass center above the axle,
+    where the roller is checked to rest."""
+    m, r, kappa, e, g = p.m, p.r, p.kappa, p.e, p.g
+    if not (kappa.lo == kappa.hi == 0.0
+            and equations.d2potential(Interval(0.0), m, r, kappa, e, g).lo > 0):
+        return False
+    top = Interval(math.pi, np.nextafter(math.pi, 4.0))  # encloses π
+    return _nearer_excluded(p, math.pi * (1.0 - 1e-9)) and _rests(p, top)
 
 
 def _window(p: Params) -> tuple[Interval, float]:
@@ -170,7 +187,9 @@ def _window(p: Params) -> tuple[Interval, float]:
     rate = abs(p.r * p.kappa / (1.0 - p.r * p.kappa))
     if rate.hi == 0.0:  # the floor
         return rate, math.pi
-    return rate, math.pi * min(1.0 / float(rate.lo), MAX_TURNS) if rate.lo > 0 else math.inf
+    if not rate.lo > 0:
+        return rate, math.inf
+    return rate, math.pi * min(1.0 / float(rate.lo), MAX_TURNS) * (1.0 + 1e-9)  # rounded up
 
 
 def _unstable_bottom_proven(p: Params) -> bool:
@@ -217,9 +236,11 @@ def _unstable_rest_proven_near(p: Params, estimate: float) -> bool:
         return False
     big = Interval(b)
     rate, _ = _window(p)
-    inside = (big.hi < MAX_TURNS * math.pi * (1.0 - 2e-9)
-              and ((rate.hi == 0.0 and big.hi < math.pi * (1.0 - 2e-9))
-                   or (big * rate).hi < math.pi * (1.0 - 2e-9)))
+    if rate.hi == 0.0:  # the floor: |φ| < π
+        inside = big.hi < math.pi * (1.0 - 2e-9)
+    else:  # |ψ| < π and |φ| < MAX_TURNS turns
+        inside = (big.hi < MAX_TURNS * math.pi * (1.0 - 2e-9)
+                  and (big * rate).hi < math.pi * (1.0 - 2e-9))
     return inside and _nearer_excluded(p, a) and _rests(p, Interval(a, b))
 
 

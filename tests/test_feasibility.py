@@ -219,7 +219,8 @@ def test_a_narrow_infeasible_pocket_between_scan_points_is_refused():
      (HOLD, {"scene": "floor", "max_torque": 0.8,
              "randomize": {"m": (0.8, 1.2), "e": (0.03, 0.05)}}),
      (BALANCE, {"randomize": {"R": (0.7, 1.5), "m": (0.8, 1.2)}}),
-     (BALANCE, {"randomize": {"e": (0.06, 0.1), "mu": (0.6, 1.0)}})],
+     (BALANCE, {"randomize": {"e": (0.06, 0.1), "mu": (0.6, 1.0)}}),
+     (BALANCE, {"scene": "floor", "randomize": {"e": (0.03, 0.05), "k": (0.05, 0.15)}})],
 )
 def test_feasible_ranges_construct_and_every_sub_environment_starts(env_id, kwargs):
     gym.make(env_id, **kwargs).reset(seed=0)
@@ -229,7 +230,10 @@ def test_feasible_ranges_construct_and_every_sub_environment_starts(env_id, kwar
     assert (info["liftoff_margin"] > 0).all() and (info["slip_margin"] >= 0).all()
     if env_id == BALANCE:  # the target is each scene's unstable rest position
         for scene, target in zip(vec.unwrapped.scenes, info["target_phi"], strict=True):
-            assert abs(target) == pytest.approx(unstable_rest_positions(scene)[0], abs=1e-9)
+            assert abs(target) == pytest.approx(abs(unstable_rest_positions(scene)[0]),
+                                                abs=1e-9)
+            if math.isinf(scene.R):  # on the floor: the mass center above the axle
+                assert abs(target) == pytest.approx(math.pi, abs=1e-12)
     for _ in range(3):
         obs, _, _, _, info = vec.step(np.zeros((256, 1), np.float32))
         assert np.isfinite(obs).all() and not info["nonfinite"].any()
