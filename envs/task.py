@@ -225,7 +225,9 @@ class Task:
     def fallback_candidates(self, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
         """The fixed grid of :meth:`fallback_start`, shape (n, 42) for a batch ``scene`` of n
         (n = 1 for a scalar one): the middle of the start range (the bottom) first, then 41
-        points across it, at rest (φ [rad], φ' [rad/s])."""
+        points across it, at rest (φ [rad], φ' [rad/s]). :mod:`roller_gym.feasibility`
+        encloses each candidate over a box of scenes by its values at the box's corners, so
+        a task's candidates must be monotone in each Scene field (as these are)."""
         grid = np.linspace(0.0, 1.0, 41)
         u = np.concatenate([[0.5], grid])[None, :].repeat(scene.batch_size or 1, axis=0)
         return self.start_candidates(u, np.full_like(u, 0.5), scene)
