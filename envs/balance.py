@@ -52,7 +52,11 @@ At rest near the bottom: φ and φ' uniform in ±0.1 (rad, rad/s).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import Any
+
 import numpy as np
+from roller_gym import feasibility
 from roller_gym.physics import Scene, contact
 from roller_gym.task import Task, per_scene, register, unstable_rest_positions
 
@@ -90,6 +94,9 @@ class BalanceTask(Task):
                 f"mu={scene.mu}"
             )
         return phi_b
+
+    def scene_proven(self, params: Any, estimates: Sequence[Scene]) -> bool:
+        return feasibility.unstable_rest_proven(params, estimates)
 
     start_rule = "near rest at the bottom, |φ| <= 0.1 rad and |φ'| <= 0.1 rad/s"
 

@@ -7,13 +7,12 @@ the same errors, draw scenes the same way and turn actions into torques the same
 
 from __future__ import annotations
 
-import itertools
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
-from roller_gym import validation
+from roller_gym import feasibility, validation
 from roller_gym.episode import INFO_KEYS
 from roller_gym.physics import METHODS, Scene, preset
 from roller_gym.physics.integrators import MAX_SUBSTEPS
@@ -97,21 +96,20 @@ class EnvConfig:
         return resolve_scene(value, self.task.default_scene)
 
 
-#: Points per randomized field at which a range's feasibility is checked (and refined).
-RANGE_POINTS = 33
-
-
 def check_randomize(task: Task, scene: Scene, dt: float,
                     randomize: Mapping[str, Any] | None) -> dict[str, tuple[float, float]]:
     """The ``randomize`` ranges, checked: each names a Scene field and is a (low, high) pair
     of finite reals with low <= high; every value in it gives a valid scene (each field's
     rule holds on the whole interval: these rules are intervals, so the ends and, for R,
-    the forbidden band [0, r] decide); and the task can be posed in the scenes of the
-    ranges (:meth:`Task.infeasible`, and :func:`validation.check_integrable`). The last is
-    checked at every corner of the box of ranges and at RANGE_POINTS points along each
-    field with the others at their ends, so a narrow infeasible pocket between checked
-    points can escape it; where a check fails the error names the field and the feasible
-    part of its range found by bisection to 1e-6 of its width.
+    the forbidden band [0, r] decide); and the task can be posed in every scene of the box
+    of ranges (:meth:`Task.infeasible`, and :func:`validation.check_integrable`). The last
+    is proven over the whole box, not sampled (:mod:`roller_gym.feasibility`: branch and
+    bound, the equations evaluated on intervals), so a range that constructs cannot fail
+    at a later reset. Where a scene of the box fails the check, the error names the field,
+    the scene and a feasible part of the field's range (found by bisection to 1e-6 of its
+    width, through the failing scene); where the proof does not close (as at an isolated
+    infeasible value), the range is refused all the same, naming the part that was proven.
+    The result is cached per (task, scene, dt, ranges).
     """
     if randomize is None:
         return {}
@@ -144,59 +142,7 @@ def check_randomize(task: Task, scene: Scene, dt: float,
                 "(on a drum) over the whole range"
             )
 
-    def problem(values: dict[str, float]) -> str | None:
-        candidate = scene.replace(**values)
-        try:
-            validation.check_integrable(candidate, dt, task.max_torque)
-        except ValueError as error:
-            return str(error)
-        return task.infeasible(candidate)
-
-    names = list(ranges)
-    corners = [dict(zip(names, ends, strict=True))
-               for ends in itertools.product(*(ranges[n] for n in names))]
-    for name in names:
-        low, high = ranges[name]
-        for corner in corners:
-            for value in np.linspace(low, high, RANGE_POINTS):
-                reason = problem({**corner, name: float(value)})
-                if reason is not None:
-                    feasible = _feasible_part(lambda v, c=corner, n=name: problem(
-                        {**c, n: v}) is None, low, high, RANGE_POINTS)
-                    raise ValueError(
-                        f"randomize[{name!r}]={ranges[name]!r} cannot be used: at {name} = "
-                        f"{float(value):.6g} (other fields at {corner}) {reason}; feasible "
-                        f"part of the range: {feasible}"
-                    )
+    if ranges:
+        feasibility.check_ranges(task, scene, dt, ranges)
     return ranges
 
-
-def _feasible_part(ok, low: float, high: float, points: int) -> str:
-    """The longest feasible run of a scan of [low, high], its ends refined by bisection."""
-    grid = np.linspace(low, high, points)
-    flags = [ok(float(v)) for v in grid]
-    best, start = None, None
-    for i, flag in enumerate([*flags, False]):
-        if flag and start is None:
-            start = i
-        if not flag and start is not None:
-            if best is None or i - start > best[1] - best[0]:
-                best = (start, i - 1)
-            start = None
-    if best is None:
-        return "none"
-    ends = []
-    for inside, step in ((best[0], -1), (best[1], 1)):
-        a = float(grid[inside])
-        outside = inside + step
-        if not 0 <= outside < points:
-            ends.append(a)
-            continue
-        b = float(grid[outside])
-        for _ in range(40):
-            if abs(b - a) <= 1e-6 * (high - low):
-                break
-            mid = 0.5 * (a + b)
-            a, b = (mid, b) if ok(mid) else (a, mid)
-        ends.append(a)
-    return f"[{min(ends):.6g}, {max(ends):.6g}]"

@@ -44,7 +44,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
 import numpy as np
@@ -187,6 +187,14 @@ class Task:
     def check_scene(self, scene: Scene) -> None:
         """Raise ValueError if the task cannot be posed in ``scene`` (default: any scene)."""
 
+    def scene_proven(self, params: Any, estimates: Sequence[Scene]) -> bool:
+        """Whether :meth:`check_scene` is proven to pass in every scene of a box of them
+        (``params``: :class:`roller_gym.feasibility.Params`, intervals; ``estimates``: scenes
+        of the box to start estimates from, e.g. its midpoint). A task without a condition:
+        True; one with a condition and no proof of it: False (a randomized range is then
+        refused)."""
+        return type(self).check_scene is Task.check_scene
+
     def infeasible(self, scene: Scene) -> str | None:
         """Why the task cannot be posed in the scalar ``scene``, or None if it can: the
         task's own condition (:meth:`check_scene`), and a start state: one of the
@@ -206,15 +214,23 @@ class Task:
         """The start state (φ [rad], φ' [rad/s]) the draw falls back to when none of its
         random candidates rolls: the accepted one nearest the bottom of a fixed grid of
         states at rest over the start range (41 points, φ = 0 among them), or None."""
-        grid = np.linspace(0.0, 1.0, 41)
-        u = np.concatenate([[0.5], grid])[None, :]  # the middle (the bottom) first
-        phi, phi_dot = self.start_candidates(u, np.full_like(u, 0.5), scene)
+        phi, phi_dot = self.fallback_candidates(scene)
         ok = self.start_accepted(phi, phi_dot, scene)[0]
         if not ok.any():
             return None
         order = np.argsort(np.abs(phi[0]), kind="stable")
         best = order[np.argmax(ok[order])]
         return float(phi[0, best]), float(phi_dot[0, best])
+
+    def fallback_candidates(self, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+        """The fixed grid of :meth:`fallback_start`, shape (n, 42) for a batch ``scene`` of n
+        (n = 1 for a scalar one): the middle of the start range (the bottom) first, then 41
+        points across it, at rest (φ [rad], φ' [rad/s]). :mod:`roller_gym.feasibility`
+        encloses each candidate over a box of scenes by its values at the box's corners, so
+        a task's candidates must be monotone in each Scene field (as these are)."""
+        grid = np.linspace(0.0, 1.0, 41)
+        u = np.concatenate([[0.5], grid])[None, :].repeat(scene.batch_size or 1, axis=0)
+        return self.start_candidates(u, np.full_like(u, 0.5), scene)
 
     def sample_targets(self, u: np.ndarray, scene: Scene) -> np.ndarray:
         """The rest positions φ* [rad] the episodes ask for, from uniforms ``u`` in [0, 1)
@@ -249,11 +265,20 @@ class Task:
         m, r, e, k, g, mu, c = (rows[f] for f in ("m", "r", "e", "k", "g", "mu", "damping"))
         kappa = np.asarray(scene.kappa, float).reshape(-1, 1)
         ok = np.ones(np.broadcast_shapes(phi.shape, m.shape), bool)
-        for tau in (-self.max_torque, 0.0, self.max_torque):
-            a = equations.accel(phi, phi_dot, tau, m, r, kappa, e, k, g, c)
-            normal, friction = equations.contact_forces(phi, phi_dot, a, m, r, kappa, e, g)
+        for normal, friction in self.start_contacts(phi, phi_dot, m, r, kappa, e, k, g, c):
             ok &= (normal > 0) & (np.abs(friction) <= mu * normal)
         return ok
+
+    def start_contacts(self, phi: Any, phi_dot: Any, m: Any, r: Any, kappa: Any, e: Any,
+                       k: Any, g: Any, c: Any) -> list[tuple[Any, Any]]:
+        """The contact forces (N, F) [N] at the state under each torque a start must roll
+        under (−max_torque, 0, +max_torque): plain arithmetic on the equations, so floats,
+        arrays and intervals (:mod:`roller_gym.intervals`) alike."""
+        out = []
+        for tau in (-self.max_torque, 0.0, self.max_torque):
+            a = equations.accel(phi, phi_dot, tau, m, r, kappa, e, k, g, c)
+            out.append(equations.contact_forces(phi, phi_dot, a, m, r, kappa, e, g))
+        return out
 
     def target_from_option(self, value: Any, scene: Scene) -> float:
         """φ* [rad] from ``reset(options={"target": value})``; tasks with a target override."""

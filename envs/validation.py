@@ -18,11 +18,14 @@ from typing import Any
 import numpy as np
 from roller_gym.physics import Scene
 
-__all__ = ["actions", "check_integrable", "choice", "count", "real", "subset"]
+__all__ = ["actions", "check_integrable", "choice", "count", "integration_magnitudes",
+           "integration_rates", "real", "subset"]
 
 _REAL = (int, float, np.integer, np.floating)
 #: The largest magnitude [SI] of the scene's derived quantities (m g r, …): squares stay finite.
 LARGEST = 1e100
+#: The smallest magnitude [SI] of those quantities: squares stay normal numbers.
+SMALLEST = 1e-100
 #: The largest ω_max·dt: the scene's fastest linear oscillation, or the torque's spin-up,
 #: over one control step (the adaptive integrators take a few substeps per radian of it).
 LARGEST_PHASE_PER_STEP = 1e4
@@ -105,18 +108,15 @@ def check_integrable(scene: Scene, dt: float, max_torque: float) -> None:
     for i in range(scene.batch_size or 1):
         one = scene.item(i) if scene.batch_size else scene
         m, r, kappa, e, k, g = (float(x) for x in one.params[:6])
-        j_min = m * (k * k + (r - e) ** 2)
-        weight_arm = m * g * r
+        weight_arm, j_min = integration_magnitudes(m, r, e, k, g)
         for label, x in (("m g r", weight_arm), ("J_min = m (k² + (r − e)²)", j_min),
                          ("max_torque", max_torque)):
-            if not (math.isfinite(x) and 1e-100 <= abs(x) <= LARGEST):
+            if not (math.isfinite(x) and SMALLEST <= abs(x) <= LARGEST):
                 raise ValueError(
                     f"{one!r} cannot be integrated in float64: {label} = {x:.3g} (SI) lies "
                     "outside [1e-100, 1e100]; rescale the scene's units"
                 )
-        s = 1.0 - r * kappa
-        omega = math.sqrt(m * g * (r * r * abs(kappa) / s + e) / j_min)
-        spin = math.sqrt(max_torque / j_min)
+        omega, spin = integration_rates(m, r, kappa, e, g, j_min, max_torque)
         phase = (omega + spin) * dt
         if not phase <= LARGEST_PHASE_PER_STEP:
             raise ValueError(
@@ -126,3 +126,18 @@ def check_integrable(scene: Scene, dt: float, max_torque: float) -> None:
                 f"{LARGEST_PHASE_PER_STEP:g} can be followed; use a shorter dt, a larger k or "
                 "a smaller e"
             )
+
+
+def integration_magnitudes(m: Any, r: Any, e: Any, k: Any, g: Any) -> tuple[Any, Any]:
+    """(m g r [N·m], J_min = m (k² + (r − e)²) [kg·m²]), the magnitudes
+    :func:`check_integrable` bounds (floats, or intervals of :mod:`roller_gym.intervals`)."""
+    return m * g * r, m * (k * k + (r - e) ** 2)
+
+
+def integration_rates(m: Any, r: Any, kappa: Any, e: Any, g: Any, j_min: Any,
+                      max_torque: Any) -> tuple[Any, Any]:
+    """(ω_max, spin) [rad/s] of :func:`check_integrable`: ω_max² = m g (r²|κ|/(1 − rκ) + e)
+    / J_min, spin² = max_torque / J_min (floats, or intervals)."""
+    s = 1.0 - r * kappa
+    omega = np.sqrt(m * g * (r * r * abs(kappa) / s + e) / j_min)
+    return omega, np.sqrt(max_torque / j_min)

@@ -1,0 +1,450 @@
+"""Proof that a task can be posed in every scene of a box of ``randomize`` ranges.
+
+:func:`check_ranges` runs a branch and bound over the box of ranges. A box is *proven* when
+every condition of :func:`problem` holds for every scene in it, shown by evaluating the same
+equations (:mod:`roller_gym.physics.equations`, :func:`roller_gym.validation.
+integration_magnitudes` and ``integration_rates``) on intervals
+(:mod:`roller_gym.intervals`, outward rounding). Otherwise the float check
+(:func:`problem`) runs at the box's midpoint: a failure there is a counterexample, and the
+range is refused with the field, the point, the reason and a feasible part of the field's
+range; else the box is split in two along its widest field (relative to that field's
+range) and both halves are examined. A range is accepted only when the whole box is covered
+by proven boxes; if that takes more than :data:`MAX_BOXES` boxes the range is refused as
+not proven, naming what was proven.
+
+What is proven on a box B (the conditions of :func:`problem`, in exact arithmetic):
+
+1. :func:`roller_gym.validation.check_integrable`: m g r and J_min within [1e-100, 1e100]
+   and (ω_max + spin)·dt <= LARGEST_PHASE_PER_STEP, on intervals.
+2. A start state (:meth:`Task.fallback_start`): one of the fixed candidates rolls (N > 0,
+   |F| <= μN) under −max_torque, 0 and +max_torque for every scene of B. Each candidate's
+   φ and φ' are enclosed by their hull over B's corners: for the tasks here they are
+   monotone in each field (Balance: constants; the others: (π/3)(2u − 1)/|q| with
+   |q| = |rκ/(1 − rκ)| monotone in r and in R on either side of R = 0, which a range cannot
+   cross).
+3. The task's own condition (:meth:`Task.scene_proven`): none for Stabilize and Hold; for
+   Balance, :func:`unstable_rest_proven`.
+"""
+
+from __future__ import annotations
+
+import functools
+import itertools
+import math
+from collections.abc import Callable, Mapping, Sequence
+from typing import NamedTuple
+
+import numpy as np
+from roller_gym import validation
+from roller_gym.intervals import Interval
+from roller_gym.physics import Scene, equations
+from roller_gym.physics.analysis import MAX_TURNS
+from roller_gym.task import Task, unstable_rest_positions
+
+__all__ = ["MAX_BOXES", "Params", "box_params", "check_ranges", "problem",
+           "unstable_rest_proven"]
+
+#: The most boxes the branch and bound examines before it refuses a range as not proven.
+MAX_BOXES = 4000
+#: Boxes narrower than this share of their field's range (every field) are not split again.
+SMALLEST_SHARE = 1e-9
+#: Points of the scan along a field that names the feasible part of its range.
+SCAN_POINTS = 33
+
+Box = dict[str, tuple[float, float]]
+
+
+class Params(NamedTuple):
+    """A box of scenes as intervals: the equations' ``m, r, kappa, e, k, g, c`` and μ."""
+
+    m: Interval
+    r: Interval
+    kappa: Interval
+    e: Interval
+    k: Interval
+    g: Interval
+    c: Interval
+    mu: Interval
+
+
+def box_params(scene: Scene, box: Mapping[str, tuple[float, float]]) -> Params:
+    """The intervals of a box: each field of ``box`` over its (low, high), the others at
+    ``scene``'s values; κ = 1/R enclosed on intervals (exactly ``scene.kappa`` if R is fixed)."""
+    def field(name: str) -> Interval:
+        return Interval(*box[name]) if name in box else Interval(float(getattr(scene, name)))
+
+    kappa = 1.0 / field("R") if "R" in box else Interval(float(scene.kappa))
+    return Params(field("m"), field("r"), kappa, field("e"), field("k"), field("g"),
+                  field("damping"), field("mu"))
+
+
+def problem(task: Task, scene: Scene, dt: float) -> str | None:
+    """Why ``task`` cannot be posed in the scalar ``scene`` with steps of ``dt`` [s], or None:
+    :func:`validation.check_integrable`, then :meth:`Task.infeasible` (floats, one scene)."""
+    try:
+        validation.check_integrable(scene, dt, task.max_torque)
+    except ValueError as error:
+        return str(error)
+    return task.infeasible(scene)
+
+
+# -- the conditions on a box ------------------------------------------------------------------
+def _integrable_proven(p: Params, dt: float, max_torque: float) -> bool:
+    weight_arm, j_min = validation.integration_magnitudes(p.m, p.r, p.e, p.k, p.g)
+    for x in (weight_arm, j_min):
+        size = abs(x)
+        if not (size.lo >= validation.SMALLEST and size.hi <= validation.LARGEST):
+            return False
+    omega, spin = validation.integration_rates(p.m, p.r, p.kappa, p.e, p.g, j_min, max_torque)
+    return bool(((omega + spin) * dt).hi <= validation.LARGEST_PHASE_PER_STEP)
+
+
+def _corners(scene: Scene, box: Box) -> Scene:
+    """The box's corners as one batch scene."""
+    names = list(box)
+    values = np.array(list(itertools.product(*(box[n] for n in names))), float).reshape(-1,
+                                                                                      len(names))
+    return scene.replace(**{n: values[:, i] for i, n in enumerate(names)})
+
+
+def _start_proven(task: Task, scene: Scene, box: Box, p: Params) -> bool:
+    phi, phi_dot = task.fallback_candidates(_corners(scene, box) if box else scene)
+    phi, phi_dot = Interval.hull(phi), Interval.hull(phi_dot)
+    ok = np.ones(np.shape(phi.lo), bool)
+    for normal, friction in task.start_contacts(phi, phi_dot, p.m, p.r, p.kappa, p.e, p.k,
+                                                p.g, p.c):
+        ok &= (normal.lo > 0) & (abs(friction).hi <= (p.mu * normal).lo)
+    return bool(ok.any())
+
+
+def _box_proven(task: Task, scene: Scene, dt: float, box: Box, ranges: Box) -> bool:
+    estimates = (scene.replace(**_middle(ranges)), scene.replace(**_middle(box)))
+    with np.errstate(all="ignore"):  # infinities and NaN prove nothing (see intervals)
+        p = box_params(scene, box)
+        return (_integrable_proven(p, dt, task.max_torque)
+                and _start_proven(task, scene, box, p) and task.scene_proven(p, estimates))
+
+
+# -- Balance: the unstable rest position ------------------------------------------------------
+#: The most pieces of (0, φ_b) examined when excluding a nearer unstable rest position.
+MAX_PIECES = 4096
+
+
+def unstable_rest_proven(p: Params, estimates: Sequence[Scene]) -> bool:
+    """Whether, for every scene of the box ``p``, the nearest unstable rest position φ_b > 0
+    of :func:`roller_gym.task.unstable_rest_positions` exists and the roller rests there
+    (N > 0, |F| <= μN at φ = φ_b, φ' = 0, τ = 0), as :meth:`BalanceTask.default_target`
+    requires. Shown on intervals, with Φ = [a, b] an interval around the estimate of φ_b
+    over the box (from the rest position of each scene of ``estimates`` in turn, refined by
+    Newton's method at the box's corners):
+
+    * dV/dφ(a) > 0 > dV/dφ(b) and d²V/dφ² < 0 on Φ: exactly one rest position in Φ, and it
+      is unstable (d²V/dφ² < 0, as the rule asks);
+    * b inside the window :func:`roller_gym.physics.equilibria` searches (|ψ| < π, and
+      |φ| < MAX_TURNS turns);
+    * no unstable rest position in (0, a): (0, a] is covered by pieces on each of which
+      dV/dφ ≠ 0, or d²V/dφ² >= 0 (a rest position there is not unstable), or (a piece
+      starting at 0, where dV/dφ = 0) d²V/dφ² ≠ 0, so dV/dφ is strictly monotone from 0;
+    * N > 0 and μN − |F| >= 0 at rest on Φ (:func:`equations.margins`). At rest (φ' = 0)
+      under τ = 0, φ'' ∝ g and N, F ∝ m g, so these margins N/(m g) and (μN − |F|)/(m g)
+      do not depend on m or g: they are evaluated at the box's least m and g, which keeps
+      the intervals from counting m's and g's range twice.
+
+    The mirror image −φ_b counts as well and is not needed: the rule takes the positive one.
+    Where the rule gives φ_b = 0 instead (no unstable rest position > 0, an unstable one at
+    0), :func:`_unstable_bottom_proven` shows that; on the floor, where the unstable rest
+    position is at the window's edge (φ = −π), :func:`_floor_top_proven`.
+    A box where any of this fails is not proven (split, or refused where that does not end).
+    """
+    for scene in estimates:
+        estimate = unstable_rest_positions(scene)
+        if estimate and estimate[0] > 0 and _unstable_rest_proven_near(p, estimate[0]):
+            return True
+        if estimate == (0.0,) and _unstable_bottom_proven(p):
+            return True
+        if estimate and estimate[0] < 0 and _floor_top_proven(p):
+            return True
+    return False
+
+
+def _floor_top_proven(p: Params) -> bool:
+    """The rule on the floor (κ = 0), whose window is φ in [−π, π): dV/dφ = m g e sin φ
+    vanishes at 0 (stable: d²V/dφ² = m g e > 0) and at −π (unstable), and at no unstable
+    point of (0, π) (shown as in :func:`unstable_rest_proven`; by symmetry none in
+    (−π, 0) either), so the rule takes φ_b = |−π| = π, the mass center above the axle,
+    where the roller is checked to rest."""
+    m, r, kappa, e, g = p.m, p.r, p.kappa, p.e, p.g
+    if not (kappa.lo == kappa.hi == 0.0
+            and equations.d2potential(Interval(0.0), m, r, kappa, e, g).lo > 0):
+        return False
+    top = Interval(math.pi, np.nextafter(math.pi, 4.0))  # encloses π
+    return _nearer_excluded(p, math.pi * (1.0 - 1e-9)) and _rests(p, top)
+
+
+def _window(p: Params) -> tuple[Interval, float]:
+    """(dψ/dφ as an interval, the largest φ [rad] the search window of
+    :func:`roller_gym.physics.equilibria` reaches over the box)."""
+    rate = abs(p.r * p.kappa / (1.0 - p.r * p.kappa))
+    if rate.hi == 0.0:  # the floor
+        return rate, math.pi
+    if not rate.lo > 0:
+        return rate, math.inf
+    return rate, math.pi * min(1.0 / float(rate.lo), MAX_TURNS) * (1.0 + 1e-9)  # rounded up
+
+
+def _unstable_bottom_proven(p: Params) -> bool:
+    """The rule's other case: φ_b = 0 (the rule then takes the unstable rest position at
+    φ = 0, as on top of a drum with the mass center high): d²V/dφ² < 0 at 0 and no
+    unstable rest position in (0, the window's end] (as in :func:`unstable_rest_proven`);
+    the roller rests at 0 (N = m g, F = 0) and is checked as well."""
+    m, r, kappa, e, g = p.m, p.r, p.kappa, p.e, p.g
+    zero = Interval(0.0)
+    _, end = _window(p)
+    if not (equations.d2potential(zero, m, r, kappa, e, g).hi < 0 and math.isfinite(end)
+            and _nearer_excluded(p, end)):
+        return False
+    return _rests(p, zero)
+
+
+def _rests(p: Params, phi: Interval) -> bool:
+    """N > 0 and μN − |F| >= 0 at rest under τ = 0 at every φ of ``phi``, for every scene
+    of the box; m and g at their least values (the margins do not depend on them, see
+    :func:`unstable_rest_proven`)."""
+    m, g = Interval(p.m.lo), Interval(p.g.lo)
+    acc = equations.accel(phi, 0.0, 0.0, m, p.r, p.kappa, p.e, p.k, g, p.c)
+    normal, friction = equations.contact_forces(phi, 0.0, acc, m, p.r, p.kappa, p.e, g)
+    liftoff, slip = equations.margins(normal, friction, m, g, p.mu)
+    return bool(liftoff.lo > 0 and slip.lo >= 0)
+
+
+def _unstable_rest_proven_near(p: Params, estimate: float) -> bool:
+    phi = _roots_at_corners(p, estimate)
+    if phi is None:
+        return False
+    m, r, kappa, e, g = p.m, p.r, p.kappa, p.e, p.g
+    spread = float(phi.max() - phi.min())
+    for pad in (0.5 * spread, 2.0 * spread):
+        pad += 1e-9 * max(1.0, float(phi.max()))
+        a, b = float(phi.min()) - pad, float(phi.max()) + pad
+        if a <= 0:
+            return False
+        if (equations.dpotential(Interval(a), m, r, kappa, e, g).lo > 0
+                and equations.dpotential(Interval(b), m, r, kappa, e, g).hi < 0
+                and equations.d2potential(Interval(a, b), m, r, kappa, e, g).hi < 0):
+            break
+    else:
+        return False
+    big = Interval(b)
+    rate, _ = _window(p)
+    if rate.hi == 0.0:  # the floor: |φ| < π
+        inside = big.hi < math.pi * (1.0 - 2e-9)
+    else:  # |ψ| < π and |φ| < MAX_TURNS turns
+        inside = (big.hi < MAX_TURNS * math.pi * (1.0 - 2e-9)
+                  and (big * rate).hi < math.pi * (1.0 - 2e-9))
+    return inside and _nearer_excluded(p, a) and _rests(p, Interval(a, b))
+
+
+def _roots_at_corners(p: Params, start: float) -> np.ndarray | None:
+    """The root of dV/dφ near ``start`` at each corner of the box (Newton's method), or None
+    where it does not converge to an unstable one: an estimate, checked by the proof."""
+    ends = [(x.lo, x.hi) for x in (p.m, p.r, p.kappa, p.e, p.g)]
+    m, r, kappa, e, g = (np.asarray(c, float) for c in zip(*itertools.product(*ends),
+                                                            strict=True))
+    phi = np.full(m.shape, start)
+    for _ in range(30):
+        step = (equations.dpotential(phi, m, r, kappa, e, g)
+                / equations.d2potential(phi, m, r, kappa, e, g))
+        phi = phi - step
+        if np.all(np.abs(step) <= 1e-14 * np.abs(phi)):
+            break
+    if not (np.all(np.isfinite(phi)) and np.all(phi > 0)
+            and np.all(equations.d2potential(phi, m, r, kappa, e, g) < 0)):
+        return None
+    return phi
+
+
+def _nearer_excluded(p: Params, a: float) -> bool:
+    """No unstable rest position in (0, a] for any scene of the box (see
+    :func:`unstable_rest_proven`), by bisecting pieces of it."""
+    m, r, kappa, e, g = p.m, p.r, p.kappa, p.e, p.g
+    edges = np.linspace(0.0, a, 33)
+    lo, hi = edges[:-1], edges[1:]
+    examined = 0
+    while lo.size:
+        examined += lo.size
+        if examined > MAX_PIECES:
+            return False
+        piece = Interval(lo, hi)
+        slope = equations.dpotential(piece, m, r, kappa, e, g)
+        curvature = equations.d2potential(piece, m, r, kappa, e, g)
+        ok = (slope.lo > 0) | (slope.hi < 0) | (curvature.lo >= 0)
+        ok |= (lo == 0.0) & ((curvature.lo > 0) | (curvature.hi < 0))
+        half = 0.5 * (lo + hi)
+        lo, hi = np.concatenate([lo[~ok], half[~ok]]), np.concatenate([half[~ok], hi[~ok]])
+    return True
+
+
+# -- the branch and bound ---------------------------------------------------------------------
+def _middle(box: Box) -> dict[str, float]:
+    return {n: 0.5 * lo + 0.5 * hi for n, (lo, hi) in box.items()}
+
+
+def check_ranges(task: Task, scene: Scene, dt: float,
+                 ranges: Mapping[str, tuple[float, float]]) -> None:
+    """Raise ValueError unless ``task`` is proven to be posable in every scene of the box
+    of ``ranges`` (each field's own rule already checked); see the module docs."""
+    key = (type(task), task.max_torque, tuple(scene.as_dict().items()), dt,
+           tuple(sorted(ranges.items())))
+    message = _check_ranges_cached(*key)
+    if message is not None:
+        raise ValueError(message)
+
+
+@functools.lru_cache(maxsize=256)
+def _check_ranges_cached(task_class: type[Task], max_torque: float,
+                         scene_items: tuple[tuple[str, float], ...], dt: float,
+                         range_items: tuple[tuple[str, tuple[float, float]], ...]) -> str | None:
+    task, scene, ranges = task_class(max_torque), Scene(**dict(scene_items)), dict(range_items)
+
+    def fails(values: Mapping[str, float]) -> str | None:
+        return problem(task, scene.replace(**values), dt)
+
+    if (type(task).check_scene is not Task.check_scene
+            and type(task).scene_proven is Task.scene_proven):
+        return (f"randomize={ranges!r} cannot be used with {task.name}: the task has its own "
+                "condition on the scene (check_scene) and no proof of it over a range of "
+                "scenes (scene_proven), so that every scene of the range can pose it cannot be "
+                "shown; use a fixed scene")
+    names = list(ranges)
+    for ends in itertools.product(*(ranges[n] for n in names)):  # a quick look first
+        corner = dict(zip(names, ends, strict=True))
+        reason = fails(corner)
+        if reason is not None:
+            return _counterexample(ranges, corner, reason, fails)
+    width = {n: hi - lo for n, (lo, hi) in ranges.items()}
+    stack: list[Box] = [dict(ranges)]
+    proven: list[Box] = []
+    examined = 0
+    while stack:
+        box = stack.pop()
+        examined += 1
+        if examined > MAX_BOXES:
+            return _not_proven(ranges, proven, box, f"within {MAX_BOXES} boxes")
+        if _box_proven(task, scene, dt, box, ranges):
+            proven.append(box)
+            continue
+        middle = _middle(box)
+        reason = fails(middle)
+        if reason is not None:
+            return _counterexample(ranges, middle, reason, fails)
+        shares = {n: (box[n][1] - box[n][0]) / width[n] for n in names if width[n] > 0}
+        widest = max(shares, key=shares.get, default=None)
+        if widest is None or shares[widest] < SMALLEST_SHARE:
+            return _not_proven(ranges, proven, box, "however finely the box is split")
+        lo, hi = box[widest]
+        split = middle[widest]
+        stack += [{**box, widest: (split, hi)}, {**box, widest: (lo, split)}]
+    return None
+
+
+def _counterexample(ranges: Mapping[str, tuple[float, float]], point: Mapping[str, float],
+                    reason: str, fails: Callable[[Mapping[str, float]], str | None]) -> str:
+    """The refusal at a point where the task cannot be posed: names the field (of several,
+    the one with the longest feasible part of its range through the point) and that part."""
+    best = None
+    for name, (low, high) in ranges.items():
+        def ok(v: float, n: str = name) -> bool:
+            return fails({**point, n: v}) is None
+
+        part = _feasible_part(ok, low, high, point[name])
+        share = 0.0 if part is None else (part[1] - part[0]) / (high - low or 1.0)
+        if best is None or share > best[0]:
+            best = (share, name, part)
+    _, name, part = best
+    others = {n: v for n, v in point.items() if n != name}
+    where = f"{name} = {point[name]:.6g}" + (f" (other fields at {others})" if others else "")
+    feasible = "none" if part is None else _inward(*part)
+    return (f"randomize[{name!r}]={ranges[name]!r} cannot be used: at {where} {reason}; "
+            f"feasible part of the range: {feasible}")
+
+
+def _inward(low: float, high: float, digits: int = 6) -> str:
+    """[low, high] with its ends rounded inward to ``digits`` significant digits (more where
+    that would empty it)."""
+    for n in range(digits, 18):
+        a, b = (_round_to(x, n, up) for x, up in ((low, True), (high, False)))
+        if a <= b:
+            return f"[{a:.{n}g}, {b:.{n}g}]"
+    return f"[{low!r}, {high!r}]"
+
+
+def _round_to(x: float, digits: int, up: bool) -> float:
+    if x == 0 or not math.isfinite(x):
+        return x
+    scale = 10.0 ** (digits - 1 - math.floor(math.log10(abs(x))))
+    y = (math.ceil if up else math.floor)(x * scale) / scale
+    return y if (y >= x if up else y <= x) else x  # keep the direction despite rounding
+
+
+def _not_proven(ranges: Mapping[str, tuple[float, float]], proven: list[Box], box: Box,
+                how: str) -> str:
+    """The refusal when the proof does not close (no counterexample found either)."""
+    def show(b: Mapping[str, tuple[float, float]]) -> str:
+        return ", ".join(f"{n} in {_inward(lo, hi)}" for n, (lo, hi) in b.items())
+
+    if len(ranges) == 1 and proven:  # the longest run of proven intervals
+        (name,) = ranges
+        runs: list[list[float]] = []
+        for lo, hi in sorted(b[name] for b in proven):
+            if runs and lo <= runs[-1][1]:
+                runs[-1][1] = max(runs[-1][1], hi)
+            else:
+                runs.append([lo, hi])
+        lo, hi = max(runs, key=lambda run: run[1] - run[0])
+        done = f"{name} in {_inward(lo, hi)}"
+    elif proven:
+        def share(b: Box) -> float:
+            return math.prod((hi - lo) / (ranges[n][1] - ranges[n][0]) for n, (lo, hi)
+                             in b.items() if ranges[n][1] > ranges[n][0])
+
+        done = f"the largest proven box is {show(max(proven, key=share))}"
+    else:
+        done = "nothing"
+    return (f"randomize={dict(ranges)!r} cannot be used: that the task can be posed in every "
+            f"scene of it could not be proven {how} (the proof does not close on "
+            f"{show(box)}, where no counterexample was found either); proven: {done}. Narrow "
+            "the ranges to a proven part")
+
+
+def _feasible_part(ok: Callable[[float], bool], low: float, high: float,
+                   bad: float | None = None) -> tuple[float, float] | None:
+    """The longest feasible run of a scan of [low, high] (``bad``, a known infeasible value,
+    among the points), its ends refined by bisection to 1e-6 of the range's width."""
+    grid = np.union1d(np.linspace(low, high, SCAN_POINTS), [] if bad is None else [bad])
+    flags = [v != bad and ok(float(v)) for v in grid]
+    best, start = None, None
+    for i, flag in enumerate([*flags, False]):
+        if flag and start is None:
+            start = i
+        if not flag and start is not None:
+            if best is None or i - start > best[1] - best[0]:
+                best = (start, i - 1)
+            start = None
+    if best is None:
+        return None
+    ends = []
+    for inside, step in ((best[0], -1), (best[1], 1)):
+        a = float(grid[inside])
+        outside = inside + step
+        if not 0 <= outside < grid.size:
+            ends.append(a)
+            continue
+        b = float(grid[outside])
+        for _ in range(60):
+            if abs(b - a) <= 1e-6 * (high - low):
+                break
+            mid = 0.5 * (a + b)
+            a, b = (mid, b) if ok(mid) else (a, mid)
+        ends.append(a)
+    return min(ends), max(ends)
+

@@ -1,0 +1,294 @@
+"""randomize ranges proven feasible over their whole box: the interval primitives enclose the
+float values of the equations, a narrow infeasible pocket between the old scan points is
+found (located independently, from PHYSICS.md's closed forms), feasible ranges construct and
+every sub-environment starts, and what cannot be proven is refused as such."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import roller_gym  # noqa: F401  (registers the environments)
+from roller_gym import Scene, feasibility, validation
+from roller_gym.intervals import Interval
+from roller_gym.physics import equations
+from roller_gym.stabilize import StabilizeTask
+from roller_gym.task import unstable_rest_positions
+from scipy.optimize import brentq
+
+STABILIZE, HOLD, BALANCE = (f"roller_gym/Roller{t}-v1" for t in ("Stabilize", "Hold", "Balance"))
+
+
+# -- the interval primitives enclose the true values -------------------------------------------
+def random_box(rng: np.random.Generator, n: int) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """n random boxes of a scene and a state: (low, high) arrays per quantity, of every sign
+    the equations allow (R inside a cylinder or on a drum; φ over several turns)."""
+    def span(low, high, relative):
+        a = rng.uniform(low, high, n)
+        return a, a * (1.0 + rng.uniform(0.0, relative, n))
+
+    r = span(0.05, 0.2, 0.3)
+    drum = rng.random(n) < 0.3
+    radius = np.where(drum, -rng.uniform(0.3, 3.0, n), r[1] * rng.uniform(1.2, 20.0, n))
+    return {
+        "m": span(0.1, 5.0, 0.5), "r": r, "R": (radius, radius * rng.uniform(1.0, 1.5, n)),
+        "e": span(0.0, 0.05, 1.0), "k": span(0.01, 0.2, 0.5), "g": span(1.0, 20.0, 0.2),
+        "c": span(0.0, 0.1, 1.0), "mu": span(0.1, 2.0, 0.5),
+        "phi": (lambda a: (a, a + rng.uniform(0.0, 3.0, n)))(rng.uniform(-12.0, 12.0, n)),
+        "phi_dot": (lambda a: (a, a + rng.uniform(0.0, 2.0, n)))(rng.uniform(-5.0, 5.0, n)),
+        "tau": (lambda a: (a, a + rng.uniform(0.0, 0.5, n)))(rng.uniform(-1.0, 1.0, n)),
+    }
+
+
+def as_intervals(box):
+    out = {name: Interval(np.minimum(*ends), np.maximum(*ends)) for name, ends in box.items()}
+    out["kappa"] = 1.0 / out.pop("R")
+    return out
+
+
+def points_inside(box, rng, draws):
+    """Float points drawn inside each box (draws per box), kappa = 1/R as the Scene has it."""
+    out = {}
+    for name, (a, b) in box.items():
+        low, high = np.minimum(a, b), np.maximum(a, b)
+        out[name] = low + (high - low) * rng.random((draws, low.size))
+    out["kappa"] = 1.0 / out.pop("R")
+    return out
+
+
+EQUATIONS = {
+    "dpotential": lambda x: equations.dpotential(x["phi"], x["m"], x["r"], x["kappa"], x["e"],
+                                                 x["g"]),
+    "d2potential": lambda x: equations.d2potential(x["phi"], x["m"], x["r"], x["kappa"],
+                                                   x["e"], x["g"]),
+    "accel": lambda x: equations.accel(x["phi"], x["phi_dot"], x["tau"], x["m"], x["r"],
+                                       x["kappa"], x["e"], x["k"], x["g"], x["c"]),
+    "normal": lambda x: contact(x)[0],
+    "friction": lambda x: contact(x)[1],
+    "liftoff margin": lambda x: margins(x)[0],
+    "slip margin": lambda x: margins(x)[1],
+    "m g r": lambda x: validation.integration_magnitudes(x["m"], x["r"], x["e"], x["k"],
+                                                         x["g"])[0],
+    "J_min": lambda x: validation.integration_magnitudes(x["m"], x["r"], x["e"], x["k"],
+                                                         x["g"])[1],
+    "omega_max": lambda x: rates(x)[0],
+    "spin": lambda x: rates(x)[1],
+}
+
+
+def contact(x):
+    a = EQUATIONS["accel"](x)
+    return equations.contact_forces(x["phi"], x["phi_dot"], a, x["m"], x["r"], x["kappa"],
+                                    x["e"], x["g"])
+
+
+def margins(x):
+    normal, friction = contact(x)
+    return equations.margins(normal, friction, x["m"], x["g"], x["mu"])
+
+
+def rates(x):
+    _, j_min = validation.integration_magnitudes(x["m"], x["r"], x["e"], x["k"], x["g"])
+    return validation.integration_rates(x["m"], x["r"], x["kappa"], x["e"], x["g"], j_min,
+                                        x["tau"] * x["tau"] + 0.1)
+
+
+@pytest.mark.parametrize("name", list(EQUATIONS))
+def test_each_equation_on_intervals_encloses_its_float_values(name):
+    rng = np.random.default_rng(sum(map(ord, name)))
+    box = random_box(rng, 400)
+    with np.errstate(all="ignore"):
+        enclosure = EQUATIONS[name](as_intervals(box))
+    values = EQUATIONS[name](points_inside(box, rng, 50))  # (50, 400) floats
+    assert np.isfinite(values).all()
+    low = np.nan_to_num(enclosure.lo, nan=-np.inf)  # NaN: no bound (proves nothing)
+    high = np.nan_to_num(enclosure.hi, nan=np.inf)
+    inside = (low <= values) & (values <= high)
+    assert inside.all(), f"{name}: {np.count_nonzero(~inside)} float values outside"
+    assert (np.isfinite(low) & np.isfinite(high)).mean() > 0.9  # and rarely vacuous
+
+
+def test_the_primitives_enclose_and_find_the_extrema_of_sin_and_cos():
+    rng = np.random.default_rng(3)
+    a = rng.uniform(-50, 50, 2000)
+    b = a + rng.exponential(1.0, 2000)
+    c = rng.uniform(0.1, 3, 2000)
+    d = c + rng.exponential(1.0, 2000)
+    x, y = Interval(a, b), Interval(c, d)
+    t = rng.random((30, 1))
+    xs, ys = a + (b - a) * t, c + (d - c) * t[::-1]
+    for label, result, value in [
+        ("+", x + y, xs + ys), ("-", x - y, xs - ys), ("*", x * y, xs * ys),
+        ("/", x / y, xs / ys), ("abs", abs(x), np.abs(xs)), ("**2", x ** 2, xs ** 2),
+        ("sqrt", np.sqrt(y), np.sqrt(ys)), ("sin", np.sin(x), np.sin(xs)),
+        ("cos", np.cos(x), np.cos(xs)), ("2 - x", 2.0 - x, 2.0 - xs),
+        ("array * x", np.full(2000, -3.0) * x, -3.0 * xs),
+    ]:
+        assert ((result.lo <= value) & (value <= result.hi)).all(), label
+    # an extremum inside the argument is reached: sin over [π/2 − δ, π/2 + δ] reaches 1
+    top = np.sin(Interval(math.pi / 2 - 1e-3, math.pi / 2 + 1e-3))
+    assert top.hi == 1.0 and top.lo == pytest.approx(math.cos(1e-3), abs=1e-15)
+    bottom = np.cos(Interval(3.0, 3.3))
+    assert bottom.lo == -1.0 and bottom.hi == pytest.approx(math.cos(3.3), abs=1e-15)
+    # a division by an interval through 0 proves nothing
+    q = Interval(1.0) / Interval(-1.0, 1.0)
+    assert not (q.lo > -1e300) and not (q.hi < 1e300)
+
+
+def test_box_params_encloses_kappa_of_each_scene():
+    scene = Scene()
+    p = feasibility.box_params(scene, {"R": (0.3, 0.9), "m": (0.5, 2.0)})
+    for radius in np.linspace(0.3, 0.9, 101):
+        assert p.kappa.contains(Scene(R=float(radius)).kappa)
+    assert p.m.lo == 0.5 and p.m.hi == 2.0 and p.e.lo == p.e.hi == scene.e
+
+
+# -- a narrow infeasible pocket between the old scan points ------------------------------------
+def start_margin(radius: np.ndarray, scene: Scene, max_torque: float) -> np.ndarray:
+    """max over the fallback candidates of min over τ in {−max, 0, +max} of
+    min(μN − |F|, N)/(m g), inside a cylinder of radius ``radius``: >= 0 where a fallback
+    start rolls. Written from PHYSICS.md's closed forms at rest (φ' = 0), independently of
+    roller_gym.physics.equations: J_I = m (k² + r² + e² − 2 r e cos θ),
+    J_I φ'' = τ − m g (r sin ψ + e sin φ), N/m = g cos ψ + e φ'' sin θ,
+    F/m = g sin ψ + (r − e cos θ) φ''; the candidates ψ = (π/3)(2u − 1), u = ½ and 41
+    points in [0, 1], ψ = qφ, q = r/(R − r), θ = φ/(1 − r/R)."""
+    m, r, e, k, g, mu = (scene.m, scene.r, scene.e, scene.k, scene.g, scene.mu)
+    radius = np.asarray(radius, float)[:, None]
+    u = np.concatenate([[0.5], np.linspace(0.0, 1.0, 41)])
+    q = r / (radius - r)
+    phi = (math.pi / 3.0) * (2.0 * u - 1.0) / q
+    psi, theta = q * phi, phi / (1.0 - r / radius)
+    inertia = m * (k * k + r * r + e * e - 2.0 * r * e * np.cos(theta))
+    worst = np.full(phi.shape, np.inf)
+    for tau in (-max_torque, 0.0, max_torque):
+        a = (tau - m * g * (r * np.sin(psi) + e * np.sin(phi))) / inertia
+        normal = g * np.cos(psi) + e * a * np.sin(theta)
+        friction = g * np.sin(psi) + (r - e * np.cos(theta)) * a
+        worst = np.minimum(worst, np.minimum(mu * normal - np.abs(friction), normal))
+    return worst.max(axis=1) / g
+
+
+def test_a_narrow_infeasible_pocket_between_scan_points_is_refused():
+    """A roller with its mass near the rim (e = 0.9 r, k = 0.3 r) and μ = 0.46 can start
+    (some fallback state rolls under ±max_torque) for R in [1.2, 1.5] m except on a pocket
+    ~3e-4 m wide, where two candidates' windows of R just fail to overlap; the bottom state
+    (φ = 0) needs μ >= 0.51 and fails throughout. The old check (ends and 33 points) passes
+    a range with the pocket between two points; the proof refuses it, names a feasible part
+    without the pocket, and accepts the parts on either side."""
+    scene, max_torque = Scene(e=0.09, k=0.03, mu=0.46), 0.5
+    fine = np.linspace(1.2, 1.5, 30_001)  # steps of 1e-5 m
+    bad = fine[start_margin(fine, scene, max_torque) < 0]
+    assert bad.size and np.all(np.diff(bad) < 2e-5)  # exactly one pocket
+
+    def margin(radius):
+        return start_margin([radius], scene, max_torque)[0]
+
+    pocket = (brentq(margin, bad[0] - 1e-5, bad[0], xtol=1e-14),
+              brentq(margin, bad[-1], bad[-1] + 1e-5, xtol=1e-14))
+    width = pocket[1] - pocket[0]
+    assert 0 < width < 1e-3
+    spacing = 0.3 / 32  # the range below: 32 gaps between the old 33 points
+    center = 0.5 * (pocket[0] + pocket[1])
+    low = center - 10.3 * spacing
+    high = low + 32 * spacing
+    old_points = np.linspace(low, high, 33)
+    assert not np.any((old_points >= pocket[0] - width) & (old_points <= pocket[1] + width))
+    task = StabilizeTask(max_torque)
+    assert all(task.infeasible(scene.replace(R=float(x))) is None for x in old_points)
+    assert task.infeasible(scene.replace(R=center)) is not None  # the library agrees
+    ranges = {"R": (low, high)}
+    for make in (lambda: gym.make(STABILIZE, scene=scene, randomize=ranges),
+                 lambda: gym.make_vec(STABILIZE, num_envs=4, scene=scene, randomize=ranges)):
+        with pytest.raises(ValueError, match=r"randomize\['R'\].*no start state") as info:
+            make()
+        part = re.search(r"feasible part of the range: \[([^,]+), ([^\]]+)\]", str(info.value))
+        a, b = float(part[1]), float(part[2])
+        assert low <= a < b <= high
+        assert a >= pocket[1] - 1e-9 or b <= pocket[0] + 1e-9  # the pocket is left out
+    for side in ((low, pocket[0] - 1e-4), (pocket[1] + 1e-4, high)):
+        gym.make(STABILIZE, scene=scene, randomize={"R": side})  # proven feasible
+
+
+# -- feasible ranges construct, and every sub-environment starts -------------------------------
+@pytest.mark.parametrize(
+    ("env_id", "kwargs"),
+    [(STABILIZE, {"randomize": {"m": (0.8, 1.2), "e": (0.03, 0.05)}}),
+     (HOLD, {"scene": "floor", "max_torque": 0.8,
+             "randomize": {"m": (0.8, 1.2), "e": (0.03, 0.05)}}),
+     (BALANCE, {"randomize": {"R": (0.7, 1.5), "m": (0.8, 1.2)}}),
+     (BALANCE, {"randomize": {"e": (0.06, 0.1), "mu": (0.6, 1.0)}}),
+     (BALANCE, {"scene": "floor", "randomize": {"e": (0.03, 0.05), "k": (0.05, 0.15)}})],
+)
+def test_feasible_ranges_construct_and_every_sub_environment_starts(env_id, kwargs):
+    gym.make(env_id, **kwargs).reset(seed=0)
+    vec = gym.make_vec(env_id, num_envs=256, **kwargs)
+    obs, info = vec.reset(seed=2)
+    assert np.isfinite(obs).all()
+    assert (info["liftoff_margin"] > 0).all() and (info["slip_margin"] >= 0).all()
+    if env_id == BALANCE:  # the target is each scene's unstable rest position
+        for scene, target in zip(vec.unwrapped.scenes, info["target_phi"], strict=True):
+            assert abs(target) == pytest.approx(abs(unstable_rest_positions(scene)[0]),
+                                                abs=1e-9)
+            if math.isinf(scene.R):  # on the floor: the mass center above the axle
+                assert abs(target) == pytest.approx(math.pi, abs=1e-12)
+    for _ in range(3):
+        obs, _, _, _, info = vec.step(np.zeros((256, 1), np.float32))
+        assert np.isfinite(obs).all() and not info["nonfinite"].any()
+
+
+# -- what cannot be proven is refused, naming what was ------------------------------------------
+def test_a_range_not_proven_within_the_box_limit_is_refused_naming_the_proven_part(monkeypatch):
+    """With one box fewer than the proof needs, the range is refused (never accepted
+    unproven), and the proven part it names is accepted."""
+    ranges = {"R": (0.7, 1.5)}
+    examined = []
+    prove = feasibility._box_proven
+    monkeypatch.setattr(feasibility, "_box_proven", lambda *a: examined.append(a) or prove(*a))
+    feasibility._check_ranges_cached.cache_clear()
+    try:
+        gym.make(BALANCE, randomize=ranges)
+        assert len(examined) > 2
+        limit = len(examined) - 1
+        monkeypatch.setattr(feasibility, "MAX_BOXES", limit)
+        feasibility._check_ranges_cached.cache_clear()
+        with pytest.raises(ValueError, match=rf"could not be proven within {limit} boxes") as info:
+            gym.make(BALANCE, randomize=ranges)
+    finally:
+        feasibility._check_ranges_cached.cache_clear()
+    part = re.search(r"proven: R in \[([^,]+), ([^\]]+)\]", str(info.value))
+    assert part, str(info.value)
+    monkeypatch.undo()
+    low, high = float(part[1]), float(part[2])
+    assert 0.7 <= low < high <= 1.5
+    gym.make(BALANCE, randomize={"R": (low, high)})  # the named part is indeed proven
+
+
+def test_a_task_condition_without_a_proof_is_refused():
+    class Picky(StabilizeTask):
+        def check_scene(self, scene):
+            if scene.m > 2.0:
+                raise ValueError("too heavy")
+
+    with pytest.raises(ValueError, match=r"no proof.*scene_proven"):
+        feasibility.check_ranges(Picky(), Scene(), 0.05, {"m": (0.5, 1.5)})
+
+
+def test_balance_at_the_top_of_a_drum_and_the_isolated_value_where_it_cannot_be_posed():
+    """On top of a drum (R < 0) a mass center near the axle (e < e* = r²/(|R| + r), where
+    d²V/dφ²(0) = m g (r²κ/(1 − rκ) + e) changes sign) leaves φ = 0 unstable and the rule
+    takes φ_b = 0; above e* an unstable rest position φ_b > 0 appears. At e = e* itself
+    there is none (d²V/dφ²(0) = 0), an isolated value no scan finds: a range across it is
+    refused as not proven, and the proven part ends below e*."""
+    scene = Scene(R=-0.5, e=0.01)
+    e_star = scene.r ** 2 / (abs(scene.R) + scene.r)
+    vec = gym.make_vec(BALANCE, num_envs=16, scene=scene, randomize={"e": (0.0, 0.5 * e_star)})
+    _, info = vec.reset(seed=0)
+    assert np.all(np.abs(info["target_phi"]) < 1e-12)  # φ_b = 0, up to the root finder
+    with pytest.raises(ValueError, match=r"could not be proven however finely") as error:
+        gym.make(BALANCE, scene=scene, randomize={"e": (0.0, 1.8 * e_star)})
+    part = re.search(r"proven: e in \[([^,]+), ([^\]]+)\]", str(error.value))
+    assert float(part[1]) == 0.0 and 0.99 * e_star < float(part[2]) <= e_star
+    gym.make(BALANCE, scene=scene, randomize={"e": (1.2 * e_star, 1.8 * e_star)})
