@@ -56,35 +56,41 @@ def vector_steps_per_s(env: Any, actions: np.ndarray, steps: int, repeats: int) 
     return env.num_envs * steps / best_time(run, repeats)
 
 
-def kernel_share_in_steps(env: Any, actions: np.ndarray, steps: int, repeats: int) -> float:
-    """The share of ``env.step``'s wall time spent in the physics kernel, timed inside the
-    steps themselves (the stepper's ``advance`` wrapped with a clock), so that the kernel
-    works on the states and step sizes the environment really meets. From the fastest of
-    ``repeats`` runs of ``steps`` steps."""
-    stepper = env.unwrapped._stepper
-    advance = stepper.advance
-    spent = [0.0]
+def ours_interleaved(envs: dict[str, Any], actions: np.ndarray, steps: int,
+                     repeats: int) -> dict[str, tuple[float, float]]:
+    """Steps per second of each of our vector ``envs`` (same seed, same actions), their runs
+    interleaved so that a shared machine's drift hits them alike, and for each the share of
+    its fastest run spent in the physics kernel: timed inside the environment's own steps
+    (its stepper's ``advance`` wrapped with a clock), so that the kernel works on the states
+    and step sizes the environment really meets. Returns {name: (steps/s, kernel share)}."""
+    spent = {name: [0.0] for name in envs}
+    for name, env in envs.items():
+        stepper = env.unwrapped._stepper
 
-    def timed(*args: Any) -> Any:
-        start = time.perf_counter()
-        out = advance(*args)
-        spent[0] += time.perf_counter() - start
-        return out
-
-    stepper.advance = timed  # an instance attribute: shadows the method for this run only
-    try:
-        fastest, share = float("inf"), 0.0
-        for _ in range(repeats):
-            spent[0] = 0.0
+        def timed(*args: Any, advance=stepper.advance, clock=spent[name]) -> Any:
             start = time.perf_counter()
-            for _ in range(steps):
-                env.step(actions)
-            wall = time.perf_counter() - start
-            if wall < fastest:
-                fastest, share = wall, spent[0] / wall
-        return share
+            out = advance(*args)
+            clock[0] += time.perf_counter() - start
+            return out
+
+        stepper.advance = timed  # an instance attribute: shadows the method for these runs
+        env.step(actions)  # warm up
+    best = {name: (float("inf"), 0.0) for name in envs}
+    try:
+        for _ in range(repeats):
+            for name, env in envs.items():
+                spent[name][0] = 0.0
+                start = time.perf_counter()
+                for _ in range(steps):
+                    env.step(actions)
+                wall = time.perf_counter() - start
+                if wall < best[name][0]:
+                    best[name] = (wall, spent[name][0] / wall)
     finally:
-        del stepper.advance
+        for env in envs.values():
+            del env.unwrapped._stepper.advance
+    return {name: (envs[name].num_envs * steps / wall, share)
+            for name, (wall, share) in best.items()}
 
 
 def measure_vector(sizes: Sequence[int], steps: int, repeats: int) -> dict[str, Any]:
@@ -94,13 +100,16 @@ def measure_vector(sizes: Sequence[int], steps: int, repeats: int) -> dict[str, 
     rng = np.random.default_rng(0)
     for n in sizes:
         ours = gym.make_vec(TASK, num_envs=n)
-        ours.reset(seed=0)
+        bare = gym.make_vec(TASK, num_envs=n, info_keys=[])  # the same steps, without info
+        for env in (ours, bare):
+            env.reset(seed=0)
         a = rng.uniform(-1, 1, (n, 1)).astype(np.float32)
+        runs = ours_interleaved({"ours": ours, "ours_no_info": bare}, a, steps, repeats)
+        (ours_rate, in_steps), (bare_rate, _) = runs["ours"], runs["ours_no_info"]
+        bare.close()
         cart = gym.make_vec("CartPole-v1", num_envs=n, vectorization_mode="vector_entry_point")
         cart.reset(seed=0)
-        a_cart = rng.integers(0, 2, n)
-        ours_rate = vector_steps_per_s(ours, a, steps, repeats)
-        cart_rate = vector_steps_per_s(cart, a_cart, steps, repeats)
+        cart_rate = vector_steps_per_s(cart, rng.integers(0, 2, n), steps, repeats)
         base = ours.unwrapped
         tau = a[:, 0].astype(np.float64) * base.task.max_torque
         stepper = base._stepper
@@ -110,9 +119,9 @@ def measure_vector(sizes: Sequence[int], steps: int, repeats: int) -> dict[str, 
                 stepper.advance(base.phi, base.phi_dot, tau)
 
         kernel_rate = n * steps / best_time(kernel, repeats)
-        in_steps = kernel_share_in_steps(ours, a, steps, repeats)
-        out[str(n)] = {"ours": ours_rate, "CartPoleVectorEnv": cart_rate,
-                       "kernel": kernel_rate, "outside_kernel_share": 1.0 - in_steps,
+        out[str(n)] = {"ours": ours_rate, "ours_no_info": bare_rate,
+                       "CartPoleVectorEnv": cart_rate, "kernel": kernel_rate,
+                       "outside_kernel_share": 1.0 - in_steps,
                        **measure_arithmetic(stepper, base, tau, repeats)}
         for name, make in PEERS.items():
             try:
@@ -383,6 +392,12 @@ def render(results: dict[str, Any]) -> str:
     lines += ["", "The kernel alone: `BatchStepper.advance` repeated from one state. The share "
               "outside the kernel is timed inside the environment's own steps (its stepper's "
               "calls clocked): observation, reward, info, autoreset and the copies."]
+    if all("ours_no_info" in v for v in results["vector"].values()):
+        lines += ["", "The info's cost: the same steps with `info_keys=[]` run " + " and ".join(
+            f"{v['ours_no_info'] / v['ours'] - 1:+.0%} faster at {int(n):,}"
+            for n, v in results["vector"].items())
+            + " (the info's 21 arrays and their masks are built from what the step computes "
+            "anyway)."]
     peers = [p for p in PEERS if any(p in v for v in results["vector"].values())]
     if peers:
         lines += ["", "Optional peers, in the same run:", "",
