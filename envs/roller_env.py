@@ -45,7 +45,10 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
             adaptive, slow: a reference).
         substeps: a fixed number of substeps per control step instead of the automatic rule.
         randomize: ``{field: (low, high)}``: Scene fields drawn uniformly at each reset
-            (domain randomization), e.g. ``{"m": (0.8, 1.2), "e": (0.03, 0.05)}``.
+            (domain randomization), e.g. ``{"m": (0.8, 1.2), "e": (0.03, 0.05)}``. At
+            construction the task is proven posable in every scene of the box of ranges
+            (:mod:`roller_gym.feasibility`), so no later reset can fail on a drawn scene;
+            otherwise a ``ValueError`` names the field and a feasible part of its range.
         render_mode: ``"human"``, ``"rgb_array"`` or None.
         info_keys: the keys of the step's and reset's info, among
             :data:`roller_gym.episode.INFO_KEYS` (default None: all of them). Building the
