@@ -37,6 +37,13 @@ from roller_gym.task import Task, get_task, psi_rate, wrap_rate
 __all__ = ["RollerVectorEnv"]
 
 
+#: The info keys whose values are the environment's own state arrays, which later episode
+#: starts overwrite in place: a step's info gets copies of them, so that nothing a step
+#: returns changes afterwards (its other info arrays are made by the step itself).
+_STATE_KEYS = frozenset({"phi", "phi_dot", "torque", "target_phi", "target_phi_dot",
+                         "target_torque"})
+
+
 def _autoreset_mode(value: AutoresetMode | str) -> AutoresetMode:
     """An AutoresetMode from itself, its name (``"SAME_STEP"``, any case) or its value."""
     for mode in AutoresetMode:
@@ -244,7 +251,8 @@ class RollerVectorEnv(VectorEnv):
         reward = np.asarray(out.reward, dtype=np.float64)
         terminated = np.asarray(out.terminated, dtype=bool)
         truncated = self.steps >= self.max_episode_steps
-        info = {key: out.info[key] for key in self.config.info_keys}
+        info = {key: np.array(out.info[key], copy=True) if key in _STATE_KEYS else out.info[key]
+                for key in self.config.info_keys}
         everyone = np.ones(self.num_envs, dtype=bool)
         info.update({f"_{k}": everyone for k in list(info)})
 
@@ -278,8 +286,7 @@ class RollerVectorEnv(VectorEnv):
         """Autoreset: new episodes in ``idx``, their reset info written into ``info``."""
         self._episodes[idx] += np.uint64(1)
         rows = self._start(idx, None)
-        for key in self.config.info_keys:
-            info[key] = np.array(info[key], copy=True)
+        for key in self.config.info_keys:  # the step's own arrays (see _STATE_KEYS)
             info[key][idx] = rows[key]
 
     # -- observation and info ------------------------------------------------------------

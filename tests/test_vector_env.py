@@ -244,3 +244,46 @@ def test_bad_info_keys_are_refused_naming_the_argument(value, message):
                  lambda: gym.make_vec(IDS[0], num_envs=2, info_keys=value)):
         with pytest.raises(ValueError, match=message):
             make()
+
+
+@pytest.mark.parametrize("mode", [AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP,
+                                  AutoresetMode.DISABLED])
+def test_what_a_step_returns_never_changes_afterwards(mode):
+    """Episode starts (autoreset, or reset with a mask) write the new episodes' state into the
+    environment; the observation, reward, flags and info a caller already holds stay as they
+    were (Hold draws a new target per episode, so a shared target array would show)."""
+    env = gym.make_vec("roller_gym/RollerHold-v1", num_envs=6, max_episode_steps=3,
+                       autoreset_mode=mode)
+    rng = np.random.default_rng(2)
+    held = [env.reset(seed=1)]
+    taken = [_snapshot(held[0])]  # each output as it was when returned
+    for _ in range(8):
+        out = env.step(rng.uniform(-1, 1, (6, 1)).astype(np.float32))
+        held.append(out)
+        taken.append(_snapshot(out))
+        if mode == AutoresetMode.DISABLED and (out[2] | out[3]).any():
+            held.append(env.reset(options={"reset_mask": out[2] | out[3]}))
+            taken.append(_snapshot(held[-1]))
+        for then, now in zip(taken, held, strict=True):
+            assert _same(then, _snapshot(now))
+    assert sum(bool((h[2] | h[3]).any()) for h in held[1:] if len(h) == 5) >= 2  # episodes ended
+
+
+def _snapshot(value):
+    if isinstance(value, dict):
+        return {k: _snapshot(v) for k, v in value.items()}
+    if isinstance(value, tuple):
+        return tuple(_snapshot(v) for v in value)
+    return np.array(value, copy=True) if isinstance(value, np.ndarray) else value
+
+
+def _same(a, b) -> bool:
+    if isinstance(a, dict):
+        return a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
+    if isinstance(a, tuple):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b, strict=True))
+    if isinstance(a, np.ndarray) and a.dtype != object:
+        return np.array_equal(a, b, equal_nan=True)
+    if isinstance(a, np.ndarray):
+        return all(_same(x, y) for x, y in zip(a, b, strict=True))
+    return a is b or a == b

@@ -45,27 +45,18 @@ def best_time(run: Callable[[], None], repeats: int) -> float:
     return best
 
 
-def vector_steps_per_s(env: Any, actions: np.ndarray, steps: int, repeats: int) -> float:
-    """Environment steps per second of ``env.step`` (all sub-environments counted)."""
-    env.step(actions)  # warm up
-
-    def run() -> None:
-        for _ in range(steps):
-            env.step(actions)
-
-    return env.num_envs * steps / best_time(run, repeats)
-
-
-def ours_interleaved(envs: dict[str, Any], actions: np.ndarray, steps: int,
-                     repeats: int) -> dict[str, tuple[float, float]]:
-    """Steps per second of each of our vector ``envs`` (same seed, same actions), their runs
-    interleaved so that a shared machine's drift hits them alike, and for each the share of
-    its fastest run spent in the physics kernel: timed inside the environment's own steps
-    (its stepper's ``advance`` wrapped with a clock), so that the kernel works on the states
-    and step sizes the environment really meets. Returns {name: (steps/s, kernel share)}."""
-    spent = {name: [0.0] for name in envs}
-    for name, env in envs.items():
-        stepper = env.unwrapped._stepper
+def interleaved(runs: dict[str, tuple[Any, np.ndarray, int]],
+                repeats: int) -> dict[str, tuple[float, float | None]]:
+    """Steps per second of vector envs, ``{name: (env, actions, steps)}``: every repeat runs
+    each env's ``steps`` steps in turn, so that a shared machine's drift hits them alike, and
+    each env keeps its fastest run. For our envs, also the share of that run spent in the
+    physics kernel, timed inside the environment's own steps (its stepper's ``advance``
+    wrapped with a clock), so that the kernel works on the states and step sizes the
+    environment really meets. Returns ``{name: (steps/s, kernel share or None)}``."""
+    spent = {name: [0.0] for name in runs}
+    ours = {name: env.unwrapped._stepper for name, (env, _, _) in runs.items()
+            if hasattr(env.unwrapped, "_stepper")}
+    for name, stepper in ours.items():
 
         def timed(*args: Any, advance=stepper.advance, clock=spent[name]) -> Any:
             start = time.perf_counter()
@@ -74,11 +65,12 @@ def ours_interleaved(envs: dict[str, Any], actions: np.ndarray, steps: int,
             return out
 
         stepper.advance = timed  # an instance attribute: shadows the method for these runs
-        env.step(actions)  # warm up
-    best = {name: (float("inf"), 0.0) for name in envs}
+    best = {name: (float("inf"), 0.0) for name in runs}
     try:
+        for env, actions, _ in runs.values():
+            env.step(actions)  # warm up
         for _ in range(repeats):
-            for name, env in envs.items():
+            for name, (env, actions, steps) in runs.items():
                 spent[name][0] = 0.0
                 start = time.perf_counter()
                 for _ in range(steps):
@@ -87,13 +79,20 @@ def ours_interleaved(envs: dict[str, Any], actions: np.ndarray, steps: int,
                 if wall < best[name][0]:
                     best[name] = (wall, spent[name][0] / wall)
     finally:
-        for env in envs.values():
-            del env.unwrapped._stepper.advance
-    return {name: (envs[name].num_envs * steps / wall, share)
+        for stepper in ours.values():
+            del stepper.advance
+    return {name: (runs[name][0].num_envs * runs[name][2] / wall,
+                   share if name in ours else None)
             for name, (wall, share) in best.items()}
 
 
-def measure_vector(sizes: Sequence[int], steps: int, repeats: int) -> dict[str, Any]:
+def measure_vector(sizes: Sequence[int], steps: int, repeats: int,
+                   whole_episodes: bool = True) -> dict[str, Any]:
+    """Ours against CartPoleVectorEnv and the optional peers at each size, interleaved.
+    Ours runs whole episodes (``whole_episodes``: each timed run is one episode of every
+    sub-environment, its autoreset included), since a step's cost depends on where the
+    rollers are in an episode; CartPole runs as many steps; the optional peers, whose
+    steps cost the same anywhere, run ``steps`` steps."""
     import gymnasium as gym
 
     out: dict[str, Any] = {}
@@ -101,15 +100,22 @@ def measure_vector(sizes: Sequence[int], steps: int, repeats: int) -> dict[str, 
     for n in sizes:
         ours = gym.make_vec(TASK, num_envs=n)
         bare = gym.make_vec(TASK, num_envs=n, info_keys=[])  # the same steps, without info
-        for env in (ours, bare):
+        cart = gym.make_vec("CartPole-v1", num_envs=n, vectorization_mode="vector_entry_point")
+        for env in (ours, bare, cart):
             env.reset(seed=0)
         a = rng.uniform(-1, 1, (n, 1)).astype(np.float32)
-        runs = ours_interleaved({"ours": ours, "ours_no_info": bare}, a, steps, repeats)
-        (ours_rate, in_steps), (bare_rate, _) = runs["ours"], runs["ours_no_info"]
-        bare.close()
-        cart = gym.make_vec("CartPole-v1", num_envs=n, vectorization_mode="vector_entry_point")
-        cart.reset(seed=0)
-        cart_rate = vector_steps_per_s(cart, rng.integers(0, 2, n), steps, repeats)
+        episode = ours.unwrapped.max_episode_steps if whole_episodes else steps
+        runs = {"ours": (ours, a, episode), "ours_no_info": (bare, a, episode),
+                "CartPoleVectorEnv": (cart, rng.integers(0, 2, n), episode)}
+        for name, make in PEERS.items():
+            try:
+                runs[name] = (make(n), rng.uniform(-2, 2, (n, 1)).astype(np.float32), steps)
+            except ImportError:
+                continue  # reported by peers_missing
+        rates = interleaved(runs, repeats)
+        for env, _, _ in runs.values():
+            if env is not ours:
+                env.close()
         base = ours.unwrapped
         tau = a[:, 0].astype(np.float64) * base.task.max_torque
         stepper = base._stepper
@@ -119,18 +125,10 @@ def measure_vector(sizes: Sequence[int], steps: int, repeats: int) -> dict[str, 
                 stepper.advance(base.phi, base.phi_dot, tau)
 
         kernel_rate = n * steps / best_time(kernel, repeats)
-        out[str(n)] = {"ours": ours_rate, "ours_no_info": bare_rate,
-                       "CartPoleVectorEnv": cart_rate, "kernel": kernel_rate,
-                       "outside_kernel_share": 1.0 - in_steps,
-                       **measure_arithmetic(stepper, base, tau, repeats)}
-        for name, make in PEERS.items():
-            try:
-                peer = make(n)
-            except ImportError:
-                continue  # reported by peers_missing
-            actions = rng.uniform(-2, 2, (n, 1)).astype(np.float32)
-            out[str(n)][name] = vector_steps_per_s(peer, actions, steps, repeats)
-            peer.close()
+        out[str(n)] = {name: rate for name, (rate, _) in rates.items()}
+        out[str(n)].update({"kernel": kernel_rate, "outside_kernel_share": 1.0 - rates["ours"][1],
+                            **measure_arithmetic(stepper, base, tau, repeats)})
+        ours.close()
     return out
 
 
@@ -306,7 +304,7 @@ def measure(quick: bool) -> dict[str, Any]:
         "command": " ".join([os.path.basename(sys.executable), "-m", __spec__.name
                              if __spec__ else __name__, *sys.argv[1:]]),
         "quick": quick,
-        "vector": measure_vector(sizes, steps, repeats),
+        "vector": measure_vector(sizes, steps, repeats, whole_episodes=not quick),
         "start_seconds": {str(start_n): measure_start(start_n, repeats)},
         "single": measure_single(2000 if quick else 20000, repeats),
         "ppo": measure_ppo(16, 2048 if quick else 16384),
@@ -389,9 +387,11 @@ def render(results: dict[str, Any]) -> str:
         lines.append(f"| {int(n):,} | {v['ours']:,.0f} | {v['CartPoleVectorEnv']:,.0f} | "
                      f"{v['ours'] / v['CartPoleVectorEnv']:.3f} | {v['kernel']:,.0f} | "
                      f"{v['outside_kernel_share']:.0%} |")
-    lines += ["", "The kernel alone: `BatchStepper.advance` repeated from one state. The share "
-              "outside the kernel is timed inside the environment's own steps (its stepper's "
-              "calls clocked): observation, reward, info, autoreset and the copies."]
+    lines += ["", "Ours runs whole episodes (every sub-environment's 200 steps and its "
+              "autoreset per timed run), as a step's cost depends on where the rollers are in "
+              "an episode. The kernel alone: `BatchStepper.advance` repeated from one state. "
+              "The share outside the kernel is timed inside the environment's own steps (its "
+              "stepper's calls clocked): observation, reward, info, autoreset and the copies."]
     if all("ours_no_info" in v for v in results["vector"].values()):
         lines += ["", "The info's cost: the same steps with `info_keys=[]` run " + " and ".join(
             f"{v['ours_no_info'] / v['ours'] - 1:+.0%} faster at {int(n):,}"
