@@ -88,7 +88,7 @@ def interleaved(runs: dict[str, tuple[Any, np.ndarray, int]],
 
 def measure_vector(sizes: Sequence[int], steps: int, repeats: int,
                    whole_episodes: bool = True) -> dict[str, Any]:
-    """Ours against CartPoleVectorEnv and the optional peers at each size, interleaved.
+    """Ours against CartPoleVectorEnv (interleaved) and the optional peers at each size.
     Ours runs whole episodes (``whole_episodes``: each timed run is one episode of every
     sub-environment, its autoreset included), since a step's cost depends on where the
     rollers are in an episode; CartPole runs as many steps; the optional peers, whose
@@ -107,15 +107,19 @@ def measure_vector(sizes: Sequence[int], steps: int, repeats: int,
         episode = ours.unwrapped.max_episode_steps if whole_episodes else steps
         runs = {"ours": (ours, a, episode), "ours_no_info": (bare, a, episode),
                 "CartPoleVectorEnv": (cart, rng.integers(0, 2, n), episode)}
+        rates = interleaved(runs, repeats)
+        bare.close()
+        cart.close()
+        # The optional peers run their own threads, which keep the cores busy for a while
+        # after a step: each is timed on its own, after ours.
         for name, make in PEERS.items():
             try:
-                runs[name] = (make(n), rng.uniform(-2, 2, (n, 1)).astype(np.float32), steps)
+                peer = make(n)
             except ImportError:
                 continue  # reported by peers_missing
-        rates = interleaved(runs, repeats)
-        for env, _, _ in runs.values():
-            if env is not ours:
-                env.close()
+            actions = rng.uniform(-2, 2, (n, 1)).astype(np.float32)
+            rates.update(interleaved({name: (peer, actions, steps)}, repeats))
+            peer.close()
         base = ours.unwrapped
         tau = a[:, 0].astype(np.float64) * base.task.max_torque
         stepper = base._stepper
