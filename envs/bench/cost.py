@@ -26,10 +26,12 @@ percentile and largest, with the share of steps whose automatic error is within 
 
 **Two variants.** ``stateless``: the sample's independent steps, each started afresh as
 ``integrators.step`` does; the verdict uses it, since the sample is of independent control
-steps. ``carried``: along short trajectories from the sample's first states (random torques
-of the same range each step), through a :class:`~roller_gym.physics.integrators.BatchStepper`
-that carries the controller's proposed size from one step to the next, as the environments
-step; the first step of each trajectory (predicted, as stateless) is left out.
+steps. ``carried``: along short reference trajectories from the sample's first states
+(random torques of the same range each step, :func:`reference_trajectories`), each step
+taken from its reference state by one :class:`~roller_gym.physics.integrators.BatchStepper`
+that carries each roller's proposed substep size from one step to the next, as the
+environments step (:func:`carried_steps`); the first step of each trajectory (predicted, as
+stateless) is left out. What an environment gets after its first step.
 """
 
 from __future__ import annotations
@@ -44,14 +46,17 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from roller_gym.config import DEFAULT_DT
 from roller_gym.physics import Scene
 from roller_gym.physics import integrators as integ
 
-__all__ = ["DT", "MAX_FIXED", "REFERENCE_TOL", "CostConfig", "adversarial_sample", "measure",
-           "references", "smallest_fixed_counts", "subset"]
+__all__ = ["DT", "MAX_FIXED", "REFERENCE_TOL", "UNCERTAINTY_SHARE", "CostConfig",
+           "Trajectories", "adversarial_sample", "carried_steps", "compare", "fixed_errors",
+           "measure", "reference_trajectories", "references", "smallest_fixed_counts",
+           "subset"]
 
 #: The control step [s] (the environments' default).
-DT = 0.05
+DT = float(DEFAULT_DT)
 #: The reference: DOP853 at rtol = atol = REFERENCE_TOL (and again at 10 × it).
 REFERENCE_TOL = 1e-13
 #: A step is skipped where the two reference runs differ by more than this share of tol.
@@ -61,7 +66,8 @@ MAX_FIXED = integ.MAX_SUBSTEPS
 #: Rollers per reference run (DOP853 integrates them as one system, with one error norm:
 #: similar stiffness together, few enough that none is under-resolved).
 REFERENCE_GROUP = 25
-G = 9.81  # [m/s²]
+#: Gravity [m/s²] (the scenes' default).
+G = float(Scene.g)
 
 
 @dataclass(frozen=True)

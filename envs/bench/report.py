@@ -660,6 +660,11 @@ def section_cost(results: Results) -> list[str]:
                    "ratio median", "ratio 99th pct", "ratio max",
                    "mean substeps automatic / smallest fixed", "error ≤ tol",
                    "worst error / tol", "tol_met False"], rows)
+    L += ["", "The means compare totals: a fixed count must resolve a step's fastest part along "
+          "all of it, so where a step's pace varies the error control can take fewer substeps "
+          "than any fixed count that meets tol (a ratio below 1). Counts are integers: a step "
+          "that one fixed substep resolves and the controller takes in two has a ratio of "
+          "exactly 2."]
     L += ["", f"Measured in {results['cost']['elapsed_s']:.0f} s"
           + (f" by `{results['cost']['command']}`" if "command" in results["cost"] else "")
           + ". ★: the variant the verdicts judge.", ""]
@@ -793,6 +798,13 @@ def section_targets(results: Results) -> list[str]:
                     "integrators."
                 )
     for v, row in zip(verdict_cost(results), cost_rows(results, "stateless"), strict=False):
+        ratio, bounds = row["ratio"], (TARGETS["substeps_median"], TARGETS["substeps_p99"])
+        if v.met and (ratio["median"] >= 0.95 * bounds[0] or ratio["p99"] >= 0.95 * bounds[1]):
+            notes.append(
+                f"- **Cost of the error control, {row['method']} at tol {row['tol']:.0e}**: met "
+                f"at the bound (median {ratio['median']:.2f} ×, 99th percentile "
+                f"{ratio['p99']:.2f} ×; largest {ratio['max']:.2f} ×): no margin, so a small "
+                "change of the controller, of the kernels or of the sample can tip it.")
         if v.met is not False:
             continue
         notes.append(
