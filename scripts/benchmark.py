@@ -1,6 +1,6 @@
 """``roller-gym benchmark``: the work-precision study (:mod:`roller_gym.bench.workprecision`).
 
-    roller-gym benchmark             # measure (~13 min on 2 cores), then render docs/BENCHMARKS.md
+    roller-gym benchmark             # measure (~7 min on 2 cores), then render docs/BENCHMARKS.md
     roller-gym benchmark --quick     # a smoke run of every part
     roller-gym benchmark --render    # the page and plots again from the results file, no measuring
     roller-gym benchmark --out DIR   # DIR/benchmarks/workprecision.json, DIR/BENCHMARKS.md, plots

@@ -5,6 +5,9 @@
   importable, the page has every section, table and plot.
 * ``roller-gym benchmark --quick`` (``--out`` a temporary folder) writes the results file, the
   page and the plots; its RK4 errors fall as the tolerance tightens and as the substeps grow.
+* The cost measurement (``roller_gym.bench.cost``): its search for the smallest fixed substep
+  count against a threshold it must find and a linear scan, its references against DOP853 on
+  each roller alone.
 * The MuJoCo model of the scene (``roller_gym.bench.mujoco_roller``) and our physics agree: at
   the tuned settings MuJoCo's trajectory matches our DOP853 reference within a stated
   tolerance, and converges to it as the timestep shrinks. Two independent models of the same
@@ -25,16 +28,19 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from roller_gym.bench import report, verdicts
+from roller_gym.bench import cost, report, verdicts
 from roller_gym.physics import Scene, preset
+from roller_gym.physics import equations as eq
 from roller_gym.physics import integrators as integ
 from roller_gym.scripts import benchmark
+from scipy.integrate import solve_ivp
 
 ROOT = Path(__file__).resolve().parents[1]
 
 SECTIONS = ("## Summary", "## Machine and command", "## How it is measured",
             "## 1. Work-precision", "### Energy at zero torque", "## 2. MuJoCo on the same scene",
-            "## 3. Throughput", "## 4. Hard cases", "## The targets: what is met")
+            "## 3. Throughput", "## 4. Hard cases", "## 5. Cost of the error control",
+            "## The targets: what is met")
 PLOTS = ("work_precision.png", "work_precision_local.png", "energy.png", "throughput.png")
 INF, NAN = math.inf, math.nan
 
@@ -91,9 +97,22 @@ def _scene(name: str, default_err: float, default_seconds: float, own_error: flo
             "default": 9, "runs": runs, "energy": energy}
 
 
+def _cost_row(method: str, tol: float, variant: str, median: float, p99: float) -> dict:
+    stats = {"median": median, "p99": p99, "max": p99 + 1, "mean": median}
+    return {"variant": variant, "method": method, "tol": tol, "steps": 300, "measured": 290,
+            "skipped": {"reference uncertain": 8, "automatic step not finite": 0,
+                        "no fixed count up to 200,000 meets tol": 2},
+            "ratio": stats, "auto_substeps": {"median": 40.0, "p99": 900.0, "max": 1e3,
+                                              "mean": 120.0},
+            "fixed_substeps": {"median": 20.0, "p99": 400.0, "max": 600.0, "mean": 60.0},
+            "within_tol": 0.99, "within_tol_where_met": 1.0, "worst_error_over_tol": 3.0,
+            "tol_not_met": 4}
+
+
 def synthetic_results() -> dict:
     """Results that meet the single-environment and MuJoCo targets, meet the vector target at
-    4,096 and miss it at 65,536; a second scene is chaotic and blows up at zero torque."""
+    4,096 and miss it at 65,536; a second scene is chaotic and blows up at zero torque; rk8's
+    substep counts meet their target, rk4's miss it in the median."""
     return {
         "study": "work-precision",
         "machine": {"cpu": "a CPU", "cores": 2, "os": "an OS", "python": "3.11",
@@ -132,6 +151,18 @@ def synthetic_results() -> dict:
             "ppo": {"ours": 500.0, "Pendulum-v1": 600.0},
             "ppo_settings": {"n_steps": 256, "batch_size": 64, "n_epochs": 4,
                              "torch_threads": 1},
+        },
+        "cost": {
+            "settings": {"dt": 0.05, "steps": 300, "trajectories": 40, "trajectory_steps": 6,
+                         "seed": 1, "trajectories_dropped": 0, "reference_tol": 1e-13,
+                         "uncertainty_share": 0.1, "max_fixed": 200_000,
+                         "verdict_variant": "stateless"},
+            "rows": [_cost_row("rk8", 1e-8, "stateless", 1.5, 3.5),
+                     _cost_row("rk8", 1e-8, "carried", 1.4, 3.0),
+                     _cost_row("rk4", 1e-6, "stateless", 6.0, 3.9),
+                     _cost_row("rk4", 1e-6, "carried", 5.0, 20.0)],
+            "command": "roller-gym benchmark", "date": "2026-01-01T00:00:00+00:00",
+            "elapsed_s": 90.0,
         },
     }
 
@@ -189,9 +220,29 @@ def test_verdict_mujoco_meets_misses_and_cannot_tell(results: dict) -> None:
     assert v.met is None and v.sentence == "**not judged**: not reached: its error stops falling"
 
 
+def test_verdict_cost_judges_median_and_99th_percentile_of_the_stateless_steps(
+        results: dict) -> None:
+    rk8, rk4 = verdicts.verdict_cost(results)  # the stateless rows only, in order
+    assert rk8.target.startswith("rk8 tol 1e-08: automatic substeps ≤ 2 × ")
+    assert rk8.met is True and rk8.measured.startswith("median 1.50 ×, 99th percentile 3.50 ×")
+    assert "over 290 hard steps (10 skipped)" in rk8.measured and "99.0 %" in rk8.measured
+    assert rk4.met is False and rk4.miss == "median 6.00 × (3.00 × the target)"
+    rows = results["cost"]["rows"]
+    rows[0]["ratio"]["p99"] = 4.5  # past 4 × at the 99th percentile only
+    rows[0]["ratio"]["median"] = 2.0  # exactly at the bound: met
+    (rk8, _) = verdicts.verdict_cost(results)
+    assert rk8.met is False and rk8.miss == "99th percentile 4.50 × (1.12 × the target)"
+    rows[1]["ratio"] = {"median": 1.0, "p99": 1.0, "max": 1.0, "mean": 1.0}  # carried: unjudged
+    assert verdicts.verdict_cost(results)[0].met is False
+    rows[0]["measured"] = 0
+    assert verdicts.verdict_cost(results)[0].met is None
+    del results["cost"]  # a results file from before the measurement: nothing to judge
+    assert verdicts.verdict_cost(results) == []
+
+
 def test_every_verdict_is_in_the_list() -> None:
     assert set(verdicts.VERDICTS) == {verdicts.verdict_single, verdicts.verdict_vector,
-                                      verdicts.verdict_mujoco}
+                                      verdicts.verdict_mujoco, verdicts.verdict_cost}
 
 
 def test_cost_at_error_interpolates_and_extrapolates() -> None:
@@ -231,8 +282,10 @@ def test_render_from_the_results_file_alone(results: dict, tmp_path: Path,
     def no_measuring(*args, **kwargs):
         raise AssertionError("rendering measured")
 
-    for name in ("measure", "measure_scene", "measure_energy", "measure_throughput"):
+    for name in ("measure", "measure_scene", "measure_energy", "measure_throughput",
+                 "measure_cost"):
         monkeypatch.setattr(workprecision, name, no_measuring)
+    monkeypatch.setattr(cost, "measure", no_measuring)
     report.save_results(results, report.results_path(tmp_path))
     benchmark.main(["--render", "--out", str(tmp_path)])
     page = (tmp_path / "BENCHMARKS.md").read_text()
@@ -243,8 +296,17 @@ def test_render_from_the_results_file_alone(results: dict, tmp_path: Path,
         assert f"(benchmarks/{png})" in page
     assert "{" not in page and "None" not in page and not re.search(r"\bnan\b", page)
     summary = _table_rows(page, "## Summary")
-    assert [row[2] for row in summary] == ["**met**", "**met**", summary[2][2], "**met**"]
+    assert [row[2] for row in summary] == ["**met**", "**met**", summary[2][2], "**met**",
+                                           "**met**", summary[5][2]]
     assert summary[2][2].startswith("**missed**")
+    assert summary[5][2] == "**missed**: median 6.00 × (3.00 × the target)"
+    costs = _table_rows(page, "## 5. Cost of the error control")
+    assert [r[:3] for r in costs] == [["rk8", "1e-08", "stateless ★"], ["rk8", "1e-08", "carried"],
+                                     ["rk4", "1e-06", "stateless ★"], ["rk4", "1e-06", "carried"]]
+    assert costs[0][3:9] == ["290 of 300", "reference uncertain 8; no fixed count up to 200,000 "
+                            "meets tol 2", "1.50", "3.50", "4.50", "120 / 60"]
+    assert costs[0][9:] == ["99.0 % (100.0 %)", "3.0e+00", "4"]
+    assert "**Cost of the error control, rk4 at tol 1e-06**: median 6.00 ×" in page
     rows = _table_rows(page, "### paper:")
     assert len(rows) == len(results["scenes"][0]["runs"])
     assert rows[9][:3] == ["rk8 auto ★", "tol 1e-08", "1.0e-09"]
@@ -256,6 +318,13 @@ def test_render_from_the_results_file_alone(results: dict, tmp_path: Path,
     assert [r[0] for r in hard] == ["paper", "tight_fit"]
     assert hard[0][8] == "3 lift-off, 4 slip (μ = 1)"
     assert "Generated by `roller-gym benchmark` in 700 s" in page
+
+
+def test_render_of_results_without_the_cost_part(results: dict) -> None:
+    del results["cost"]
+    page = report.render(results)
+    assert "## 5. Cost of the error control\n\nNot measured in this results file" in page
+    assert len(_table_rows(page, "## Summary")) == 4
 
 
 def test_render_does_not_need_mujoco(results: dict, tmp_path: Path) -> None:
@@ -321,6 +390,23 @@ def test_quick_run_writes_the_results_with_machine_versions_and_command(wp, quic
     assert default["finite"] and 0 < default["error"][0] < 1e-6
     assert set(results["throughput"]["vector"]) == {
         str(n) for n in results["config"]["vector_sizes"]}
+
+
+def test_quick_run_measures_the_cost_of_every_error_controlled_setting(quick_run) -> None:
+    """Part 5 of the quick run: a row per method, tolerance and variant; most steps measured;
+    the ratio's median <= 99th percentile <= largest; and the automatic steps that report
+    tol_met are within tol in at least 95 % of the steps."""
+    results, _ = quick_run
+    rows = results["cost"]["rows"]
+    cfg = results["config"]["cost"]
+    assert [(r["method"], r["tol"], r["variant"]) for r in rows] == [
+        (m, t, v) for m in cfg["methods"] for t in cfg["tols"] for v in ("stateless", "carried")]
+    for row in rows:
+        assert row["measured"] >= 0.8 * row["steps"], row
+        assert row["measured"] + sum(row["skipped"].values()) == row["steps"], row
+        assert 0 < row["ratio"]["median"] <= row["ratio"]["p99"] <= row["ratio"]["max"], row
+        assert row["fixed_substeps"]["median"] >= 1
+        assert row["within_tol_where_met"] >= 0.95, row
 
 
 def test_quick_report_has_every_section_and_finite_numbers(quick_run) -> None:
@@ -443,3 +529,67 @@ def test_synthetic_results_keep_the_shape_of_measured_ones(quick_run) -> None:
     assert set(synthetic["scenes"][0]["energy"][0]) == set(measured["scenes"][0]["energy"][0])
     assert set(synthetic["config"]) <= set(measured["config"])
     assert set(synthetic) == set(measured)
+    assert set(synthetic["cost"]) == set(measured["cost"])
+    assert set(synthetic["cost"]["settings"]) == set(measured["cost"]["settings"])
+    assert keys(synthetic["cost"]["rows"][0], 2) == keys(measured["cost"]["rows"][0], 2)
+
+
+# -- the cost measurement: the smallest fixed count and the references ---------------------------
+def test_smallest_fixed_counts_finds_the_threshold_of_a_monotone_test() -> None:
+    """Where meeting tol is ``count >= threshold``, the search returns each threshold (1,
+    powers of two and their neighbours, the largest count) and 0 where none meets it."""
+    most = 1000
+    thresholds = np.array([1, 2, 3, 7, 8, 9, 255, 256, 257, 999, 1000, 1001, 5000])
+    calls = []
+
+    def meets(index: np.ndarray, counts: np.ndarray) -> np.ndarray:
+        assert np.all((counts >= 1) & (counts <= most))
+        calls.append(index.size)
+        return counts >= thresholds[index]
+
+    got = cost.smallest_fixed_counts(meets, thresholds.size, most)
+    want = np.where(thresholds <= most, thresholds, 0)
+    np.testing.assert_array_equal(got, want)
+    assert len(calls) <= 2 * math.ceil(math.log2(most)) + 2  # doubling, then bisection
+
+
+def _solve(scene: Scene, phi: float, w: float, tau: float, dt: float) -> np.ndarray:
+    """DOP853 at rtol = atol = 1e-13 on ``equations.accel``, one roller alone."""
+    sol = solve_ivp(lambda _t, y: [y[1], eq.accel(y[0], y[1], tau, *scene.params)], (0, dt),
+                    [phi, w], method="DOP853", rtol=1e-13, atol=1e-13, max_step=dt / 50)
+    return sol.y[:, -1]
+
+
+def test_cost_row_gives_the_least_fixed_count_of_a_linear_scan() -> None:
+    """One easy step (paper, rk4, tol 1e-10): the row's smallest fixed count is the first
+    count of a linear scan whose error (against DOP853 run here, one roller alone) is within
+    tol, and its ratio is the automatic count over it."""
+    scene, (phi, w, tau), tol, dt = preset("paper"), (0.7, 2.0, 0.3), 1e-10, 0.05
+    ref = _solve(scene, phi, w, tau, dt)
+
+    def err(res: integ.StepResult) -> float:
+        return max(abs(res.phi - ref[0]), abs(res.phi_dot - ref[1]))
+
+    scan = next(n for n in range(1, 1000)
+                if err(integ.step(scene, phi, w, tau, dt, method="rk4", substeps=n)) <= tol)
+    assert scan & (scan - 1)  # not a power of two: the bisection decided it
+    batch = cost.subset(scene, np.array([0]))
+    a = [np.array([x]) for x in (phi, w, tau)]
+    auto = integ.step(batch, *a, dt, method="rk4", tol=tol)
+    row = cost.compare(batch, *a, auto, ref.reshape(2, 1), np.zeros(1), "rk4", tol)
+    assert row["measured"] == 1 and row["fixed_substeps"]["max"] == scan
+    assert row["ratio"]["median"] == pytest.approx(auto.substeps[0] / scan)
+    assert row["within_tol"] == (err(auto) <= tol)
+
+
+def test_cost_references_agree_with_one_roller_alone() -> None:
+    """The benchmark's references (DOP853 on groups of rollers as one system) on 12 steps of
+    its sample: where their stated uncertainty lets them judge tol = 1e-8 (at most tol/10),
+    within tol/10 of DOP853 on each roller alone, and that is most of the steps."""
+    scene, phi, w, tau = cost.adversarial_sample(12, 5)
+    ref, unc = cost.references(scene, phi, w, tau)
+    sure = np.flatnonzero(unc <= 1e-9)
+    assert sure.size >= 9, unc
+    for i in sure:
+        alone = _solve(scene.item(int(i)), phi[i], w[i], tau[i], cost.DT)
+        assert np.abs(ref[:, i] - alone).max() <= 1e-9, (i, ref[:, i], alone)

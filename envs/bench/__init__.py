@@ -9,6 +9,8 @@ module             what it holds
 ``workprecision``  the work-precision study: every integrator's cost against its error
                    (against DOP853), MuJoCo on the same scene, the environments' throughput
 ``mujoco_roller``  the roller scene built in MuJoCo, the peer of ``workprecision``
+``cost``           part of ``workprecision``: the error-controlled integrators' substep counts
+                   against the smallest fixed counts that meet the same tolerance, on hard steps
 ``report``         the work-precision results file, and its page and plots
 ``verdicts``       the work-precision targets, one verdict function each
 =================  ===========================================================================

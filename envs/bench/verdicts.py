@@ -16,18 +16,22 @@ from typing import Any, NamedTuple
 from roller_gym.bench import throughput
 
 __all__ = ["TARGETS", "VERDICTS", "Comparison", "Verdict", "compare_mujoco", "cost_at_error",
-           "verdict_mujoco", "verdict_single", "verdict_vector"]
+           "cost_rows", "verdict_cost", "verdict_mujoco", "verdict_single", "verdict_vector"]
 
 Results = dict[str, Any]
 
 #: Targets: one environment's steps/s against Pendulum-v1's, the episode's state error [rad],
 #: the vector environment's steps/s against CartPoleVectorEnv's (at the sizes of
-#: VECTOR_SIZES), and our speed against MuJoCo's at equal error on the default scene.
+#: VECTOR_SIZES), our speed against MuJoCo's at equal error on the default scene, and the
+#: automatic substep count against the smallest fixed count that meets the same tolerance on
+#: hard control steps (its median and 99th percentile over the steps).
 TARGETS = {
     "single_vs_pendulum": throughput.TARGETS["single_vs_pendulum"],
     "episode_error_rad": throughput.TARGETS["episode_error_rad"],
     "vector_vs_cartpole": throughput.TARGETS["vector_vs_cartpole"],
     "mujoco_speedup": 100.0,
+    "substeps_median": 2.0,
+    "substeps_p99": 4.0,
 }
 VECTOR_SIZES = (4096, 65536)
 
@@ -239,6 +243,41 @@ def verdict_mujoco(results: Results) -> list[Verdict]:
         c.ratio >= target, f"{c.ratio / target:.2f} of the target")]
 
 
+def cost_rows(results: Results, variant: str | None = None) -> list[dict[str, Any]]:
+    """The rows of the cost measurement (one per method, tolerance and variant; none in a
+    results file from before it), of one ``variant`` (``"stateless"``, ``"carried"``) if
+    given."""
+    rows = results.get("cost", {}).get("rows", [])
+    return [r for r in rows if variant is None or r["variant"] == variant]
+
+
+def verdict_cost(results: Results) -> list[Verdict]:
+    """Per error-controlled method and tolerance: its automatic substep count at most
+    ``substeps_median`` × the smallest fixed count that meets the tolerance in the median of
+    the hard steps measured, and at most ``substeps_p99`` × at their 99th percentile. Judged
+    on the variant the results name (the independent steps: ``"stateless"``)."""
+    med_t, p99_t = TARGETS["substeps_median"], TARGETS["substeps_p99"]
+    variant = results.get("cost", {}).get("settings", {}).get("verdict_variant", "stateless")
+    out = []
+    for row in cost_rows(results, variant):
+        ratio = row["ratio"]
+        what = (f"{row['method']} tol {row['tol']:.0e}: automatic substeps ≤ {med_t:g} × the "
+                f"smallest fixed count meeting tol (median), ≤ {p99_t:g} × (99th percentile)")
+        if not row["measured"]:
+            out.append(Verdict(what, "no step measured", None, "every step was skipped"))
+            continue
+        misses = [f"{name} {x:.2f} × ({x / t:.2f} × the target)"
+                  for name, x, t in (("median", ratio["median"], med_t),
+                                     ("99th percentile", ratio["p99"], p99_t)) if x > t]
+        out.append(Verdict(
+            what,
+            f"median {ratio['median']:.2f} ×, 99th percentile {ratio['p99']:.2f} × over "
+            f"{row['measured']} hard steps ({row['steps'] - row['measured']} skipped); error "
+            f"≤ tol in {100 * row['within_tol']:.1f} % of them",
+            not misses, "; ".join(misses)))
+    return out
+
+
 #: Every verdict, in the order of the report's summary.
 VERDICTS: tuple[Callable[[Results], list[Verdict]], ...] = (
-    verdict_single, verdict_vector, verdict_mujoco)
+    verdict_single, verdict_vector, verdict_mujoco, verdict_cost)

@@ -18,6 +18,9 @@ the same scene, and the environments' throughput, measured in one run.
    environment against Gymnasium's ``CartPoleVectorEnv``, stable-baselines3's PPO.
 4. **Hard cases**: from the same runs, substeps, errors, energy error, non-finite steps and
    contact loss.
+5. **Cost of the error control** (:mod:`roller_gym.bench.cost`): on random hard control
+   steps, rk8's and rk4's automatic substep counts against the smallest fixed counts that
+   meet the same tolerance, and their errors.
 
 Timing: every comparison is measured in this process, interleaved (one repeat of every
 candidate, then the next repeat), and the best of the repeats is kept: other processes on the
@@ -39,6 +42,8 @@ from typing import Any
 import mujoco
 import numpy as np
 from roller_gym.bench import mujoco_roller as mjr
+from roller_gym.bench.cost import CostConfig
+from roller_gym.bench.cost import measure as measure_cost
 from roller_gym.bench.throughput import TARGETS, machine, package_versions
 from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE
 from roller_gym.physics import Scene, energy, preset
@@ -110,6 +115,7 @@ class Config:
     vector_sizes: tuple[int, ...] = (1, 16, 256, 4096, 65536)
     env_steps: int = 4000  # steps per repeat for the single environments
     ppo_steps: int = 2048
+    cost: CostConfig = field(default_factory=CostConfig)  # part 5
 
     @classmethod
     def make(cls, quick: bool) -> Config:
@@ -122,6 +128,7 @@ class Config:
             auto_tols=(1e-4, 1e-6, 1e-8, 1e-10), midpoint_substeps=(1, 16),
             dop853_tols=(1e-6, 1e-12), mujoco_default_n=(25,), mujoco_tuned_n=(25, 100),
             energy_horizon_s=20.0, vector_sizes=(1, 16, 256), env_steps=1000, ppo_steps=128,
+            cost=CostConfig.make(quick),
         )
 
 
@@ -658,7 +665,7 @@ def settings() -> dict[str, Any]:
 
 def measure(cfg: Config, command: str, progress: Callable[[str], None] = print
             ) -> dict[str, Any]:
-    """Measure parts 1 to 4; the results as plain data (see :mod:`roller_gym.bench.report`).
+    """Measure parts 1 to 5; the results as plain data (see :mod:`roller_gym.bench.report`).
 
     Args:
         cfg: what to measure.
@@ -685,6 +692,7 @@ def measure(cfg: Config, command: str, progress: Callable[[str], None] = print
     tp = measure_throughput(cfg, paper)
     progress("throughput: one env {:,.0f} steps/s (Pendulum-v1 {:,.0f})".format(
         tp["single"]["ours"], tp["single"]["Pendulum-v1"]))
+    costs = measure_cost(cfg.cost, command, progress)
     return {
         "study": "work-precision",
         "machine": {**machine(), "versions": versions()},
@@ -696,4 +704,5 @@ def measure(cfg: Config, command: str, progress: Callable[[str], None] = print
         "config": dataclasses.asdict(cfg),
         "scenes": [scene_record(r) for r in results],
         "throughput": tp,
+        "cost": costs,
     }
