@@ -293,7 +293,10 @@ class RollerVectorEnv(VectorEnv):
     def _observation(self) -> np.ndarray:
         terms = self.task.observation_terms(self.phi, self.phi_dot, self.target, self._psi_rate,
                                             self.target_rate)
-        return np.stack(terms, axis=1).astype(np.float32)
+        out = np.empty((self.num_envs, len(terms)), dtype=np.float32)
+        for j, term in enumerate(terms):  # rounded to float32 as they are written
+            out[:, j] = term
+        return out
 
     def _masked_info(self, rows: dict[str, Any], idx: np.ndarray) -> dict[str, Any]:
         """A vector info whose rows ``idx`` hold ``rows`` and whose masks mark only them."""
