@@ -400,8 +400,10 @@ def render(results: dict[str, Any]) -> str:
         lines += ["", "The info's cost: the same steps with `info_keys=[]` run " + " and ".join(
             f"{v['ours_no_info'] / v['ours'] - 1:+.0%} faster at {int(n):,}"
             for n, v in results["vector"].items())
-            + " (the info's 21 arrays and their masks are built from what the step computes "
-            "anyway)."]
+            + ". Its 21 arrays are built from what the step computes anyway; at large "
+            "batches their cost is mostly memory: they stay alive until the caller drops "
+            "them, so every step's arrays land on fresh pages, which glibc returns to the "
+            "system and takes back (see the README on `GLIBC_TUNABLES`)."]
     peers = [p for p in PEERS if any(p in v for v in results["vector"].values())]
     if peers:
         lines += ["", "Optional peers, in the same run:", "",
