@@ -573,7 +573,7 @@ def test_cost_row_gives_the_least_fixed_count_of_a_linear_scan() -> None:
     scan = next(n for n in range(1, 1000)
                 if err(integ.step(scene, phi, w, tau, dt, method="rk4", substeps=n)) <= tol)
     assert scan & (scan - 1)  # not a power of two: the bisection decided it
-    batch = cost.subset(scene, np.array([0]))
+    batch = Scene.stack([scene])
     a = [np.array([x]) for x in (phi, w, tau)]
     auto = integ.step(batch, *a, dt, method="rk4", tol=tol)
     row = cost.compare(batch, *a, auto, ref.reshape(2, 1), np.zeros(1), "rk4", tol)

@@ -41,19 +41,19 @@ import math
 import time
 import warnings
 from collections.abc import Callable
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from roller_gym.config import DEFAULT_DT
+from roller_gym.episode import take
 from roller_gym.physics import Scene
 from roller_gym.physics import integrators as integ
 
 __all__ = ["DT", "MAX_FIXED", "REFERENCE_TOL", "UNCERTAINTY_SHARE", "CostConfig",
            "Trajectories", "adversarial_sample", "carried_steps", "compare", "fixed_errors",
-           "measure", "reference_trajectories", "references", "smallest_fixed_counts",
-           "subset"]
+           "measure", "reference_trajectories", "references", "smallest_fixed_counts"]
 
 #: The control step [s] (the environments' default).
 DT = float(DEFAULT_DT)
@@ -112,11 +112,9 @@ def adversarial_sample(n: int, seed: int) -> tuple[Scene, np.ndarray, np.ndarray
     return Scene(m=m, r=r, R=R, e=e, k=k, g=G, damping=c), phi, w, tau
 
 
-def subset(scene: Scene, index: np.ndarray) -> Scene:
-    """The rollers ``index`` (an index array) of a batch scene, as a batch scene."""
-    n = scene.batch_size or 1
-    return Scene(**{f.name: np.broadcast_to(np.asarray(getattr(scene, f.name), dtype=float),
-                                            (n,))[index] for f in fields(Scene)})
+def _take(scene: Scene, index: np.ndarray) -> Scene:
+    """The rollers ``index`` of the batch ``scene`` (:func:`roller_gym.episode.take`)."""
+    return take(scene, index, scene.batch_size or 1)
 
 
 def references(scene: Scene, phi: np.ndarray, w: np.ndarray, tau: np.ndarray, dt: float = DT
@@ -135,7 +133,7 @@ def references(scene: Scene, phi: np.ndarray, w: np.ndarray, tau: np.ndarray, dt
         out = np.empty((2, n))
         for group in np.array_split(order, max(1, math.ceil(n / REFERENCE_GROUP))):
             with np.errstate(all="ignore"):
-                res = integ.step(subset(scene, group), phi[group], w[group], tau[group], dt,
+                res = integ.step(_take(scene, group), phi[group], w[group], tau[group], dt,
                                  method="dop853", tol=rtol)
             out[0, group] = np.where(res.finite, res.phi, np.nan)
             out[1, group] = np.where(res.finite, res.phi_dot, np.nan)
@@ -159,7 +157,7 @@ def fixed_errors(scene: Scene, phi: np.ndarray, w: np.ndarray, tau: np.ndarray,
     for n in np.unique(counts):
         idx = np.flatnonzero(counts == n)
         with np.errstate(all="ignore"):
-            res = integ.step(subset(scene, idx), phi[idx], w[idx], tau[idx], dt, method=method,
+            res = integ.step(_take(scene, idx), phi[idx], w[idx], tau[idx], dt, method=method,
                              substeps=int(n))
         err[idx] = _errors(res, ref[:, idx])
     return err
@@ -217,7 +215,7 @@ def compare(scene: Scene, phi: np.ndarray, w: np.ndarray, tau: np.ndarray,
 
     def meets(index: np.ndarray, counts: np.ndarray) -> np.ndarray:
         i = keep[index]
-        return fixed_errors(subset(scene, i), phi[i], w[i], tau[i], ref[:, i], counts, method,
+        return fixed_errors(_take(scene, i), phi[i], w[i], tau[i], ref[:, i], counts, method,
                             dt) <= tol
 
     smallest = smallest_fixed_counts(meets, keep.size)
@@ -268,11 +266,11 @@ def reference_trajectories(scene: Scene, phi: np.ndarray, w: np.ndarray, steps: 
     states[0] = phi, w
     for i in range(steps):
         live = np.flatnonzero(np.isfinite(states[i]).all(axis=0))
-        ref, unc[i, live] = references(subset(scene, live), states[i, 0, live],
+        ref, unc[i, live] = references(_take(scene, live), states[i, 0, live],
                                        states[i, 1, live], tau[i, live], dt)
         states[i + 1][:, live] = ref
     keep = np.flatnonzero(np.isfinite(states).all(axis=(0, 1)))
-    return Trajectories(subset(scene, keep), states[:, :, keep], tau[:, keep], unc[:, keep],
+    return Trajectories(_take(scene, keep), states[:, :, keep], tau[:, keep], unc[:, keep],
                         n - keep.size)
 
 
@@ -305,11 +303,11 @@ def measure(cfg: CostConfig, command: str = "", progress: Callable[[str], None] 
     scene, phi, w, tau = adversarial_sample(cfg.steps, cfg.seed)
     ref, unc = references(scene, phi, w, tau)
     starts = np.arange(min(cfg.trajectories, cfg.steps))
-    traj = reference_trajectories(subset(scene, starts), phi[starts], w[starts],
+    traj = reference_trajectories(_take(scene, starts), phi[starts], w[starts],
                                   cfg.trajectory_steps, cfg.seed + 1)
     # the carried steps, flattened as carried_steps gives them: steps 1 .. steps − 1
     k = traj.states.shape[2]
-    t_scene = subset(traj.scene, np.tile(np.arange(k), cfg.trajectory_steps - 1))
+    t_scene = _take(traj.scene, np.tile(np.arange(k), cfg.trajectory_steps - 1))
     t_phi, t_w = (traj.states[1:-1, j].reshape(-1) for j in (0, 1))
     t_tau = traj.tau[1:].reshape(-1)
     t_ref = traj.states[2:].transpose(1, 0, 2).reshape(2, -1)
