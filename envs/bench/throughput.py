@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from roller_gym.episode import INFO_KEYS
 
 TASK = "roller_gym/RollerStabilize-v1"
 #: Targets: the vector env against CartPoleVectorEnv, the single env against Pendulum-v1,
@@ -130,7 +131,8 @@ def measure_vector(sizes: Sequence[int], steps: int, repeats: int,
 
         kernel_rate = n * steps / best_time(kernel, repeats)
         out[str(n)] = {name: rate for name, (rate, _) in rates.items()}
-        out[str(n)].update({"kernel": kernel_rate, "outside_kernel_share": 1.0 - rates["ours"][1],
+        out[str(n)].update({"ours_steps": episode, "kernel": kernel_rate,
+                            "outside_kernel_share": 1.0 - rates["ours"][1],
                             **measure_arithmetic(stepper, base, tau, repeats)})
         ours.close()
     return out
@@ -391,19 +393,22 @@ def render(results: dict[str, Any]) -> str:
         lines.append(f"| {int(n):,} | {v['ours']:,.0f} | {v['CartPoleVectorEnv']:,.0f} | "
                      f"{v['ours'] / v['CartPoleVectorEnv']:.3f} | {v['kernel']:,.0f} | "
                      f"{v['outside_kernel_share']:.0%} |")
-    lines += ["", "Ours runs whole episodes (every sub-environment's 200 steps and its "
-              "autoreset per timed run), as a step's cost depends on where the rollers are in "
-              "an episode. The kernel alone: `BatchStepper.advance` repeated from one state. "
+    steps = {v.get("ours_steps") for v in results["vector"].values()}
+    lines += ["", (f"Ours and CartPole run {steps.pop()} steps per timed run (for ours a whole "
+                   "episode of every sub-environment, its autoreset included), as a step's cost "
+                   "depends on where the rollers are in an episode. "
+                   if len(steps) == 1 and None not in steps else "")
+              + "The kernel alone: `BatchStepper.advance` repeated from one state. "
               "The share outside the kernel is timed inside the environment's own steps (its "
               "stepper's calls clocked): observation, reward, info, autoreset and the copies."]
     if all("ours_no_info" in v for v in results["vector"].values()):
         lines += ["", "The info's cost: the same steps with `info_keys=[]` run " + " and ".join(
             f"{v['ours_no_info'] / v['ours'] - 1:+.0%} faster at {int(n):,}"
             for n, v in results["vector"].items())
-            + ". Its 21 arrays are built from what the step computes anyway; at large "
-            "batches their cost is mostly memory: they stay alive until the caller drops "
-            "them, so every step's arrays land on fresh pages, which glibc returns to the "
-            "system and takes back (see the README on `GLIBC_TUNABLES`)."]
+            + f". Its {len(INFO_KEYS)} arrays are built from what the step computes "
+            "anyway; at large batches their cost is mostly memory: they stay alive until the "
+            "caller drops them, so every step's arrays land on fresh pages, which glibc "
+            "returns to the system and takes back (see the README on `GLIBC_TUNABLES`)."]
     peers = [p for p in PEERS if any(p in v for v in results["vector"].values())]
     if peers:
         lines += ["", "Optional peers, in the same run:", "",
@@ -432,7 +437,8 @@ def render(results: dict[str, Any]) -> str:
               f"{single['Pendulum-v1']:,.0f} steps/s: "
               f"{single['ours'] / single['Pendulum-v1']:.2f} ×."
               + (f" With `info_keys=[]` (no info): {single['ours_no_info']:,.0f} steps/s, "
-                 f"{single['ours_no_info'] / single['Pendulum-v1']:.2f} ×; the info's 21 typed "
+                 f"{single['ours_no_info'] / single['Pendulum-v1']:.2f} ×; the info's "
+                 f"{len(INFO_KEYS)} typed "
                  f"values are {1 - single['ours'] / single['ours_no_info']:.0%} of a step."
                  if "ours_no_info" in single else ""),
               f"- SB3 PPO, 16 environments: {ppo['RollerVecEnv']:,.0f} training steps/s through "
