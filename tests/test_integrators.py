@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 import pytest
-from roller_gym.bench.cost import adversarial_sample
+from roller_gym.bench.cost import adversarial_sample, smallest_fixed_counts
 from roller_gym.physics import (
     METHODS,
     PRESETS,
@@ -707,22 +707,17 @@ def test_adversarial_steps_stay_within_tol(method, adversarial):
 
 
 def _smallest_fixed_count(scene, state, tol, method="rk8", dt=DT):
-    """The smallest count n of equal substeps whose error is within tol: doubling n until it
-    meets tol, then bisecting between the last count that did not and the first that did
-    (the least n that meets tol where n − 1 does not)."""
+    """The smallest count n of equal substeps whose error is within tol, by the benchmark's
+    search (``roller_gym.bench.cost.smallest_fixed_counts``: doubling, then bisection)."""
     ref = reference(scene, *state, dt=dt)
 
-    def meets(n):
-        return error(step(scene, *state, dt, method=method, substeps=n), ref) <= tol
+    def meets(_index, counts):
+        return np.array([error(step(scene, *state, dt, method=method, substeps=int(n)), ref)
+                         <= tol for n in counts])
 
-    lo, hi = 0, 1
-    while not meets(hi):
-        lo, hi = hi, 2 * hi
-        assert hi <= 2**17
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        lo, hi = (lo, mid) if meets(mid) else (mid, hi)
-    return hi
+    (n,) = smallest_fixed_counts(meets, 1, most=2**17)
+    assert n > 0  # some count up to 2**17 meets tol
+    return int(n)
 
 
 def test_smallest_fixed_count_is_the_least_count_meeting_tol():
