@@ -316,14 +316,12 @@ class Task:
         """The observed fields by name (the formulas of :data:`OBSERVATION_FIELDS`)."""
         psi = rate * phi
         f = rewards.xp(psi)
-        t = _trig(psi)
-        out = {"cos_psi": t.cos(psi), "sin_psi": t.sin(psi), "cos_phi": t.cos(phi),
-               "sin_phi": t.sin(phi), "speed": f.tanh(phi_dot / SPEED_SCALE)}
+        out = {"speed": f.tanh(phi_dot / SPEED_SCALE)}
+        out["sin_psi"], out["cos_psi"] = _sincos(psi)
+        out["sin_phi"], out["cos_phi"] = _sincos(phi)
         if self.observes_target:
-            psi_t = rate * target
-            t = _trig(psi_t)
-            out.update(cos_psi_target=t.cos(psi_t), sin_psi_target=t.sin(psi_t),
-                       cos_phi_target=t.cos(target), sin_phi_target=t.sin(target))
+            out["sin_psi_target"], out["cos_psi_target"] = _sincos(rate * target)
+            out["sin_phi_target"], out["cos_phi_target"] = _sincos(target)
         if "target_speed" in self.observation:
             out["target_speed"] = rewards.xp(psi).tanh(target_rate / SPEED_SCALE)
         return out
@@ -349,10 +347,12 @@ class Task:
                 & (abs(step["phi_dot"] - step["target_phi_dot"]) <= self.success_speed))
 
 
-def _trig(x):
-    """sin and cos for ``x``: :mod:`math` for a Python float (the single environment's fast
-    path), else :mod:`roller_gym.physics.trig` (a compiled loop over float64 arrays)."""
-    return math if type(x) is float else trig
+def _sincos(x):
+    """(sin x, cos x): :mod:`math`'s for a Python float (the single environment's fast path),
+    else :func:`roller_gym.physics.trig.sincos` (one compiled loop over float64 arrays)."""
+    if type(x) is float:
+        return math.sin(x), math.cos(x)
+    return trig.sincos(x)
 
 
 def per_scene(function, scene: Scene) -> np.ndarray:

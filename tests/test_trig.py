@@ -75,13 +75,17 @@ def test_compiled_code_gives_the_bits_of_its_numpy_evaluation_and_libm_within_on
     x = _sample(2)
 
     @numba.njit(error_model="numpy")
-    def both(x, s, c):
+    def both(x, s, c, s2, c2):
         for i in range(x.size):
             s[i], c[i] = trig.sin(x[i]), trig.cos(x[i])
+            s2[i], c2[i] = trig.sincos(x[i])
 
-    s, c = np.empty_like(x), np.empty_like(x)
-    both(x, s, c)
+    s, c, s2, c2 = (np.empty_like(x) for _ in range(4))
+    both(x, s, c, s2, c2)
     assert np.array_equal(s, trig._sin(x)) and np.array_equal(c, trig._cos(x))
+    # sincos, one reduction for both: the bits of sin and cos
+    assert np.array_equal(s2, s) and np.array_equal(c2, c)
+    assert all(np.array_equal(a, b) for a, b in zip(trig.sincos(x), (s, c), strict=True))
     # called from Python on scalars, sin and cos are NumPy's: within 1 ulp of the compiled form
     for i in range(0, x.size, max(1, x.size // 200)):
         assert abs(s[i] - trig.sin(float(x[i]))) <= np.spacing(abs(np.sin(x[i])))
@@ -99,6 +103,9 @@ def test_float64_arrays_from_python_get_the_compiled_bits_in_any_layout():
         assert got_s.shape == view.shape and got_s.dtype == np.float64
         assert np.array_equal(got_s, trig._sin(np.array(view)))
         assert np.array_equal(got_c, trig._cos(np.array(view)))
+        pair = trig.sincos(view)
+        assert np.array_equal(pair[0], got_s) and np.array_equal(pair[1], got_c)
+        assert pair[0].shape == view.shape
     small = x[0, : trig.ARRAY_LOOP_SIZE - 1]
     assert np.array_equal(trig.sin(small), np.sin(small))
     z = x[0] + 1e-20j

@@ -121,14 +121,22 @@ def accel(phi, phi_dot, tau, m, r, kappa, e, k, g, c):
     (k² + e² + r² − 2er cos θ) φ'' + (e r / s) φ'² sin θ + g (r sin ψ + e sin φ) = (τ − c φ')/m
 
     (e r R/(R − r) of the paper is e r / s.) This is the form that drives the simulation.
+
+    It takes two sine–cosine pairs (:func:`~roller_gym.physics.trig.sincos`), of θ/2 and of
+    ψ, instead of four sines: sin θ = 2 sin(θ/2) cos(θ/2), k² + e² + r² − 2er cos θ =
+    k² + (r − e)² + 4re sin²(θ/2), and, since φ = θ − ψ, sin φ = sin θ cos ψ − cos θ sin ψ.
     """
     s = 1.0 - r * kappa
     theta = phi / s
-    h = trig.sin(0.5 * theta)
+    h, hc = trig.sincos(0.5 * theta)
+    sin_psi, cos_psi = trig.sincos(r * kappa * theta)
+    sin_t = 2.0 * h * hc
+    cos_t = 1.0 - 2.0 * h * h
+    sin_phi = sin_t * cos_psi - cos_t * sin_psi
     lhs = (
         (tau - c * phi_dot) / m
-        - e * r / s * phi_dot * phi_dot * trig.sin(theta)
-        - g * (r * trig.sin(r * kappa * theta) + e * trig.sin(phi))
+        - e * r / s * phi_dot * phi_dot * sin_t
+        - g * (r * sin_psi + e * sin_phi)
     )
     return lhs / (k * k + (r - e) * (r - e) + 4.0 * r * e * h * h)
 
@@ -197,9 +205,10 @@ def contact_forces(phi, phi_dot, phi_ddot, m, r, kappa, e, g):
     """
     s, psi, theta = shape_factors(phi, r, kappa)
     w2 = phi_dot * phi_dot
-    sin_t, cos_t = trig.sin(theta), trig.cos(theta)
-    normal = m * (g * trig.cos(psi) + r * r * kappa / s * w2 + e * (phi_ddot * sin_t + w2 * cos_t))
-    friction = m * (g * trig.sin(psi) + (r - e * cos_t) * phi_ddot + e * w2 * sin_t)
+    sin_t, cos_t = trig.sincos(theta)
+    sin_psi, cos_psi = trig.sincos(psi)
+    normal = m * (g * cos_psi + r * r * kappa / s * w2 + e * (phi_ddot * sin_t + w2 * cos_t))
+    friction = m * (g * sin_psi + (r - e * cos_t) * phi_ddot + e * w2 * sin_t)
     return normal, friction
 
 

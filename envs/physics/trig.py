@@ -34,7 +34,7 @@ import numpy as np
 from numba import njit
 from numba.extending import overload, register_jitable
 
-__all__ = ["ARRAY_LOOP_SIZE", "DOMAIN", "EXACT_RANGE", "cos", "select", "sin"]
+__all__ = ["ARRAY_LOOP_SIZE", "DOMAIN", "EXACT_RANGE", "cos", "select", "sin", "sincos"]
 
 _TOINT = 6755399441055744.0  # 1.5·2⁵²: (v + _TOINT) − _TOINT rounds v to an integer, |v| < 2⁵¹
 _INVPIO2 = 6.36619772367581382433e-01  # 2/π
@@ -153,6 +153,13 @@ def _cos(x):
     return _quadrant(n + 1.0, _sin_kernel(y, y_lo), _cos_kernel(y, y_lo))
 
 
+def _sincos(x):
+    """(sin x, cos x) from one reduction and one pair of kernels: the cost of one of them."""
+    n, y, y_lo = _reduce(x)
+    s, c = _sin_kernel(y, y_lo), _cos_kernel(y, y_lo)
+    return _quadrant(n, s, c), _quadrant(n + 1.0, s, c)
+
+
 def sin(x):
     """sin x [x in rad]. From Python: for float64 arrays the branch-free form in a compiled
     loop; for scalars and other types (complex: complex-step derivatives) ``np.sin``. Compiled
@@ -168,6 +175,19 @@ def cos(x):
     if type(x) is np.ndarray and x.dtype == np.float64 and x.size >= ARRAY_LOOP_SIZE:
         return _each(_cos_loop, x)
     return np.cos(x)
+
+
+def sincos(x):
+    """(sin x, cos x) [x in rad], bit for bit :func:`sin` and :func:`cos`, from one reduction
+    and one pair of polynomials: the pair costs what one of them does (the branch-free sin
+    evaluates both polynomials anyway). From Python, float64 arrays go through one compiled
+    loop; anything else gets NumPy's sin and cos."""
+    if type(x) is np.ndarray and x.dtype == np.float64 and x.size >= ARRAY_LOOP_SIZE:
+        flat = np.ascontiguousarray(x).reshape(-1)
+        s, c = np.empty_like(flat), np.empty_like(flat)
+        _sincos_loop(flat, s, c)
+        return s.reshape(x.shape), c.reshape(x.shape)
+    return np.sin(x), np.cos(x)
 
 
 #: Arrays from this many elements on go through the compiled loops (below, one NumPy call
@@ -195,11 +215,23 @@ def _cos_compiled(x):
     return _cos
 
 
+@overload(sincos, inline="always", jit_options={"nogil": True})
+def _sincos_compiled(x):
+    return _sincos
+
+
 @njit(cache=True, nogil=True, error_model="numpy")
 def _sin_loop(x, out):
     """out[i] = sin(x[i]), the branch-free form (a loop LLVM runs in SIMD lanes)."""
     for i in range(x.size):
         out[i] = sin(x[i])
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _sincos_loop(x, s, c):
+    """s[i], c[i] = sin(x[i]), cos(x[i]), the branch-free form."""
+    for i in range(x.size):
+        s[i], c[i] = sincos(x[i])
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
