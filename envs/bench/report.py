@@ -550,7 +550,10 @@ def section_throughput(results: Results) -> list[str]:
           "observation, reward, info). The timed window is 1,000,000 / N batched steps (20 at "
           "least, 1,000 at most), going on from one reset: where it passes the episode's "
           "truncation, the episodes begun together are truncated together and all restart in "
-          "one step's autoreset (the last column: what that costs).",
+          "one step's autoreset (the last column: what that costs). This run times ours and "
+          "CartPole one after the other; `docs/THROUGHPUT.md` (`make throughput`) times "
+          "whole episodes interleaved with CartPole, which a shared machine's drift hits "
+          "alike, against the optional peers too: the README quotes that page.",
           "", "![throughput](benchmarks/throughput.png)", ""]
     if tp["ppo"]:
         ppo, ps = tp["ppo"], tp["ppo_settings"]
@@ -739,11 +742,13 @@ def section_targets(results: Results) -> list[str]:
                 "processes on the cores, numba's threads wait for each other. "
             )
         text += (
-            "To close it: (1) a kernel that vectorizes across rollers (each stage computed "
-            "for a block of rollers, so that LLVM uses SIMD: AVX-512 holds 8 doubles) and "
-            "contact margins at the end of the step only; (2) a vectorized autoreset (draw "
-            "the start states of all ended sub-environments at once); (3) at equal error, no "
-            "more substeps than needed."
+            "The kernel already evaluates the equations in SIMD lanes and the autoreset is "
+            "vectorized; what is left is the kernel's own arithmetic. To close it: fewer "
+            "right-hand sides per step (rk8's error estimates overstate its error, so it "
+            "takes about twice the substeps the smallest fixed count needs: part 5) and less "
+            "work between them (the stage sums, error estimates and margins cost about as "
+            "much as the evaluations: `docs/THROUGHPUT.md`, the kernel against its "
+            "arithmetic)."
         )
         notes.append(text)
     c, mj_target = compare_mujoco(results, paper), TARGETS["mujoco_speedup"]

@@ -48,7 +48,8 @@ def best_time(run: Callable[[], None], repeats: int) -> float:
 
 def interleaved(runs: dict[str, tuple[Any, np.ndarray, int]],
                 repeats: int) -> dict[str, tuple[float, float | None]]:
-    """Steps per second of vector envs, ``{name: (env, actions, steps)}``: every repeat runs
+    """Steps per second of vector envs, ``{name: (env, actions, steps)}`` (``actions[k]``
+    the batch of step k, drawn anew every step as an exploring agent's): every repeat runs
     each env's ``steps`` steps in turn, so that a shared machine's drift hits them alike, and
     each env keeps its fastest run. For our envs, also the share of that run spent in the
     physics kernel, timed inside the environment's own steps (its stepper's ``advance``
@@ -69,13 +70,13 @@ def interleaved(runs: dict[str, tuple[Any, np.ndarray, int]],
     best = {name: (float("inf"), 0.0) for name in runs}
     try:
         for env, actions, _ in runs.values():
-            env.step(actions)  # warm up
+            env.step(actions[0])  # warm up
         for _ in range(repeats):
             for name, (env, actions, steps) in runs.items():
                 spent[name][0] = 0.0
                 start = time.perf_counter()
-                for _ in range(steps):
-                    env.step(actions)
+                for k in range(steps):
+                    env.step(actions[k])
                 wall = time.perf_counter() - start
                 if wall < best[name][0]:
                     best[name] = (wall, spent[name][0] / wall)
@@ -104,10 +105,10 @@ def measure_vector(sizes: Sequence[int], steps: int, repeats: int,
         cart = gym.make_vec("CartPole-v1", num_envs=n, vectorization_mode="vector_entry_point")
         for env in (ours, bare, cart):
             env.reset(seed=0)
-        a = rng.uniform(-1, 1, (n, 1)).astype(np.float32)
         episode = ours.unwrapped.max_episode_steps if whole_episodes else steps
+        a = rng.uniform(-1, 1, (episode, n, 1)).astype(np.float32)
         runs = {"ours": (ours, a, episode), "ours_no_info": (bare, a, episode),
-                "CartPoleVectorEnv": (cart, rng.integers(0, 2, n), episode)}
+                "CartPoleVectorEnv": (cart, rng.integers(0, 2, (episode, n)), episode)}
         rates = interleaved(runs, repeats)
         bare.close()
         cart.close()
@@ -118,11 +119,11 @@ def measure_vector(sizes: Sequence[int], steps: int, repeats: int,
                 peer = make(n)
             except ImportError:
                 continue  # reported by peers_missing
-            actions = rng.uniform(-2, 2, (n, 1)).astype(np.float32)
+            actions = rng.uniform(-2, 2, (steps, n, 1)).astype(np.float32)
             rates.update(interleaved({name: (peer, actions, steps)}, repeats))
             peer.close()
         base = ours.unwrapped
-        tau = a[:, 0].astype(np.float64) * base.task.max_torque
+        tau = a[0, :, 0].astype(np.float64) * base.task.max_torque
         stepper = base._stepper
 
         def kernel(stepper=stepper, base=base, tau=tau) -> None:
@@ -398,7 +399,10 @@ def render(results: dict[str, Any]) -> str:
                    "episode of every sub-environment, its autoreset included), as a step's cost "
                    "depends on where the rollers are in an episode. "
                    if len(steps) == 1 and None not in steps else "")
-              + "The kernel alone: `BatchStepper.advance` repeated from one state. "
+              + "Every env's actions are drawn uniformly anew for every step and "
+              "sub-environment, as an exploring agent's (a torque that changes every step "
+              "costs the error control more substeps than a steady one). "
+              "The kernel alone: `BatchStepper.advance` repeated from one state. "
               "The share outside the kernel is timed inside the environment's own steps (its "
               "stepper's calls clocked): observation, reward, info, autoreset and the copies."]
     if all("ours_no_info" in v for v in results["vector"].values()):
