@@ -550,10 +550,9 @@ def section_throughput(results: Results) -> list[str]:
           "observation, reward, info). The timed window is 1,000,000 / N batched steps (20 at "
           "least, 1,000 at most), going on from one reset: where it passes the episode's "
           "truncation, the episodes begun together are truncated together and all restart in "
-          "one step's autoreset (the last column: what that costs). This run times ours and "
-          "CartPole one after the other; `docs/THROUGHPUT.md` (`make throughput`) times "
-          "whole episodes interleaved with CartPole, which a shared machine's drift hits "
-          "alike, against the optional peers too: the README quotes that page.",
+          "one step's autoreset (the last column: what that costs). `docs/THROUGHPUT.md` "
+          "(`make throughput`) times whole episodes from a reset instead, against the "
+          "optional peers too: the README quotes that page.",
           "", "![throughput](benchmarks/throughput.png)", ""]
     if tp["ppo"]:
         ppo, ps = tp["ppo"], tp["ppo_settings"]

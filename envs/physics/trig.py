@@ -145,6 +145,9 @@ def _quadrant(n, s, c):
     return (1.0 - 2.0 * high) * (odd * c + (1.0 - odd) * s)
 
 
+# _sin, _cos and _sincos each spell out the reduction and the kernels: written as _sincos(x)[0],
+# sin is one call deeper, and LLVM then leaves it a call in the larger loops (_end_lanes), which
+# stop running in SIMD lanes.
 def _sin(x):
     """The branch-free sin (plain arithmetic: also evaluates NumPy arrays, for the tests)."""
     n, y, y_lo = _reduce(x)
@@ -169,29 +172,20 @@ def sin(x):
     loop; for scalars and other types (complex: complex-step derivatives) ``np.sin``. Compiled
     by numba: the branch-free form, inlined. Within 1 ulp for |x| ≤ EXACT_RANGE, NaN beyond
     DOMAIN (the branch-free form)."""
-    if type(x) is np.ndarray and x.dtype == np.float64 and x.size >= ARRAY_LOOP_SIZE:
-        return _each(_sin_loop, x)
-    return np.sin(x)
+    return _each(_sin_loop, x, 1)[0] if _looped(x) else np.sin(x)
 
 
 def cos(x):
     """cos x [x in rad], with the faces of :func:`sin`."""
-    if type(x) is np.ndarray and x.dtype == np.float64 and x.size >= ARRAY_LOOP_SIZE:
-        return _each(_cos_loop, x)
-    return np.cos(x)
+    return _each(_cos_loop, x, 1)[0] if _looped(x) else np.cos(x)
 
 
 def sincos(x):
     """(sin x, cos x) [x in rad], bit for bit :func:`sin` and :func:`cos`, from one reduction
     and one pair of polynomials: the pair costs what one of them does (the branch-free sin
-    evaluates both polynomials anyway). From Python, float64 arrays go through one compiled
-    loop; anything else gets NumPy's sin and cos."""
-    if type(x) is np.ndarray and x.dtype == np.float64 and x.size >= ARRAY_LOOP_SIZE:
-        flat = np.ascontiguousarray(x).reshape(-1)
-        s, c = np.empty_like(flat), np.empty_like(flat)
-        _sincos_loop(flat, s, c)
-        return s.reshape(x.shape), c.reshape(x.shape)
-    return np.sin(x), np.cos(x)
+    evaluates both polynomials anyway). The faces of :func:`sin`: from Python, float64 arrays
+    go through one compiled loop; anything else gets NumPy's sin and cos."""
+    return _each(_sincos_loop, x, 2) if _looped(x) else (np.sin(x), np.cos(x))
 
 
 #: Arrays from this many elements on go through the compiled loops (below, one NumPy call
@@ -199,12 +193,19 @@ def sincos(x):
 ARRAY_LOOP_SIZE = 64
 
 
-def _each(loop, x: np.ndarray) -> np.ndarray:
-    """``loop`` over the elements of x (any shape and strides), into a new array of x's shape."""
+def _looped(x) -> bool:
+    """Whether a Python caller's x goes through the compiled loops: a float64 array of at
+    least :data:`ARRAY_LOOP_SIZE` elements."""
+    return type(x) is np.ndarray and x.dtype == np.float64 and x.size >= ARRAY_LOOP_SIZE
+
+
+def _each(loop, x: np.ndarray, outputs: int) -> tuple[np.ndarray, ...]:
+    """``loop(flat x, *outs)`` over the elements of x (any shape and strides), into
+    ``outputs`` new arrays of x's shape."""
     flat = np.ascontiguousarray(x).reshape(-1)
-    out = np.empty_like(flat)
-    loop(flat, out)
-    return out.reshape(x.shape)
+    outs = tuple(np.empty_like(flat) for _ in range(outputs))
+    loop(flat, *outs)
+    return tuple(out.reshape(x.shape) for out in outs)
 
 
 # Compiled, sin and cos are the polynomial forms, inlined where they are called so that the
