@@ -39,9 +39,12 @@ results: $(STAMP)  ## train SAC, TD3 and PPO with 5 seeds on every task (two pro
 	printf '%s\n' $(SEEDS) | xargs -P 2 -n 1 sh -c '$(TRAIN_SEED)' && \
 	$(RG) results --runs runs/results --env $(TASKS) --train-wall-s $$(( $$(date +%s) - start ))
 
+# The suite runs on every core (pytest-xdist), one test file per worker at a time, so that a
+# file's module-scoped references are computed once.
+PYTEST := -m pytest -q -n auto --dist loadfile
 test: $(STAMP)  ## the whole test suite and the linter
 	$(PY) -m ruff check .
-	$(PY) -m pytest -q
+	$(PY) $(PYTEST)
 
 # Ray RLlib pins its own Gymnasium release (1.2.2): a second environment, .venv-rllib.
 RLLIB_VENV := .venv-rllib
@@ -54,7 +57,7 @@ $(RLLIB_STAMP): EXTRAS := train,render,dev,rllib
 RLLIB_TESTS := test_envs test_vector_env test_autoreset test_tasks test_rewards \
 	test_reliability test_rendering test_sb3_vec_env test_layout test_rllib
 test-rllib: $(RLLIB_STAMP)  ## the environment tests on RLlib's Gymnasium release, and the RLlib test
-	$(RLLIB_VENV)/bin/python -m pytest -q $(RLLIB_TESTS:%=tests/%.py)
+	$(RLLIB_VENV)/bin/python $(PYTEST) $(RLLIB_TESTS:%=tests/%.py)
 
 train-rllib: $(RLLIB_STAMP)  ## PPO on a local Ray
 	$(RLLIB_VENV)/bin/roller-gym train-rllib

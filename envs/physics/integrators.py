@@ -584,43 +584,53 @@ PARALLEL_THRESHOLD = 2048
 # -- the fixed-substep kernel ------------------------------------------------------------------
 
 
-def _make_fixed_kernel(substep: Callable) -> Callable:
-    """The kernel of a fixed-substep scheme: each roller on its own, n equal substeps."""
-
-    @numba.njit(nogil=True, error_model="numpy")
-    def kernel(io, tab, cfg):
-        dt, tol, nfixed = cfg[0], cfg[1], int(cfg[2])
-        for col in range(io.shape[1]):
-            m, r, kappa, e = io[_M, col], io[_RR, col], io[_KAPPA, col], io[_E, col]
-            k, g, c, mu = io[_K, col], io[_G, col], io[_C, col], io[_MU, col]
-            phi0, w0, tau = io[_PHI_IN, col], io[_W_IN, col], io[_TAU, col]
-            n = nfixed if nfixed > 0 else _substeps(abs(w0), m, r, kappa, e, k, g, c, dt, tol,
-                                                   cfg[4], cfg[5], cfg[6], cfg[7])
-            phi, w = phi0, w0
+@numba.extending.register_jitable(inline="always")
+def _fixed_steps(io, cfg, substep):
+    """The loop of a fixed-substep scheme around its ``substep`` function: each roller on its
+    own, n equal substeps."""
+    dt, tol, nfixed = cfg[0], cfg[1], int(cfg[2])
+    for col in range(io.shape[1]):
+        m, r, kappa, e = io[_M, col], io[_RR, col], io[_KAPPA, col], io[_E, col]
+        k, g, c, mu = io[_K, col], io[_G, col], io[_C, col], io[_MU, col]
+        phi0, w0, tau = io[_PHI_IN, col], io[_W_IN, col], io[_TAU, col]
+        n = nfixed if nfixed > 0 else _substeps(abs(w0), m, r, kappa, e, k, g, c, dt, tol,
+                                               cfg[4], cfg[5], cfg[6], cfg[7])
+        phi, w = phi0, w0
+        lift, slip = np.inf, np.inf
+        for _attempt in range(20):
+            h = dt / n
+            phi, w, top = phi0, w0, abs(w0)
             lift, slip = np.inf, np.inf
-            for _attempt in range(20):
-                h = dt / n
-                phi, w, top = phi0, w0, abs(w0)
-                lift, slip = np.inf, np.inf
-                for _ in range(n):
-                    a = eq.accel(phi, w, tau, m, r, kappa, e, k, g, c)
-                    li, si = _margins(phi, w, a, m, r, kappa, e, g, mu)
-                    lift, slip = min(lift, li), min(slip, si)
-                    phi, w = substep(phi, w, tau, m, r, kappa, e, k, g, c, h)
-                    if not (math.isfinite(phi) and math.isfinite(w)):
-                        break
-                    top = max(top, abs(w))
-                finite = math.isfinite(phi) and math.isfinite(w)
-                if nfixed > 0 or (not finite and n >= MAX_SUBSTEPS):
+            for _ in range(n):
+                a = eq.accel(phi, w, tau, m, r, kappa, e, k, g, c)
+                li, si = _margins(phi, w, a, m, r, kappa, e, g, mu)
+                lift, slip = min(lift, li), min(slip, si)
+                phi, w = substep(phi, w, tau, m, r, kappa, e, k, g, c, h)
+                if not (math.isfinite(phi) and math.isfinite(w)):
                     break
-                needed = (_substeps(top, m, r, kappa, e, k, g, c, dt, tol, cfg[4], cfg[5],
-                                    cfg[6], cfg[7]) if finite else 2 * n)
-                if needed <= n:
-                    break
-                n = min(needed, MAX_SUBSTEPS)
-            _finish(io, col, True, phi, w, tau, n, lift, slip, math.nan, True)
+                top = max(top, abs(w))
+            finite = math.isfinite(phi) and math.isfinite(w)
+            if nfixed > 0 or (not finite and n >= MAX_SUBSTEPS):
+                break
+            needed = (_substeps(top, m, r, kappa, e, k, g, c, dt, tol, cfg[4], cfg[5],
+                                cfg[6], cfg[7]) if finite else 2 * n)
+            if needed <= n:
+                break
+            n = min(needed, MAX_SUBSTEPS)
+        _finish(io, col, True, phi, w, tau, n, lift, slip, math.nan, True)
 
-    return kernel
+
+# Each fixed-substep scheme's kernel: the shared loop around its substep function. A function
+# of its own per scheme, so that numba caches it on disk (a kernel made by a factory closes
+# over its substep, and numba cannot cache such closures).
+@_jit
+def _euler_kernel(io, tab, cfg):
+    _fixed_steps(io, cfg, _euler_substep)
+
+
+@_jit
+def _midpoint_kernel(io, tab, cfg):
+    _fixed_steps(io, cfg, _midpoint_substep)
 
 
 # -- the reference --------------------------------------------------------------------------------
@@ -666,6 +676,8 @@ class Scheme:
             region with room to spare (``math.inf``: A-stable).
         adaptive: True if its substeps follow an error estimate (see the module docs).
         substep: its substep function (for the Runge–Kutta pairs, the shared pair kernel).
+        kernel: for a fixed-substep scheme, its compiled kernel: ``_fixed_steps`` around
+            ``substep``, written as a function of its own (two lines) so that numba caches it.
         tableau: for an explicit Runge–Kutta pair, its coefficients (see ``_tableau``).
         constant: C of the substep prediction n = (C (λ dt)^(p+1) / tol)^(1/p), calibrated
             on the presets (for the adaptive schemes only the first step-size guess).
@@ -682,6 +694,7 @@ class Scheme:
     adaptive: bool
     substep: Callable | None
     tableau: np.ndarray | None = None
+    kernel: Callable | None = None
     constant: float = 0.0
     sweep_exponent: float = 0.5
     halvings: int = 0
@@ -696,8 +709,9 @@ _SCHEME_LIST = (
     Scheme("rk8", 8, 1.0, True, _rk_chunk, _DOP853, constant=1e-6, sweep_exponent=0.75,
            halvings=3, tol_share=0.1),
     Scheme("rk4", 4, 1.0, True, _rk_chunk, _RK4, constant=0.02, halvings=2, tol_share=0.1),
-    Scheme("euler", 1, 0.5, False, _euler_substep, constant=2.0),
-    Scheme("midpoint", 2, math.inf, False, _midpoint_substep, constant=0.3),
+    Scheme("euler", 1, 0.5, False, _euler_substep, kernel=_euler_kernel, constant=2.0),
+    Scheme("midpoint", 2, math.inf, False, _midpoint_substep, kernel=_midpoint_kernel,
+           constant=0.3),
     Scheme("dop853", 8, math.inf, True, None),
 )
 #: The schemes by name.
@@ -717,8 +731,7 @@ def _kernels(scheme: Scheme) -> tuple[Callable, Callable]:
         elif scheme.tableau is not None:
             pair = (_rk_serial, _rk_parallel)
         else:
-            kernel = _make_fixed_kernel(scheme.substep)
-            pair = (kernel, kernel)
+            pair = (scheme.kernel, scheme.kernel)
         _KERNELS[scheme.name] = pair
     return _KERNELS[scheme.name]
 
