@@ -431,17 +431,17 @@ def test_midpoint_energy_error_stays_bounded_while_euler_drifts():
 
 
 #: bounds on the drift of E (zero torque) and of E − τφ (maximum torque) [J] over 1e5 steps of
-#: 0.05 s at tol 1e-9 on "paper": the largest measured, 1.3e-9 J (rk4) and 1.5e-8 J (rk8),
-#: with about 4× margin.
+#: 0.05 s at tol 1e-9 on "paper": the largest measured, 3.2e-9 J (rk4) and 1.5e-8 J (rk8),
+#: with 1.5× and 4× margin.
 LONG_RUN_BOUND = {"rk4": 5e-9, "rk8": 6e-8}
 
 
 @pytest.mark.parametrize("method", ["rk4", "rk8"])
 def test_zero_torque_for_1e5_steps_keeps_the_energy(method):
     """1e5 control steps (5000 s) of "paper" at zero torque, no damping, tol = 1e-9, from
-    rest at φ = 1 rad (E0 ≈ 0.302 J). Measured energy error: rk4 1.28e-9 J, rk8 1.45e-8 J
-    (a slow linear drift, ~1e-14 J and ~1.5e-13 J per step: 4e-9 and 5e-8 of E0); asserted
-    within LONG_RUN_BOUND (about 4× margin): 5e-9 J (rk4), 6e-8 J (rk8). The motion stays
+    rest at φ = 1 rad (E0 ≈ 0.302 J). Measured energy error: rk4 3.23e-9 J, rk8 1.45e-8 J
+    (a slow linear drift, ~3e-14 J and ~1.5e-13 J per step: 1e-8 and 5e-8 of E0); asserted
+    within LONG_RUN_BOUND: 5e-9 J (rk4), 6e-8 J (rk8). The motion stays
     the same swing: |φ| exceeds 1 rad by no more than that energy error allows."""
     scene = preset("paper")
     phi, w = _run(scene, 1.0, 0.0, 0.0, 100_000, method)
@@ -479,7 +479,7 @@ def _turning_point(scene: Scene, torque: float) -> float:
 @pytest.mark.parametrize("method", ["rk4", "rk8"])
 def test_maximum_torque_for_1e5_steps_keeps_e_minus_tau_phi(method):
     """Constant maximum torque, no damping: E − τφ is an exact invariant. 1e5 steps of 0.05 s
-    at tol 1e-9 from rest at φ = 0 on "paper": measured drift 1.26e-9 J (rk4), 1.5e-9 J
+    at tol 1e-9 from rest at φ = 0 on "paper": measured drift 3.01e-9 J (rk4), 1.5e-9 J
     (rk8); asserted <= LONG_RUN_BOUND (5e-9 J and 6e-8 J). The swing reaches the turning
     point where V(φ) = τφ (solved here independently), and not beyond it by more than the
     drift allows."""
@@ -807,3 +807,22 @@ def test_scalar_and_batch_steppers_agree_bit_for_bit(method):
         for name, value in zip(integrators.STEP_FIELDS, got, strict=True):
             b = getattr(out, name)[i]
             assert value == b or (math.isnan(value) and math.isnan(b)), (name, i)
+
+
+def test_rk4_error_control_extrapolates_two_half_steps_against_one_whole_step():
+    """rk4 under error control takes doubled steps: one of its substeps is Richardson's
+    extrapolation y2 + (y2 − y1)/15 of two classical half steps (y2) and one whole classical
+    step (y1), each taken here by rk4's fixed substeps, and its error estimate is
+    max |y2 − y1|/15 over φ and φ'."""
+    scene, (phi, w, tau) = preset("paper"), (0.7, 2.0, 0.3)
+    y1 = step(scene, phi, w, tau, DT, method="rk4", substeps=1)
+    y2 = step(scene, phi, w, tau, DT, method="rk4", substeps=2)
+    doubled = integrators.Stepper(scene, method="rk4", dt=DT, tol=1e-8, substeps=1)
+    doubled._tab = integrators.SCHEMES["rk4"].tableau  # one substep of the error-control pair
+    out = integrators.StepResult(*doubled.advance(phi, w, tau))
+    want = (y2.phi + (y2.phi - y1.phi) / 15, y2.phi_dot + (y2.phi_dot - y1.phi_dot) / 15)
+    assert out.phi == pytest.approx(want[0], rel=1e-13)
+    assert out.phi_dot == pytest.approx(want[1], rel=1e-13)
+    estimate = max(abs(y2.phi - y1.phi), abs(y2.phi_dot - y1.phi_dot)) / 15
+    assert out.error_estimate == pytest.approx(estimate, rel=1e-9)
+    assert abs(out.phi - y2.phi) > 1e3 * abs(out.phi) * 1e-16  # the extrapolation mattered

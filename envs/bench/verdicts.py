@@ -253,7 +253,8 @@ def cost_rows(results: Results, variant: str | None = None) -> list[dict[str, An
 
 def verdict_cost(results: Results) -> list[Verdict]:
     """Per error-controlled method and tolerance: its automatic substep count at most
-    ``substeps_median`` × the smallest fixed count that meets the tolerance in the median of
+    ``substeps_median`` × the smallest fixed count that meets the tolerance (both counted in
+    right-hand-side evaluations, see :func:`roller_gym.bench.cost.compare`) in the median of
     the hard steps measured, and at most ``substeps_p99`` × at their 99th percentile. Judged
     on the variant the results name (the independent steps: ``"stateless"``)."""
     med_t, p99_t = TARGETS["substeps_median"], TARGETS["substeps_p99"]
@@ -262,7 +263,8 @@ def verdict_cost(results: Results) -> list[Verdict]:
     for row in cost_rows(results, variant):
         ratio = row["ratio"]
         what = (f"{row['method']} tol {row['tol']:.0e}: automatic substeps ≤ {med_t:g} × the "
-                f"smallest fixed count meeting tol (median), ≤ {p99_t:g} × (99th percentile)")
+                f"smallest fixed count meeting tol (median), ≤ {p99_t:g} × (99th percentile), "
+                "in right-hand-side evaluations")
         if not row["measured"]:
             out.append(Verdict(what, "no step measured", None, "every step was skipped"))
             continue

@@ -8,8 +8,11 @@ name            order  control   what it is for
 ``"rk8"``       8      adaptive  the default everywhere: Dormand–Prince 8(5,3) (scipy's DOP853
                                  tableau), compiled, with its embedded 5th- and 3rd-order error
                                  estimators and a step-size controller per roller
-``"rk4"``       4      adaptive  classical Runge–Kutta with the embedded 3rd-order estimate
-                                 h/6 (k4 − k5) (k5 = f at the new state, reused as the next k1)
+``"rk4"``       4      adaptive  classical Runge–Kutta; under error control by step doubling
+                                 with local extrapolation (two half steps and one whole step,
+                                 11 evaluations: Richardson's estimate of the half steps'
+                                 error, the extrapolated 5th-order solution carried on);
+                                 ``substeps=n``: n classical steps of 4 evaluations
 ``"euler"``     1      fixed     semi-implicit (symplectic) Euler, the scheme of Gymnasium's
                                  Pendulum: kept to show its error (J_I depends on φ, so it is
                                  not symplectic here and drifts in energy)
@@ -294,12 +297,38 @@ def _tableau(a: np.ndarray, b: np.ndarray, e3: np.ndarray, e5: np.ndarray) -> np
 _N8 = dop853_coefficients.N_STAGES
 _DOP853 = _tableau(dop853_coefficients.A, dop853_coefficients.B, dop853_coefficients.E3,
                    dop853_coefficients.E5)
-_RK4 = _tableau(
+_RK4 = _tableau(  # classical RK4 (its error weights: unused, its fixed substeps only)
     np.array([[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 1.0, 0]]),
     np.array([1 / 6, 1 / 3, 1 / 3, 1 / 6]),
     np.zeros(5),
     np.array([0, 0, 0, 1 / 6, -1 / 6]),  # RK4 − the embedded 3rd-order (1/6, 1/3, 1/3, 0, 1/6)
 )
+
+
+def _doubled(tab: np.ndarray, order: int) -> np.ndarray:
+    """Step doubling with local extrapolation, as one explicit pair (see :func:`_tableau`).
+
+    Its 3s − 1 stages are those of two half steps of the method ``tab`` (s stages each) and of
+    one whole step (its first stage shared with the first half step's). With y₂ the two half
+    steps' solution and y₁ the whole step's, the weights b give y₂ + (y₂ − y₁)/(2^p − 1)
+    (Richardson's extrapolation, order p + 1) and the error weights (y₂ − y₁)/(2^p − 1), the
+    estimate of y₂'s error, which the extrapolated solution's error is far below: the adaptive
+    RK4 of Numerical Recipes.
+    """
+    s = tab.shape[0] - 3
+    a, b = tab[:s, :s], tab[s, :s]
+    n = 3 * s - 1
+    whole = [0, *range(2 * s, n)]  # the whole step's stages (stage 0 shared)
+    big = np.zeros((n, n))
+    big[:s, :s] = a / 2  # the first half step
+    big[s:2 * s, :s] = b / 2  # the second starts where the first ends
+    big[s:2 * s, s:2 * s] = a / 2
+    big[np.ix_(whole, whole)] = a
+    halves, once = np.zeros(n), np.zeros(n)
+    halves[:2 * s] = np.concatenate((b, b)) / 2
+    once[whole] = b
+    error = (halves - once) / (2**order - 1)
+    return _tableau(big, halves + error, np.zeros(n + 1), np.append(error, 0.0))
 
 
 @numba.extending.register_jitable
@@ -679,6 +708,8 @@ class Scheme:
         kernel: for a fixed-substep scheme, its compiled kernel: ``_fixed_steps`` around
             ``substep``, written as a function of its own (two lines) so that numba caches it.
         tableau: for an explicit Runge–Kutta pair, its coefficients (see ``_tableau``).
+        fixed_tableau: the coefficients its fixed substeps (``substeps=n``) take, where they
+            differ from ``tableau`` (rk4: classical RK4; under error control, step doubling).
         constant: C of the substep prediction n = (C (λ dt)^(p+1) / tol)^(1/p), calibrated
             on the presets (for the adaptive schemes only the first step-size guess).
         sweep_exponent: the exponent of re/(k² + (r − e)²) in the prediction's sweep rate.
@@ -694,6 +725,7 @@ class Scheme:
     adaptive: bool
     substep: Callable | None
     tableau: np.ndarray | None = None
+    fixed_tableau: np.ndarray | None = None
     kernel: Callable | None = None
     constant: float = 0.0
     sweep_exponent: float = 0.5
@@ -704,11 +736,22 @@ class Scheme:
         """(serial, parallel) kernels ``f(io, tableau, cfg)`` of this scheme."""
         return _kernels(self)
 
+    def pair(self, fixed: bool) -> np.ndarray | None:
+        """The coefficients its kernel takes: under error control, or with ``fixed`` substeps."""
+        return self.fixed_tableau if fixed and self.fixed_tableau is not None else self.tableau
+
+    def evaluations(self, fixed: bool) -> int:
+        """Right-hand-side evaluations per substep of a Runge–Kutta pair (the first stage is
+        the last substep's end, evaluated once): under error control, or with ``fixed``
+        substeps."""
+        return self.pair(fixed).shape[0] - 3
+
 
 _SCHEME_LIST = (
     Scheme("rk8", 8, 1.0, True, _rk_chunk, _DOP853, constant=1e-6, sweep_exponent=0.75,
            halvings=3, tol_share=0.1),
-    Scheme("rk4", 4, 1.0, True, _rk_chunk, _RK4, constant=0.02, halvings=2, tol_share=0.1),
+    Scheme("rk4", 4, 1.0, True, _rk_chunk, _doubled(_RK4, 4), fixed_tableau=_RK4,
+           constant=0.02, halvings=2, tol_share=0.05),
     Scheme("euler", 1, 0.5, False, _euler_substep, kernel=_euler_kernel, constant=2.0),
     Scheme("midpoint", 2, math.inf, False, _midpoint_substep, kernel=_midpoint_kernel,
            constant=0.3),
@@ -769,7 +812,8 @@ class _Base:
             raise ValueError(f"substeps={substeps!r}: method={method!r} chooses its own steps")
         self.method, self.dt, self.tol, self.substeps = method, float(dt), float(tol), substeps
         self._serial, self._parallel = self.scheme.kernels()
-        self._tab = self.scheme.tableau if self.scheme.tableau is not None else np.zeros((1, 1))
+        tab = self.scheme.pair(substeps is not None)
+        self._tab = tab if tab is not None else np.zeros((1, 1))
         sch = self.scheme
         self._cfg = np.array([dt, tol, substeps or 0, sch.halvings, sch.order, sch.constant,
                               sch.stable_step, sch.sweep_exponent, sch.tol_share], dtype=float)
