@@ -359,8 +359,9 @@ def section_method(results: Results) -> list[str]:
         "- **Families**: `euler` = semi-implicit Euler with n fixed substeps (n = 1 is "
         "Gymnasium's Pendulum scheme); `rk4` = RK4 with n fixed substeps; `rk4 auto` = RK4 "
         "with error control at a tolerance per control step (the environments' default: "
-        f"{st['tolerance']:.0e}); `rk8`, `rk8 auto` = the same with the 8th-order "
-        "Dormand–Prince tableau (the environments' default integrator: "
+        f"{st['tolerance']:.0e}) by step doubling, the extrapolated solution carried on; "
+        "`rk8`, `rk8 auto` = the same with the 8th-order Dormand–Prince tableau and its "
+        "embedded estimate (the environments' default integrator: "
         f"`{st['method']}`); `midpoint` = implicit midpoint, n fixed substeps; "
         "`dop853` = scipy's, at rtol = atol = tol.",
         "",
