@@ -297,7 +297,7 @@ def _tableau(a: np.ndarray, b: np.ndarray, e3: np.ndarray, e5: np.ndarray) -> np
 _N8 = dop853_coefficients.N_STAGES
 _DOP853 = _tableau(dop853_coefficients.A, dop853_coefficients.B, dop853_coefficients.E3,
                    dop853_coefficients.E5)
-_RK4 = _tableau(  # classical RK4 (its error weights: unused, its fixed substeps only)
+_RK4 = _tableau(  # classical RK4: rk4 with fixed substeps (their reported error_estimate)
     np.array([[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 1.0, 0]]),
     np.array([1 / 6, 1 / 3, 1 / 3, 1 / 6]),
     np.zeros(5),
@@ -312,8 +312,9 @@ def _doubled(tab: np.ndarray, order: int) -> np.ndarray:
     one whole step (its first stage shared with the first half step's). With y₂ the two half
     steps' solution and y₁ the whole step's, the weights b give y₂ + (y₂ − y₁)/(2^p − 1)
     (Richardson's extrapolation, order p + 1) and the error weights (y₂ − y₁)/(2^p − 1), the
-    estimate of y₂'s error, which the extrapolated solution's error is far below: the adaptive
-    RK4 of Numerical Recipes.
+    estimate of y₂'s error, which the extrapolated solution's error is far below where the
+    substeps resolve the motion (the tests measure how far): the adaptive RK4 of Numerical
+    Recipes.
     """
     s = tab.shape[0] - 3
     a, b = tab[:s, :s], tab[s, :s]
