@@ -1,7 +1,7 @@
 """The episode core, written once for the single and the vector environment.
 
 It holds what happens between the integrator and Gymnasium, on arrays of rollers (the
-single environment passes arrays of one at reset, and floats on its fast step path):
+single environment's are arrays of one):
 
 * **Random streams.** Every random draw of an episode start is a counter-based uniform:
   ``uniform(seed, episode, draw)``, a pure function of the sub-environment's seed, the
@@ -11,8 +11,11 @@ single environment passes arrays of one at reset, and floats on its fast step pa
   array operations: no generator object per sub-environment.
 * **Episode starts** (:func:`start_episodes`): the scene (domain randomization), the
   target and the start state (a rejection draw, vectorized), with reset options.
-* **The step's outcome** (:func:`outcome`): reward, termination and success from a
-  :class:`~roller_gym.physics.integrators.StepResult`, and the info (:data:`INFO_KEYS`).
+* **The step's outcome** (:class:`OutcomeKernel`, :func:`outcome`): reward, termination,
+  success, the info (:data:`INFO_KEYS`) and the observation from a
+  :class:`~roller_gym.physics.integrators.StepResult`, for every roller in one compiled
+  loop over the task's formulas (:mod:`roller_gym.task`): the single environment runs it
+  on one roller, the vector environment on all of them, with the same bits.
 
 The generator is SplitMix64's mixing function applied to a counter that combines the
 three numbers (as in counter-based generators such as Philox or Squares): each
@@ -26,14 +29,27 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from typing import Any
 
+import numba
 import numpy as np
 from roller_gym import validation
 from roller_gym.physics import Scene
 from roller_gym.physics import equations as eq
+from roller_gym.physics.integrators import STEP_FIELDS
+from roller_gym.task import (
+    OBSERVATION_FIELDS,
+    observation_values,
+    position_error,
+    step_reward,
+    step_success,
+)
 
 __all__ = [
+    "CONTEXT_FIELDS",
     "INFO_KEYS",
+    "OUTCOME_ROWS",
     "Outcome",
+    "OutcomeKernel",
+    "info_rows",
     "random_seed",
     "scene_rows",
     "start_episodes",
@@ -49,6 +65,7 @@ _SCENE_DRAW, _TARGET_DRAW, _STATE_DRAW = 0, 16, 32
 #: Start-state candidates drawn per round, and the most rounds before giving up.
 CANDIDATES, ROUNDS = 4, 256
 _FIELDS = tuple(f.name for f in fields(Scene))
+_FIELD_NUMBER = {name: i for i, name in enumerate(OBSERVATION_FIELDS)}
 
 
 def _mix(x: np.ndarray) -> np.ndarray:
@@ -286,71 +303,141 @@ INFO_KEYS: dict[str, tuple[type, str]] = {
 }
 
 
+#: Per-roller numbers a step's outcome takes besides the integrator's StepResult, in the
+#: order of their rows: the torque τ [N·m], the target φ* [rad], its rate φ*' [rad/s], its
+#: holding torque τ* [N·m], the wrap rate q and dψ/dφ (``roller_gym.task``).
+CONTEXT_FIELDS = ("torque", "target_phi", "target_phi_dot", "target_torque", "wrap_rate",
+                  "psi_rate")
+#: The rows of the outcome's table: reward, terminated, then the info in INFO_KEYS order.
+OUTCOME_ROWS = ("reward", "terminated", *INFO_KEYS)
+_O = {name: i for i, name in enumerate(OUTCOME_ROWS)}
+(_S_PHI, _S_PHI_DOT, _, _S_SUBSTEPS, _S_FINITE, _S_NORMAL, _S_FRICTION, _S_ENERGY, _S_LIFT,
+ _S_SLIP, _S_ERR, _S_TOL_MET) = range(len(STEP_FIELDS))
+(_C_TORQUE, _C_TARGET, _C_TARGET_RATE, _C_TARGET_TORQUE, _C_Q,
+ _C_PSI_RATE) = range(len(CONTEXT_FIELDS))
+assert STEP_FIELDS[_S_TOL_MET] == "tol_met" and CONTEXT_FIELDS[_C_PSI_RATE] == "psi_rate"
+# Row numbers as compile-time constants of the kernel.
+(_O_REWARD, _O_TERMINATED, _O_PHI, _O_PHI_DOT, _O_PSI, _O_TORQUE, _O_NORMAL, _O_FRICTION,
+ _O_ENERGY, _O_SUBSTEPS, _O_LIFTING, _O_SLIPPING, _O_NONFINITE, _O_LIFT, _O_SLIP, _O_ERR,
+ _O_TOL_MET, _O_TARGET_PHI, _O_TARGET_PSI, _O_TARGET_RATE, _O_TARGET_TORQUE, _O_ERROR,
+ _O_SUCCESS) = range(len(OUTCOME_ROWS))
+assert OUTCOME_ROWS[_O_SUCCESS] == "is_success" and OUTCOME_ROWS[_O_TARGET_PSI] == "target_psi"
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _outcome_kernel(result, context, constants, observed, out, obs):
+    """Each roller's outcome: ``result`` (STEP_FIELDS rows), ``context`` (CONTEXT_FIELDS
+    rows) and the task's ``constants`` (TASK_CONSTANTS) into ``out`` (OUTCOME_ROWS rows) and
+    its observation into ``obs`` (rollers × len(observed), the fields numbered ``observed``
+    of OBSERVATION_FIELDS)."""
+    band, margin, w_p, speed_margin, w_v, w_u = (constants[0], constants[1], constants[2],
+                                                 constants[3], constants[4], constants[5])
+    success_speed, max_torque, symmetric = constants[6], constants[7], constants[8]
+    for i in range(result.shape[1]):
+        phi, phi_dot = result[_S_PHI, i], result[_S_PHI_DOT, i]
+        finite = result[_S_FINITE, i] != 0.0
+        lift, slip, estimate = result[_S_LIFT, i], result[_S_SLIP, i], result[_S_ERR, i]
+        tau, target, target_rate = context[_C_TORQUE, i], context[_C_TARGET, i], context[
+            _C_TARGET_RATE, i]
+        target_torque, q, rate = (context[_C_TARGET_TORQUE, i], context[_C_Q, i],
+                                  context[_C_PSI_RATE, i])
+        error = position_error(phi, target, q, symmetric)
+        speed_error = phi_dot - target_rate
+        reward = step_reward(error, speed_error, (tau - target_torque) / max_torque, band,
+                             margin, w_p, speed_margin, w_v, w_u)
+        lifting, slipping = lift <= 0.0, slip < 0.0
+        out[_O_REWARD, i] = reward if finite else 0.0  # a failed step earns nothing
+        out[_O_TERMINATED, i] = 1.0 if (lifting or slipping or not finite) else 0.0
+        out[_O_PHI, i], out[_O_PHI_DOT, i], out[_O_PSI, i] = phi, phi_dot, rate * phi
+        out[_O_TORQUE, i] = tau
+        out[_O_NORMAL, i], out[_O_FRICTION, i] = result[_S_NORMAL, i], result[_S_FRICTION, i]
+        out[_O_ENERGY, i], out[_O_SUBSTEPS, i] = result[_S_ENERGY, i], result[_S_SUBSTEPS, i]
+        out[_O_LIFTING, i] = 1.0 if lifting else 0.0
+        out[_O_SLIPPING, i] = 1.0 if slipping else 0.0
+        out[_O_NONFINITE, i] = 0.0 if finite else 1.0
+        out[_O_LIFT, i], out[_O_SLIP, i] = lift, slip
+        # inf where a finished step has no estimate (NaN from the integrator): info values
+        # then compare equal across identical runs (Gymnasium's checker)
+        out[_O_ERR, i] = math.inf if (estimate != estimate and finite) else estimate
+        out[_O_TOL_MET, i] = result[_S_TOL_MET, i]
+        out[_O_TARGET_PHI, i], out[_O_TARGET_PSI, i] = target, rate * target
+        out[_O_TARGET_RATE, i], out[_O_TARGET_TORQUE, i] = target_rate, target_torque
+        out[_O_ERROR, i] = error
+        out[_O_SUCCESS, i] = 1.0 if step_success(error, speed_error, band, success_speed) else 0.0
+        values = observation_values(phi, phi_dot, target, rate, target_rate)
+        for j in range(observed.size):
+            obs[i, j] = values[observed[j]]
+
+
 @dataclass
 class Outcome:
-    """Reward, flags and info of a step (floats for one roller, arrays for a batch)."""
+    """Reward, flags, info and observation of a step (arrays of rollers, or scalars where
+    every input was a scalar)."""
 
     reward: Any
     terminated: Any
     info: dict[str, Any]
+    observation: np.ndarray
 
 
-def outcome(task: Any, result: Any, action: Any, target: Any, q: Any, psi_rate: Any,
-            tau: Any, target_rate: Any = 0.0, target_torque: Any = 0.0) -> Outcome:
-    """What a step means for the task: the termination rule, the reward, the info.
+class OutcomeKernel:
+    """The step's outcome for a fixed set of rollers, into buffers of its own: what both
+    environments call once per step (and per reset).
 
-    The target enters as φ* [rad], its rate φ*' [rad/s] and its holding torque τ* [N·m]
-    (:func:`target_torque`).
-
-    ``result`` is the integrator's StepResult (floats or arrays); the step terminates on
-    lift-off, slip or a step that could not stay finite, each flagged in the info; a failed
-    step earns no reward.
+    ``table`` (``OUTCOME_ROWS`` × rollers, float64), ``observation`` (rollers × the task's
+    observation size, float32) and ``context`` (``CONTEXT_FIELDS`` × rollers, for the caller
+    to fill) are its buffers; :meth:`run` overwrites the first two.
     """
-    finite = result.finite
-    lifting = result.liftoff_margin <= 0.0
-    slipping = result.slip_margin < 0.0
-    array = isinstance(finite, np.ndarray)
-    nonfinite = ~finite if array else not finite
-    info = {
-        "phi": result.phi,
-        "phi_dot": result.phi_dot,
-        "psi": psi_rate * result.phi,
-        "torque": tau,
-        "normal_force": result.normal_force,
-        "friction_force": result.friction_force,
-        "energy": result.energy,
-        "substeps": result.substeps,
-        "lifting": lifting,
-        "slipping": slipping,
-        "nonfinite": nonfinite,
-        "liftoff_margin": result.liftoff_margin,
-        "slip_margin": result.slip_margin,
-        "error_estimate": _not_estimated_as_inf(result.error_estimate, finite),
-        "tol_met": result.tol_met,
-        "target_phi": target,
-        "target_psi": psi_rate * target,
-        "target_phi_dot": target_rate,
-        "target_torque": target_torque,
-        "position_error": task.error(result.phi, target, q),
-    }
-    step = {**info, "action": action}
-    reward = task.reward(step)
-    info["is_success"] = task.success(step)
-    if array:
-        reward = np.where(finite, reward, 0.0)
-        terminated = lifting | slipping | nonfinite
-    else:
-        reward = reward if finite else 0.0
-        terminated = lifting or slipping or nonfinite
-    return Outcome(reward, terminated, info)
+
+    def __init__(self, task: Any, num: int) -> None:
+        self.constants = task.constants()
+        self.observed = np.array([_FIELD_NUMBER[f] for f in task.observation],
+                                 dtype=np.int64)
+        self.context = np.zeros((len(CONTEXT_FIELDS), num))
+        self.table = np.empty((len(OUTCOME_ROWS), num))
+        self.observation = np.empty((num, self.observed.size), dtype=np.float32)
+
+    def run(self, result: np.ndarray) -> None:
+        """The outcome of the rollers' ``result`` (STEP_FIELDS rows × rollers, float64) under
+        the context in :attr:`context`."""
+        _outcome_kernel(result, self.context, self.constants, self.observed, self.table,
+                        self.observation)
 
 
-def _not_estimated_as_inf(estimate: Any, finite: Any) -> Any:
-    """The integrator's error estimate, with inf where a finished step has none (NaN from
-    the integrator): info values compare equal across identical runs (Gymnasium's checker)."""
-    if isinstance(estimate, np.ndarray):
-        return np.where(np.isnan(estimate) & finite, np.inf, estimate)
-    return math.inf if estimate != estimate and finite else estimate
+def outcome(task: Any, result: Any, target: Any, q: Any, psi_rate: Any, tau: Any,
+            target_rate: Any = 0.0, target_torque: Any = 0.0) -> Outcome:
+    """What a step means for the task: the termination rule, the reward, the info and the
+    observation (the environments run the same kernel through :class:`OutcomeKernel`).
+
+    ``result`` is the integrator's StepResult (floats or arrays); the target enters as φ*
+    [rad], its rate φ*' [rad/s] and its holding torque τ* [N·m] (:func:`target_torque`).
+    The step terminates on lift-off, slip or a step that could not stay finite, each flagged
+    in the info; a failed step earns no reward.
+    """
+    values = [getattr(result, f) for f in STEP_FIELDS]
+    context = [tau, target, target_rate, target_torque, q, psi_rate]
+    shape = np.broadcast_shapes(*(np.shape(v) for v in values + context))
+    n = math.prod(shape)
+    kernel = OutcomeKernel(task, n)
+    for row, value in enumerate(context):
+        kernel.context[row] = np.broadcast_to(np.asarray(value, float), shape).reshape(n)
+    table = np.array([np.broadcast_to(np.asarray(v, float), shape).reshape(n)
+                      for v in values]).reshape(len(STEP_FIELDS), n)
+    kernel.run(table)
+    rows = info_rows(kernel.table, tuple(INFO_KEYS))
+    scalar = shape == ()
+    info = {k: v[0] if scalar else v.reshape(shape) for k, v in rows.items()}
+    reward, terminated = kernel.table[_O_REWARD], kernel.table[_O_TERMINATED] != 0.0
+    if scalar:
+        return Outcome(reward[0], terminated[0], info, kernel.observation[0])
+    return Outcome(reward.reshape(shape), terminated.reshape(shape), info,
+                   kernel.observation.reshape(*shape, -1))
+
+
+def info_rows(table: np.ndarray, keys: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """The info arrays of ``keys`` from an outcome ``table``, each of its INFO_KEYS type
+    (new arrays: the table is overwritten at the next step)."""
+    return {key: table[_O[key]].astype(INFO_KEYS[key][0]) for key in keys}
 
 
 @dataclass(frozen=True)

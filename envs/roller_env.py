@@ -8,7 +8,6 @@ reset, step, info and rendering.
 from __future__ import annotations
 
 import math
-from collections import namedtuple
 from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
@@ -17,14 +16,17 @@ import numpy as np
 from gymnasium import spaces
 from roller_gym import episode, validation
 from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig
+from roller_gym.episode import CONTEXT_FIELDS, OUTCOME_ROWS, OutcomeKernel
 from roller_gym.physics import Scene
-from roller_gym.physics.integrators import STEP_FIELDS, Stepper
+from roller_gym.physics.integrators import Stepper
 from roller_gym.task import Task, get_task, psi_rate, wrap_rate
 
 __all__ = ["RollerEnv"]
 
-#: One roller's step result as named floats (the fields of the integrators' StepResult).
-StepFloats = namedtuple("StepFloats", STEP_FIELDS)
+_CONTEXT = {name: i for i, name in enumerate(CONTEXT_FIELDS)}
+_ROW = {name: i for i, name in enumerate(OUTCOME_ROWS)}
+_PHI, _PHI_DOT, _REWARD, _TERMINATED = (_ROW[k] for k in ("phi", "phi_dot", "reward",
+                                                          "terminated"))
 
 
 class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
@@ -79,8 +81,8 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
             info_keys=info_keys,
         )
         self.task = self.config.task
-        self._info_types = tuple((key, _NUMPY[episode.INFO_KEYS[key][0]])
-                                 for key in self.config.info_keys)
+        self._info = _ScalarInfo(self.config.info_keys)
+        self._outcome = OutcomeKernel(self.task, 1)
         self.render_mode = render_mode
         self.action_space = spaces.Box(-1.0, 1.0, (1,), np.float32)
         size = self.task.observation_size
@@ -89,9 +91,8 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         self._stepper = Stepper(cfg.scene, method=cfg.integrator, dt=cfg.dt,
                                 tol=cfg.tolerance, substeps=cfg.substeps or None)
         self._set_scene(cfg.scene)
-        self.target = self.task.default_target(self.scene)
-        self.target_rate, self._time = 0.0, 0.0
-        self.target_torque = float(episode.target_torque(self.scene, self.target))
+        self._set_target(self.task.default_target(self.scene), 0.0)
+        self._time = 0.0
         self._target_params = np.full(self.task.target_size, self.target)
         self.phi, self.phi_dot, self.torque = self.target, 0.0, 0.0
         self._stream_seed: int | None = None  # set by the first reset
@@ -103,6 +104,16 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         self._stepper.set_scene(scene)
         self._q = wrap_rate(scene)
         self._psi_rate = psi_rate(scene)
+        context = self._outcome.context
+        context[_CONTEXT["wrap_rate"], 0] = self._q
+        context[_CONTEXT["psi_rate"], 0] = self._psi_rate
+
+    def _set_target(self, target: float, rate: float) -> None:
+        self.target, self.target_rate = target, rate
+        self.target_torque = float(episode.target_torque(self.scene, target))
+        context = self._outcome.context
+        context[_CONTEXT["target_phi"], 0], context[_CONTEXT["target_phi_dot"], 0] = target, rate
+        context[_CONTEXT["target_torque"], 0] = self.target_torque
 
     # -- Gymnasium API -----------------------------------------------------------------
     def reset(
@@ -124,48 +135,42 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         if scene is not self.scene:  # randomized, or set by the options: its numbers anew
             self._set_scene(scene)
         self._target_params = start.target_params[0]
-        self.target, self.target_rate = float(start.target[0]), float(start.target_rate[0])
+        self._set_target(float(start.target[0]), float(start.target_rate[0]))
         self._time = 0.0
-        self.target_torque = float(episode.target_torque(self.scene, self.target))
         self.phi, self.phi_dot, self.torque = float(start.phi[0]), float(start.phi_dot[0]), 0.0
         self._stepper.forget()  # a new episode does not continue the last one's substeps
         at_start = episode.at_start(start.scene, start.phi, start.phi_dot)
-        out = episode.outcome(self.task, at_start, 0.0, start.target, self._q,
-                              self._psi_rate, 0.0, start.target_rate, self.target_torque)
+        out = episode.outcome(self.task, at_start, start.target, self._q, self._psi_rate, 0.0,
+                              start.target_rate, self.target_torque)
         if self.render_mode == "human":
             self.render()
-        first = {k: v[0] if isinstance(v, np.ndarray) else v for k, v in out.info.items()}
-        return self._observation(), _scalars(first, self._info_types)
+        return out.observation[0].copy(), {key: out.info[key][0]
+                                           for key in self.config.info_keys}
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         if self._stream_seed is None:
             raise RuntimeError("call reset() before step()")
-        if (type(action) is np.ndarray and action.shape == (1,) and action.dtype.kind == "f"
-                and math.isfinite(action[0])):
-            a = min(1.0, max(-1.0, float(action[0])))  # the common case, without the checks' cost
+        common = type(action) is np.ndarray and action.shape == (1,) and action.dtype.kind == "f"
+        a = action.item() if common else math.nan
+        if math.isfinite(a):  # the common case, without the checks' cost
+            a = min(1.0, max(-1.0, a))
         else:
             a = float(validation.actions(action, (1,))[0])
         tau = a * self.task.max_torque
-        result = StepFloats._make(self._stepper.advance(self.phi, self.phi_dot, tau))
-        self.phi, self.phi_dot, self.torque = result.phi, result.phi_dot, tau
+        results = self._stepper.run(self.phi, self.phi_dot, tau)
+        self._outcome.context[_CONTEXT["torque"], 0] = tau
         if self.task.moving_target:
             self._time += self.config.dt
             target, rate = self.task.target_at(self._target_params, self._time)
-            self.target, self.target_rate = float(target), float(rate)
-            self.target_torque = float(episode.target_torque(self.scene, self.target))
-        out = episode.outcome(self.task, result, a, self.target, self._q, self._psi_rate, tau,
-                              self.target_rate, self.target_torque)
+            self._set_target(float(target), float(rate))
+        outcome = self._outcome
+        outcome.run(results)
+        row = outcome.table[:, 0].tolist()
+        self.phi, self.phi_dot, self.torque = row[_PHI], row[_PHI_DOT], tau
         if self.render_mode == "human":
             self.render()
-        return self._observation(), float(out.reward), bool(out.terminated), False, \
-            _scalars(out.info, self._info_types)
-
-    def _observation(self) -> np.ndarray:
-        return np.array(
-            self.task.observation_terms(self.phi, self.phi_dot, self.target, self._psi_rate,
-                                        self.target_rate),
-            dtype=np.float32,
-        )
+        return (outcome.observation[0].copy(), row[_REWARD], row[_TERMINATED] != 0.0, False,
+                self._info(row))
 
     # -- rendering ---------------------------------------------------------------------
     def render(self) -> np.ndarray | None:
@@ -193,11 +198,18 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
             self._renderer = None
 
 
-_NUMPY = {float: np.float64, int: np.int64, bool: np.bool_}
+class _ScalarInfo:
+    """One roller's info from its row of the outcome's table (a list of floats), the values
+    as NumPy scalars (``np.float64``, ``np.bool_``, ``np.int64``): every value has a
+    ``dtype``, as array-based clients (TorchRL) expect."""
+
+    def __init__(self, keys: Sequence[str]) -> None:
+        kinds = {float: np.float64, int: np.int64, bool: None}  # None: a NumPy bool, looked up
+        self.plan = tuple((key, kinds[episode.INFO_KEYS[key][0]], _ROW[key]) for key in keys)
+
+    def __call__(self, row: list[float]) -> dict[str, Any]:
+        return {key: kind(row[i]) if kind is not None else _TRUTH[row[i] != 0.0]
+                for key, kind, i in self.plan}
 
 
-def _scalars(info: dict[str, Any], types: tuple[tuple[str, type], ...]) -> dict[str, Any]:
-    """The info of one roller, the keys of ``types``, as NumPy scalars (``np.float64``,
-    ``np.int64``, ``np.bool_``): every value has a ``dtype``, as array-based clients
-    (TorchRL) expect."""
-    return {key: kind(info[key]) for key, kind in types}
+_TRUTH = (np.False_, np.True_)

@@ -1,8 +1,11 @@
 """What a task asks of the roller: start state, target, observation, reward, success.
 
 A task knows the physics (:mod:`roller_gym.physics`) but neither Gymnasium nor pygame. Its
-per-step methods take floats (one environment) or arrays (the vector environment) and are
-written once for both. Each task is one class in its own module (``stabilize.py``,
+per-episode methods (targets, start states) take arrays of rollers. Its per-step formulas
+(position error, reward, success, observation) are this module's compiled functions, the
+same for every task and parametrized by the task's class variables (:data:`TASK_CONSTANTS`);
+the single and the vector environment run them in one compiled kernel
+(:func:`roller_gym.episode.outcome`). Each task is one class in its own module (``stabilize.py``,
 ``hold.py``, ``balance.py``), added to the registry :data:`TASKS` by the decorator
 :func:`register`, as dm_control's suite does; registration with Gymnasium, the agents,
 the scripts and the tests iterate over the registry. A new task is one class here and its
@@ -20,9 +23,8 @@ so the contact point is r·|error| metres of rolling away from its target.
 declared once in :data:`OBSERVATION_FIELDS`; a task lists the ones it observes, in order,
 in ``Task.observation``, and agents read them by name (:meth:`Task.index`).
 
-**The reward** sees the step's named physics (the info's keys, :data:`roller_gym.episode.
-INFO_KEYS`, and the ``action``). It is a product of bounded terms (:mod:`roller_gym.rewards`),
-in [0, 1] per step, the same for every task:
+**The reward** (:func:`step_reward`) is a product of bounded terms (:mod:`roller_gym.rewards`),
+in [0, 1] per step, the same for every task; a new term is added there, once:
 
     reward = position(ε)
              · (1 − w_v + w_v · near(φ' − φ*', speed_margin))
@@ -48,11 +50,13 @@ from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
 import numpy as np
+from numba.extending import register_jitable
 from roller_gym import rewards
 from roller_gym.physics import Scene, contact, equations, equilibria, holding_torque, trig
 
-__all__ = ["NAMESPACE", "OBSERVATION_FIELDS", "SPEED_SCALE", "TASKS", "Task", "get_task",
-           "hold_range", "per_scene", "psi_rate", "register", "unstable_rest_positions",
+__all__ = ["NAMESPACE", "OBSERVATION_FIELDS", "SPEED_SCALE", "TASKS", "TASK_CONSTANTS", "Task",
+           "get_task", "hold_range", "observation_values", "per_scene", "position_error",
+           "psi_rate", "register", "step_reward", "step_success", "unstable_rest_positions",
            "wrap_rate"]
 
 #: The Gymnasium namespace of every task: ``roller_gym/<Task>-v<version>``.
@@ -87,8 +91,19 @@ def register(cls: type[Task]) -> type[Task]:
     if unknown:
         raise ValueError(f"{cls.name}.observation names unknown fields {sorted(unknown)}; "
                          f"known: {', '.join(OBSERVATION_FIELDS)}")
+    compiled = [name for name in _COMPILED if getattr(cls, name) is not getattr(Task, name)]
+    if compiled:
+        raise ValueError(
+            f"{cls.name} overrides {', '.join(compiled)}: the environments compute these in "
+            "one compiled kernel from the task's class variables (TASK_CONSTANTS); set those, "
+            "or change the formula itself (step_reward, step_success, position_error)")
     TASKS[cls.name] = cls
     return cls
+
+
+#: The per-step methods the environments do not call (their compiled kernel runs the same
+#: formulas), so a task may not override them.
+_COMPILED = ("error", "observation_dict", "observation_terms", "reward", "success")
 
 
 def get_task(task: str | type[Task]) -> type[Task]:
@@ -288,17 +303,14 @@ class Task:
         """The target used when none is drawn (for rendering before reset)."""
         return 0.0
 
-    # -- per step (floats or arrays) ---------------------------------------------------
+    # -- per step (the formulas are the module's compiled functions, see below) -------
+    def constants(self) -> np.ndarray:
+        """The task's numbers the per-step formulas take, in :data:`TASK_CONSTANTS` order."""
+        return np.array([float(getattr(self, name)) for name in TASK_CONSTANTS])
+
     def error(self, phi, target, q):
-        """The task's position error [rad of φ]: :meth:`error_to` the target or, with
-        ``symmetric_target``, to the nearer of ±φ*."""
-        error = self.error_to(phi, target, q)
-        if not self.symmetric_target:
-            return error
-        mirror = self.error_to(phi, -target, q)
-        if type(error) is float:
-            return error if abs(error) <= abs(mirror) else mirror
-        return np.where(np.abs(error) <= np.abs(mirror), error, mirror)
+        """The task's position error [rad of φ] (:func:`position_error`)."""
+        return position_error(phi, target, q, float(self.symmetric_target))
 
     @staticmethod
     def error_to(phi, target, q):
@@ -313,46 +325,74 @@ class Task:
         return tuple(terms[name] for name in self.observation)
 
     def observation_dict(self, phi, phi_dot, target, rate, target_rate=0.0) -> dict[str, Any]:
-        """The observed fields by name (the formulas of :data:`OBSERVATION_FIELDS`)."""
-        psi = rate * phi
-        f = rewards.xp(psi)
-        out = {"speed": f.tanh(phi_dot / SPEED_SCALE)}
-        out["sin_psi"], out["cos_psi"] = _sincos(psi)
-        out["sin_phi"], out["cos_phi"] = _sincos(phi)
-        if self.observes_target:
-            out["sin_psi_target"], out["cos_psi_target"] = _sincos(rate * target)
-            out["sin_phi_target"], out["cos_phi_target"] = _sincos(target)
-        if "target_speed" in self.observation:
-            out["target_speed"] = rewards.xp(psi).tanh(target_rate / SPEED_SCALE)
-        return out
+        """Every observation field by name (:func:`observation_values`)."""
+        return dict(zip(OBSERVATION_FIELDS,
+                        observation_values(phi, phi_dot, target, rate, target_rate),
+                        strict=True))
 
     def reward(self, step: Mapping[str, Any]):
-        """The reward in [0, 1] (formula in the module docs) from the step's named physics:
-        the info's keys (``position_error``, ``phi_dot``, ``target_phi_dot``, ``torque``,
-        ``target_torque``, ``energy``, the forces and margins, …) and ``action``."""
-        error, band = step["position_error"], self.success_band
-        position = ((1.0 - self.precision_weight)
-                    * rewards.tolerance(error, band, self.position_margin)
-                    + self.precision_weight * rewards.tolerance(error, band, 3.0 * band))
-        return position * rewards.product(
-            (rewards.near(step["phi_dot"] - step["target_phi_dot"], self.speed_margin),
-             self.speed_weight),
-            (rewards.near((step["torque"] - step["target_torque"]) / self.max_torque, 1.0),
-             self.control_weight),
-        )
+        """The reward in [0, 1] (:func:`step_reward`) from the step's named physics: the
+        info's keys (``position_error``, ``phi_dot``, ``target_phi_dot``, ``torque``,
+        ``target_torque``)."""
+        return step_reward(step["position_error"], step["phi_dot"] - step["target_phi_dot"],
+                           (step["torque"] - step["target_torque"]) / self.max_torque,
+                           *self.constants()[:_REWARD_CONSTANTS])
 
     def success(self, step: Mapping[str, Any]):
-        """Inside the success band, moving with the target (at rest for a rest position)."""
-        return ((abs(step["position_error"]) <= self.success_band)
-                & (abs(step["phi_dot"] - step["target_phi_dot"]) <= self.success_speed))
+        """Inside the success band, moving with the target (:func:`step_success`)."""
+        return step_success(step["position_error"], step["phi_dot"] - step["target_phi_dot"],
+                            self.success_band, self.success_speed)
 
 
-def _sincos(x):
-    """(sin x, cos x): :mod:`math`'s for a Python float (the single environment's fast path),
-    else :func:`roller_gym.physics.trig.sincos` (one compiled loop over float64 arrays)."""
-    if type(x) is float:
-        return math.sin(x), math.cos(x)
-    return trig.sincos(x)
+# -- the per-step formulas, written once -------------------------------------------------------
+# Plain arithmetic on NumPy's ufuncs and :mod:`roller_gym.physics.trig`: the same source serves
+# floats and arrays from Python and, compiled, the environments' per-step kernel
+# (:func:`roller_gym.episode.outcome`), which takes a task's numbers as :data:`TASK_CONSTANTS`.
+
+#: The task's class variables the per-step formulas take, in order (the reward's first).
+TASK_CONSTANTS = ("success_band", "position_margin", "precision_weight", "speed_margin",
+                  "speed_weight", "control_weight", "success_speed", "max_torque",
+                  "symmetric_target")
+_REWARD_CONSTANTS = 6
+
+
+@register_jitable
+def position_error(phi, target, q, symmetric):
+    """The position error [rad of φ], wrap(q (φ − φ*))/q (see the module docs); with
+    ``symmetric`` (1.0) the error to the nearer of ±φ*."""
+    error = rewards.wrap_angle(q * (phi - target)) / q
+    mirror = rewards.wrap_angle(q * (phi + target)) / q
+    return trig.select((symmetric != 0.0) & (np.abs(mirror) < np.abs(error)), mirror, error)
+
+
+@register_jitable
+def step_reward(error, speed_error, control_error, band, position_margin, precision_weight,
+                speed_margin, speed_weight, control_weight):
+    """The reward in [0, 1] (formula in the module docs) from the position error ε [rad of φ],
+    the speed error φ' − φ*' [rad/s] and the control error (τ − τ*)/max_torque [-]."""
+    position = ((1.0 - precision_weight) * rewards.tolerance(error, band, position_margin)
+                + precision_weight * rewards.tolerance(error, band, 3.0 * band))
+    return (position * rewards.blend(rewards.near(speed_error, speed_margin), speed_weight)
+            * rewards.blend(rewards.near(control_error, 1.0), control_weight))
+
+
+@register_jitable
+def step_success(error, speed_error, band, success_speed):
+    """|ε| <= band [rad of φ] and |φ' − φ*'| <= success_speed [rad/s]."""
+    return (np.abs(error) <= band) & (np.abs(speed_error) <= success_speed)
+
+
+@register_jitable
+def observation_values(phi, phi_dot, target, rate, target_rate):
+    """Every field of :data:`OBSERVATION_FIELDS`, in its order (the formulas listed there);
+    ``rate`` = dψ/dφ, ``target_rate`` φ*' [rad/s]."""
+    sin_psi, cos_psi = trig.sincos(rate * phi)
+    sin_phi, cos_phi = trig.sincos(phi)
+    sin_psi_target, cos_psi_target = trig.sincos(rate * target)
+    sin_phi_target, cos_phi_target = trig.sincos(target)
+    return (cos_psi, sin_psi, cos_phi, sin_phi, np.tanh(phi_dot / SPEED_SCALE),
+            cos_psi_target, sin_psi_target, cos_phi_target, sin_phi_target,
+            np.tanh(target_rate / SPEED_SCALE))
 
 
 def per_scene(function, scene: Scene) -> np.ndarray:

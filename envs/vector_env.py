@@ -31,17 +31,13 @@ from gymnasium.vector.utils import batch_space
 from roller_gym import episode, validation
 from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig, resolve_scene
 from roller_gym.physics import Scene
-from roller_gym.physics.integrators import STEP_FIELDS, BatchStepper, StepResult
+from roller_gym.physics.integrators import BatchStepper
 from roller_gym.task import Task, get_task, psi_rate, wrap_rate
 
 __all__ = ["RollerVectorEnv"]
 
-
-#: The info keys whose values are the environment's own state arrays, which later episode
-#: starts overwrite in place: a step's info gets copies of them, so that nothing a step
-#: returns changes afterwards (its other info arrays are made by the step itself).
-_STATE_KEYS = frozenset({"phi", "phi_dot", "torque", "target_phi", "target_phi_dot",
-                         "target_torque"})
+_ROW = {name: i for i, name in enumerate(episode.OUTCOME_ROWS)}
+_CONTEXT = {name: i for i, name in enumerate(episode.CONTEXT_FIELDS)}
 
 
 def _autoreset_mode(value: AutoresetMode | str) -> AutoresetMode:
@@ -144,6 +140,8 @@ class RollerVectorEnv(VectorEnv):
         self._seeds = np.zeros(num_envs, np.uint64)
         self._episodes = np.zeros(num_envs, np.uint64)
         self._seeded = False
+        self._outcome = episode.OutcomeKernel(task, num_envs)
+        self._obs = np.zeros((num_envs, size), dtype=np.float32)  # the last observation
         self._renderers: list[Any] | None = None
 
     @staticmethod
@@ -170,7 +168,8 @@ class RollerVectorEnv(VectorEnv):
 
     # -- episode starts ------------------------------------------------------------------
     def _start(self, idx: np.ndarray, options: Mapping[str, Any] | None) -> dict[str, Any]:
-        """Start new episodes in sub-environments ``idx``; returns their reset info."""
+        """Start new episodes in sub-environments ``idx``: their observation goes into the
+        last observation; returns their reset info."""
         base = self._base if self._base.batch_size is None else episode.take(
             self._base, idx, self.num_envs)
         start = episode.start_episodes(self.config, base, self._seeds[idx],
@@ -188,9 +187,10 @@ class RollerVectorEnv(VectorEnv):
         self.torque[idx] = 0.0
         self.steps[idx] = 0
         rest = episode.at_start(start.scene, start.phi, start.phi_dot)
-        return episode.outcome(self.task, rest, 0.0, start.target, self._q[idx],
-                               self._psi_rate[idx], 0.0, start.target_rate,
-                               self.target_torque[idx]).info
+        out = episode.outcome(self.task, rest, start.target, self._q[idx], self._psi_rate[idx],
+                              0.0, start.target_rate, self.target_torque[idx])
+        self._obs[idx] = out.observation
+        return out.info
 
     def reset(
         self,
@@ -236,23 +236,26 @@ class RollerVectorEnv(VectorEnv):
         if not self._seeded:
             raise RuntimeError("call reset() before step()")
         tau = a * self.task.max_torque
-        # The stepper's arrays are its own buffers: copies, so that what this step returns
-        # stays as it is after the next.
-        raw = self._stepper.advance(self.phi, self.phi_dot, tau)
-        result = StepResult(*(np.array(getattr(raw, f)) for f in STEP_FIELDS))
-        self.phi, self.phi_dot, self.torque = result.phi, result.phi_dot, tau
+        results = self._stepper.run(self.phi, self.phi_dot, tau)
         self.steps += 1
         if self.task.moving_target:
             self.target, self.target_rate = self.task.target_at(
                 self._target_params, self.steps * self.config.dt)
             self.target_torque = episode.target_torque(self._scene, self.target)
-        out = episode.outcome(self.task, result, a, self.target, self._q, self._psi_rate, tau,
-                              self.target_rate, self.target_torque)
-        reward = np.asarray(out.reward, dtype=np.float64)
-        terminated = np.asarray(out.terminated, dtype=bool)
+        outcome = self._outcome
+        for name, row in zip(episode.CONTEXT_FIELDS, (tau, self.target, self.target_rate,
+                                                      self.target_torque, self._q,
+                                                      self._psi_rate), strict=True):
+            outcome.context[_CONTEXT[name]] = row
+        outcome.run(results)
+        table = outcome.table
+        self.phi, self.phi_dot, self.torque = table[_ROW["phi"]].copy(), table[
+            _ROW["phi_dot"]].copy(), tau
+        self._obs[:] = outcome.observation
+        reward = table[_ROW["reward"]].copy()
+        terminated = table[_ROW["terminated"]] != 0.0
         truncated = self.steps >= self.max_episode_steps
-        info = {key: np.array(out.info[key], copy=True) if key in _STATE_KEYS else out.info[key]
-                for key in self.config.info_keys}
+        info = episode.info_rows(table, self.config.info_keys)
         everyone = np.ones(self.num_envs, dtype=bool)
         info.update({f"_{k}": everyone for k in list(info)})
 
@@ -291,12 +294,8 @@ class RollerVectorEnv(VectorEnv):
 
     # -- observation and info ------------------------------------------------------------
     def _observation(self) -> np.ndarray:
-        terms = self.task.observation_terms(self.phi, self.phi_dot, self.target, self._psi_rate,
-                                            self.target_rate)
-        out = np.empty((self.num_envs, len(terms)), dtype=np.float32)
-        for j, term in enumerate(terms):  # rounded to float32 as they are written
-            out[:, j] = term
-        return out
+        """The observation of every sub-environment's current state (a new array)."""
+        return self._obs.copy()
 
     def _masked_info(self, rows: dict[str, Any], idx: np.ndarray) -> dict[str, Any]:
         """A vector info whose rows ``idx`` hold ``rows`` and whose masks mark only them."""

@@ -188,7 +188,7 @@ def test_a_failed_step_is_not_reported_as_lift_off_or_slip():
     task = roller_gym.stabilize.StabilizeTask()
     nan = float("nan")
     failed = episode.RestState(0.3, 0.1, nan, 12, False, nan, nan, nan, nan, nan, nan, False)
-    out = episode.outcome(task, failed, 0.5, 0.0, 0.25, 0.25, 0.25)
+    out = episode.outcome(task, failed, 0.0, 0.25, 0.25, 0.25)
     assert out.reward == 0.0 and out.terminated
     assert out.info["nonfinite"] and not out.info["lifting"] and not out.info["slipping"]
     n = 3
@@ -197,7 +197,7 @@ def test_a_failed_step_is_not_reported_as_lift_off_or_slip():
     finite = np.array([True, False, True])
     batch = episode.RestState(batch.phi, batch.phi_dot, batch.phi_ddot, batch.substeps, finite,
                               *(np.where(finite, 0.5, nan) for _ in range(5)))
-    out = episode.outcome(task, batch, np.zeros(n), np.zeros(n), np.full(n, 0.25),
+    out = episode.outcome(task, batch, np.zeros(n), np.full(n, 0.25),
                           np.full(n, 0.25), np.zeros(n))
     np.testing.assert_array_equal(out.terminated, [False, True, False])
     assert out.reward[1] == 0.0 and out.reward[0] > 0

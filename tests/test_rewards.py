@@ -86,3 +86,70 @@ def test_tolerance_is_one_inside_the_band_and_near_outside():
     for xi, g in zip(x[[0, 5, 6]], got[[0, 5, 6]], strict=True):
         assert g == pytest.approx(math.exp(math.log(0.1) * ((abs(xi) - 0.05) / 0.2) ** 2))
     assert rewards.tolerance(0.25, 0.05, 0.2) == pytest.approx(0.1)
+
+
+def documented_reward(task, info):
+    """The reward as the task's docs write it, from a step's info, in plain Python floats:
+    (0.4 tol(ε, b, m_p) + 0.6 tol(ε, b, 3b)) (0.5 + 0.5 near(φ' − φ*', 5)) (0.8 + 0.2 near(
+    (τ − τ*)/max_torque, 1)), written here apart from the package's compiled formula."""
+    def near(x, m):
+        return math.exp(math.log(0.1) * (x / m) ** 2)
+
+    def tol(x, b, m):
+        return 1.0 if abs(x) <= b else near(abs(x) - b, m)
+
+    e, b = float(info["position_error"]), task.success_band
+    w_p, w_v, w_u = task.precision_weight, task.speed_weight, task.control_weight
+    position = (1 - w_p) * tol(e, b, task.position_margin) + w_p * tol(e, b, 3 * b)
+    speed = near(float(info["phi_dot"]) - float(info["target_phi_dot"]), task.speed_margin)
+    control = near((float(info["torque"]) - float(info["target_torque"])) / task.max_torque,
+                   1.0)
+    return position * (1 - w_v + w_v * speed) * (1 - w_u + w_u * control)
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_the_environments_pay_the_documented_reward(env_id):
+    """The reward the single and the vector environment return (one compiled kernel) is the
+    documented formula evaluated here on the step's info, and the position error is the
+    wrapped distance to the target (to the nearer of ±φ* where the task is symmetric)."""
+    env = gym.make(env_id)
+    task = env.unwrapped.task
+    vec = gym.make_vec(env_id, num_envs=3)
+    _, vinfo = vec.reset(seed=5)
+    env.reset(seed=5)
+    rng = np.random.default_rng(5)
+    for _ in range(25):
+        u = rng.uniform(-1, 1)
+        _, reward, terminated, _, info = env.step(np.array([u], np.float32))
+        if terminated:
+            break
+        assert reward == pytest.approx(documented_reward(task, info), rel=1e-12, abs=1e-15)
+        q = env.unwrapped._q
+        wrap = [(q * (info["phi"] - t) + math.pi) % (2 * math.pi) - math.pi for t in
+                ((info["target_phi"], -info["target_phi"]) if task.symmetric_target
+                 else (info["target_phi"],))]
+        assert abs(info["position_error"]) == pytest.approx(min(abs(w) / abs(q) for w in wrap),
+                                                            rel=1e-9, abs=1e-12)
+    _, vreward, vterm, _, vinfo = vec.step(rng.uniform(-1, 1, (3, 1)).astype(np.float32))
+    for i in np.flatnonzero(~vterm):
+        row = {k: vinfo[k][i] for k in ("position_error", "phi_dot", "target_phi_dot",
+                                         "torque", "target_torque")}
+        assert vreward[i] == pytest.approx(documented_reward(task, row), rel=1e-12, abs=1e-15)
+
+
+def test_a_task_may_not_override_what_the_kernel_computes():
+    """The environments compute error, reward, success and observation in one compiled
+    kernel from the task's class variables: a task overriding one of them is refused at
+    registration, naming the method, instead of being silently ignored."""
+    from roller_gym.stabilize import StabilizeTask
+    from roller_gym.task import TASKS, register
+
+    class Greedy(StabilizeTask):
+        name = "RollerGreedyTest"
+
+        def reward(self, step):
+            return 1.0
+
+    with pytest.raises(ValueError, match=r"RollerGreedyTest overrides reward: .*TASK_CONSTANTS"):
+        register(Greedy)
+    assert "RollerGreedyTest" not in TASKS

@@ -823,7 +823,8 @@ class _Base:
 
     def __getstate__(self) -> dict:
         state = dict(self.__dict__)
-        for name in ("_serial", "_parallel", "_kernel", "_flat"):  # made again on unpickling
+        # views and kernels, made again on unpickling
+        for name in ("_serial", "_parallel", "_kernel", "_flat", "_results"):
             state.pop(name, None)
         return state
 
@@ -834,6 +835,7 @@ class _Base:
 
     def _link(self) -> None:
         """Views and kernel choices that refer to the buffers (again after unpickling)."""
+        self._results = self._io[_OUT:]  # the STEP_FIELDS rows
 
     def _warn(self) -> None:
         if self.substeps is not None:  # fixed substeps: tol_met informs, no warning
@@ -864,6 +866,7 @@ class Stepper(_Base):
         self.set_scene(scene)
 
     def _link(self) -> None:
+        super()._link()
         self._flat = self._io.reshape(-1)  # a view: row i is element i
 
     def set_scene(self, scene: Scene) -> None:
@@ -880,16 +883,22 @@ class Stepper(_Base):
         that an episode's steps do not depend on the episodes before it."""
         self._flat[_H_NEXT] = 0.0
 
-    def advance(self, phi: float, phi_dot: float, tau: float) -> tuple:
-        """One control step from (φ [rad], φ' [rad/s]) at torque τ [N·m]: the fields of
-        :class:`StepResult` in :data:`STEP_FIELDS` order, as Python float, int and bool."""
+    def run(self, phi: float, phi_dot: float, tau: float) -> np.ndarray:
+        """One control step from (φ [rad], φ' [rad/s]) at torque τ [N·m]; returns the
+        result as a table (:data:`STEP_FIELDS` rows × 1 roller, float64), a view of the
+        stepper's buffer, valid until the next call (what the environment reads)."""
         flat = self._flat
         flat[_PHI_IN], flat[_W_IN], flat[_TAU] = phi, phi_dot, tau
         self._serial(self._io, self._tab, self._cfg)
-        (p, w, a, nsub, finite, normal, friction, energy, lift, slip, err,
-         met) = flat[_OUT:].tolist()
-        if met == 0.0 and finite != 0.0:
+        if flat[_TOL_MET] == 0.0 and flat[_FINITE] != 0.0:
             self._warn()
+        return self._results
+
+    def advance(self, phi: float, phi_dot: float, tau: float) -> tuple:
+        """One control step from (φ [rad], φ' [rad/s]) at torque τ [N·m]: the fields of
+        :class:`StepResult` in :data:`STEP_FIELDS` order, as Python float, int and bool."""
+        (p, w, a, nsub, finite, normal, friction, energy, lift, slip, err,
+         met) = self.run(phi, phi_dot, tau)[:, 0].tolist()
         return (p, w, a, int(nsub), finite != 0.0, normal, friction, energy, lift, slip, err,
                 met != 0.0)
 
@@ -914,9 +923,12 @@ class BatchStepper(_Base):
         self._substeps = np.zeros(self.num, dtype=np.int64)
         self._finite = np.zeros(self.num, dtype=bool)
         self._tol_met = np.zeros(self.num, dtype=bool)
+        self._typed = {"substeps": self._substeps, "finite": self._finite,
+                       "tol_met": self._tol_met}
         self._link()
 
     def _link(self) -> None:
+        super()._link()
         self._kernel = self._parallel if self.num >= PARALLEL_THRESHOLD else self._serial
 
     def set_scenes(self, scene: Scene, index=None) -> None:
@@ -938,22 +950,28 @@ class BatchStepper(_Base):
         """The rollers' scene numbers, shape ``(len(SCENE_FIELDS), num)`` (a view)."""
         return self._io[: len(SCENE_FIELDS)]
 
-    def advance(self, phi: np.ndarray, phi_dot: np.ndarray, tau: np.ndarray) -> StepResult:
-        """One control step of every roller; arrays of ``num``. The result's arrays are views
-        of the stepper's own buffers, valid until the next call."""
+    def run(self, phi: np.ndarray, phi_dot: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """One control step of every roller (arrays of ``num``); returns the result as a
+        table (:data:`STEP_FIELDS` rows × ``num``, float64), a view of the stepper's buffer,
+        valid until the next call."""
         io = self._io
         io[_PHI_IN], io[_W_IN], io[_TAU] = phi, phi_dot, tau
         if np.isnan(io[_M]).any():
             raise ValueError("some rollers have no scene: call set_scenes first")
         self._kernel(io, self._tab, self._cfg)
-        np.copyto(self._substeps, io[_NSUB], casting="unsafe")
-        np.not_equal(io[_FINITE], 0.0, out=self._finite)
-        np.not_equal(io[_TOL_MET], 0.0, out=self._tol_met)
-        if not (self._tol_met | ~self._finite).all():
+        if not ((io[_TOL_MET] != 0.0) | (io[_FINITE] == 0.0)).all():
             self._warn()
-        return StepResult(io[_PHI], io[_W], io[_ACC], self._substeps, self._finite,
-                          io[_NORMAL], io[_FRICTION], io[_ENERGY], io[_LIFT], io[_SLIP],
-                          io[_ERR], self._tol_met)
+        return self._results
+
+    def advance(self, phi: np.ndarray, phi_dot: np.ndarray, tau: np.ndarray) -> StepResult:
+        """One control step of every roller; arrays of ``num``. The result's arrays are views
+        of the stepper's own buffers, valid until the next call."""
+        io = self.run(phi, phi_dot, tau)
+        np.copyto(self._substeps, io[_NSUB - _OUT], casting="unsafe")
+        np.not_equal(io[_FINITE - _OUT], 0.0, out=self._finite)
+        np.not_equal(io[_TOL_MET - _OUT], 0.0, out=self._tol_met)
+        return StepResult(*(self._typed.get(f, row) for f, row in zip(STEP_FIELDS, io,
+                                                                       strict=True)))
 
 
 def step(
