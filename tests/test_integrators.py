@@ -809,20 +809,28 @@ def test_scalar_and_batch_steppers_agree_bit_for_bit(method):
             assert value == b or (math.isnan(value) and math.isnan(b)), (name, i)
 
 
-def test_rk4_error_control_extrapolates_two_half_steps_against_one_whole_step():
-    """rk4 under error control takes doubled steps: one of its substeps is Richardson's
-    extrapolation y2 + (y2 − y1)/15 of two classical half steps (y2) and one whole classical
-    step (y1), each taken here by rk4's fixed substeps, and its error estimate is
-    max |y2 − y1|/15 over φ and φ'."""
+def test_rk4_error_control_is_scipys_rk45_step():
+    """rk4 under error control takes Dormand–Prince 5(4) substeps: one of its substeps is the
+    step scipy's RK45 takes (``scipy.integrate._ivp.rk.rk_step``, the 5th-order solution
+    carried on), and its error estimate is max |h E·K| over φ and φ', the difference to the
+    embedded 4th-order solution that scipy computes from the same stages."""
+    from scipy.integrate._ivp.rk import RK45, rk_step
+
     scene, (phi, w, tau) = preset("paper"), (0.7, 2.0, 0.3)
-    y1 = step(scene, phi, w, tau, DT, method="rk4", substeps=1)
-    y2 = step(scene, phi, w, tau, DT, method="rk4", substeps=2)
-    doubled = integrators.Stepper(scene, method="rk4", dt=DT, tol=1e-8, substeps=1)
-    doubled._tab = integrators.SCHEMES["rk4"].tableau  # one substep of the error-control pair
-    out = integrators.StepResult(*doubled.advance(phi, w, tau))
-    want = (y2.phi + (y2.phi - y1.phi) / 15, y2.phi_dot + (y2.phi_dot - y1.phi_dot) / 15)
-    assert out.phi == pytest.approx(want[0], rel=1e-13)
-    assert out.phi_dot == pytest.approx(want[1], rel=1e-13)
-    estimate = max(abs(y2.phi - y1.phi), abs(y2.phi_dot - y1.phi_dot)) / 15
-    assert out.error_estimate == pytest.approx(estimate, rel=1e-9)
-    assert abs(out.phi - y2.phi) > 1e3 * abs(out.phi) * 1e-16  # the extrapolation mattered
+    params = scene.params
+
+    def f(_t, y):
+        return np.array([y[1], eq.accel(y[0], y[1], tau, *params)])
+
+    y0 = np.array([phi, w])
+    k = np.empty((RK45.n_stages + 1, 2))
+    y1, _ = rk_step(f, 0.0, y0, f(0.0, y0), DT, RK45.A, RK45.B, RK45.C, k)
+    scipy_error = DT * (k.T @ RK45.E)
+    one = integrators.Stepper(scene, method="rk4", dt=DT, tol=1e-8, substeps=1)
+    one._tab = integrators.SCHEMES["rk4"].tableau  # one substep of the error-control pair
+    out = integrators.StepResult(*one.advance(phi, w, tau))
+    assert out.phi == pytest.approx(y1[0], rel=1e-14)
+    assert out.phi_dot == pytest.approx(y1[1], rel=1e-14)
+    assert out.error_estimate == pytest.approx(np.max(np.abs(scipy_error)), rel=1e-9)
+    classical = step(scene, phi, w, tau, DT, method="rk4", substeps=1)  # fixed substeps
+    assert abs(classical.phi - out.phi) > 1e3 * abs(out.phi) * 1e-16

@@ -357,9 +357,10 @@ def section_method(results: Results) -> list[str]:
         "`mujoco.mj_step(model, data, n)`). `steps/s` = control steps per second of the "
         "physics alone, the ceiling of an environment's steps/s.",
         "- **Families**: `euler` = semi-implicit Euler with n fixed substeps (n = 1 is "
-        "Gymnasium's Pendulum scheme); `rk4` = RK4 with n fixed substeps; `rk4 auto` = RK4 "
-        "with error control at a tolerance per control step (the environments' default: "
-        f"{st['tolerance']:.0e}) by step doubling, the extrapolated solution carried on; "
+        "Gymnasium's Pendulum scheme); `rk4` = classical RK4 with n fixed substeps; `rk4 "
+        "auto` = error control at a tolerance per control step (the environments' default: "
+        f"{st['tolerance']:.0e}) with the Dormand–Prince 5(4) pair (scipy's RK45 tableau, its "
+        "5th-order solution carried on); "
         "`rk8`, `rk8 auto` = the same with the 8th-order Dormand–Prince tableau and its "
         "embedded estimate (the environments' default integrator: "
         f"`{st['method']}`); `midpoint` = implicit midpoint, n fixed substeps; "
@@ -627,9 +628,9 @@ def section_cost(results: Results) -> list[str]:
         "whose n equal substeps of the same scheme end within tol of the reference (DOP853 "
         f"at rtol = atol = {st['reference_tol']:g}), found by doubling n and then bisecting "
         "between n/2 and n. `ratio` = automatic / smallest fixed, per step, counted in "
-        "right-hand-side evaluations: the same as substeps for `rk8`; `rk4` takes doubled "
-        "steps of 11 evaluations under error control and classical steps of 4 with fixed "
-        "substeps. Skipped: steps "
+        "right-hand-side evaluations: the same as substeps for `rk8`; `rk4` takes "
+        "Dormand–Prince 5(4) substeps of 6 evaluations under error control and classical "
+        "steps of 4 with fixed substeps. Skipped: steps "
         f"whose reference's own error (against a run at 10 × rtol) exceeds "
         f"{st['uncertainty_share']:g} tol, and steps no fixed count up to "
         f"{st['max_fixed']:,} meets (the tolerance is out of float64's reach there).",
@@ -664,7 +665,7 @@ def section_cost(results: Results) -> list[str]:
         ])
     L += md_table(["method", "tol", "variant", "steps measured", "skipped",
                    "ratio median", "ratio 99th pct", "ratio max",
-                   "mean substeps automatic / smallest fixed (rk4: doubled / classical)",
+                   "mean substeps automatic / smallest fixed (rk4: Dormand–Prince / classical)",
                    "error ≤ tol",
                    "worst error / tol", "tol_met False"], rows)
     L += ["", "The means compare totals: a fixed count must resolve a step's fastest part along "
@@ -819,10 +820,10 @@ def section_targets(results: Results) -> list[str]:
         notes.append(
             f"- **Cost of the error control, {row['method']} at tol {row['tol']:.0e}**: "
             f"{v.miss}. The automatic count follows the scheme's error estimate, which "
-            + ("for rk4 is step doubling's: Richardson's estimate of the two half steps' "
-               "error, while their extrapolated 5th-order solution is carried on, so it "
-               "overstates the error of what is carried; a doubled step costs 11 "
-               "evaluations, against 8 for two classical steps"
+            + ("for rk4 is Dormand–Prince 5(4)'s: the estimate is of the embedded "
+               "4th-order solution's error, while the 5th-order solution is carried on, so "
+               "it overstates the error of what is carried, most on the stiff scenes; a "
+               "substep costs 6 evaluations, against 4 for a classical one"
                if row["method"] == "rk4" else
                "for rk8 is DOP853's blended 5th/3rd-order one: it overstates the 8th-order "
                "step's error, most on the stiff scenes")

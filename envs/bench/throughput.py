@@ -52,7 +52,7 @@ def interleaved(runs: dict[str, tuple[Any, np.ndarray, int]],
     the batch of step k, drawn anew every step as an exploring agent's): every repeat runs
     each env's ``steps`` steps in turn, so that a shared machine's drift hits them alike, and
     each env keeps its fastest run. For our envs, also the share of that run spent in the
-    physics kernel, timed inside the environment's own steps (its stepper's ``advance``
+    physics kernel, timed inside the environment's own steps (its stepper's ``run``
     wrapped with a clock), so that the kernel works on the states and step sizes the
     environment really meets. Returns ``{name: (steps/s, kernel share or None)}``."""
     spent = {name: [0.0] for name in runs}
@@ -60,13 +60,13 @@ def interleaved(runs: dict[str, tuple[Any, np.ndarray, int]],
             if hasattr(env.unwrapped, "_stepper")}
     for name, stepper in ours.items():
 
-        def timed(*args: Any, advance=stepper.advance, clock=spent[name]) -> Any:
+        def timed(*args: Any, run=stepper.run, clock=spent[name]) -> Any:
             start = time.perf_counter()
-            out = advance(*args)
+            out = run(*args)
             clock[0] += time.perf_counter() - start
             return out
 
-        stepper.advance = timed  # an instance attribute: shadows the method for these runs
+        stepper.run = timed  # an instance attribute: shadows the method for these runs
     best = {name: (float("inf"), 0.0) for name in runs}
     try:
         for env, actions, _ in runs.values():
@@ -82,7 +82,7 @@ def interleaved(runs: dict[str, tuple[Any, np.ndarray, int]],
                     best[name] = (wall, spent[name][0] / wall)
     finally:
         for stepper in ours.values():
-            del stepper.advance
+            del stepper.run
     return {name: (runs[name][0].num_envs * runs[name][2] / wall,
                    share if name in ours else None)
             for name, (wall, share) in best.items()}
@@ -128,7 +128,7 @@ def measure_vector(sizes: Sequence[int], steps: int, repeats: int,
 
         def kernel(stepper=stepper, base=base, tau=tau) -> None:
             for _ in range(steps):
-                stepper.advance(base.phi, base.phi_dot, tau)
+                stepper.run(base.phi, base.phi_dot, tau)
 
         kernel_rate = n * steps / best_time(kernel, repeats)
         out[str(n)] = {name: rate for name, (rate, _) in rates.items()}
@@ -402,7 +402,7 @@ def render(results: dict[str, Any]) -> str:
               + "Every env's actions are drawn uniformly anew for every step and "
               "sub-environment, as an exploring agent's (a torque that changes every step "
               "costs the error control more substeps than a steady one). "
-              "The kernel alone: `BatchStepper.advance` repeated from one state. "
+              "The kernel alone: `BatchStepper.run` repeated from one state. "
               "The share outside the kernel is timed inside the environment's own steps (its "
               "stepper's calls clocked): observation, reward, info, autoreset and the copies."]
     if all("ours_no_info" in v for v in results["vector"].values()):

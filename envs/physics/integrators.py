@@ -8,11 +8,11 @@ name            order  control   what it is for
 ``"rk8"``       8      adaptive  the default everywhere: Dormand–Prince 8(5,3) (scipy's DOP853
                                  tableau), compiled, with its embedded 5th- and 3rd-order error
                                  estimators and a step-size controller per roller
-``"rk4"``       4      adaptive  classical Runge–Kutta; under error control by step doubling
-                                 with local extrapolation (two half steps and one whole step,
-                                 11 evaluations: Richardson's estimate of the half steps'
-                                 error, the extrapolated 5th-order solution carried on);
-                                 ``substeps=n``: n classical steps of 4 evaluations
+``"rk4"``       4      adaptive  Runge–Kutta of order 4: under error control the Dormand–Prince
+                                 5(4) pair (scipy's RK45 tableau, 6 evaluations a substep: the
+                                 estimate is of its embedded 4th-order solution's error, the
+                                 5th-order solution is carried on, as in scipy and MATLAB's
+                                 ode45); ``substeps=n``: n classical RK4 steps of 4 evaluations
 ``"euler"``     1      fixed     semi-implicit (symplectic) Euler, the scheme of Gymnasium's
                                  Pendulum: kept to show its error (J_I depends on φ, so it is
                                  not symplectic here and drifts in energy)
@@ -90,6 +90,7 @@ from roller_gym.physics import trig
 from roller_gym.physics.scene import Scene
 from scipy.integrate import solve_ivp
 from scipy.integrate._ivp import dop853_coefficients
+from scipy.integrate._ivp.rk import RK45
 
 __all__ = [
     "CARRY_FIELDS",
@@ -305,31 +306,9 @@ _RK4 = _tableau(  # classical RK4: rk4 with fixed substeps (their reported error
 )
 
 
-def _doubled(tab: np.ndarray, order: int) -> np.ndarray:
-    """Step doubling with local extrapolation, as one explicit pair (see :func:`_tableau`).
-
-    Its 3s − 1 stages are those of two half steps of the method ``tab`` (s stages each) and of
-    one whole step (its first stage shared with the first half step's). With y₂ the two half
-    steps' solution and y₁ the whole step's, the weights b give y₂ + (y₂ − y₁)/(2^p − 1)
-    (Richardson's extrapolation, order p + 1) and the error weights (y₂ − y₁)/(2^p − 1), the
-    estimate of y₂'s error, which the extrapolated solution's error is far below where the
-    substeps resolve the motion (the tests measure how far): the adaptive RK4 of Numerical
-    Recipes.
-    """
-    s = tab.shape[0] - 3
-    a, b = tab[:s, :s], tab[s, :s]
-    n = 3 * s - 1
-    whole = [0, *range(2 * s, n)]  # the whole step's stages (stage 0 shared)
-    big = np.zeros((n, n))
-    big[:s, :s] = a / 2  # the first half step
-    big[s:2 * s, :s] = b / 2  # the second starts where the first ends
-    big[s:2 * s, s:2 * s] = a / 2
-    big[np.ix_(whole, whole)] = a
-    halves, once = np.zeros(n), np.zeros(n)
-    halves[:2 * s] = np.concatenate((b, b)) / 2
-    once[whole] = b
-    error = (halves - once) / (2**order - 1)
-    return _tableau(big, halves + error, np.zeros(n + 1), np.append(error, 0.0))
+_DP5 = _tableau(  # Dormand–Prince 5(4), scipy's RK45 tableau: rk4 under error control
+    np.hstack((RK45.A, np.zeros((RK45.n_stages, 1)))), RK45.B, np.zeros(RK45.n_stages + 1),
+    RK45.E)
 
 
 @numba.extending.register_jitable
@@ -710,7 +689,8 @@ class Scheme:
             ``substep``, written as a function of its own (two lines) so that numba caches it.
         tableau: for an explicit Runge–Kutta pair, its coefficients (see ``_tableau``).
         fixed_tableau: the coefficients its fixed substeps (``substeps=n``) take, where they
-            differ from ``tableau`` (rk4: classical RK4; under error control, step doubling).
+            differ from ``tableau`` (rk4: classical RK4; under error control, Dormand–Prince
+            5(4)).
         constant: C of the substep prediction n = (C (λ dt)^(p+1) / tol)^(1/p), calibrated
             on the presets (for the adaptive schemes only the first step-size guess).
         sweep_exponent: the exponent of re/(k² + (r − e)²) in the prediction's sweep rate.
@@ -751,7 +731,7 @@ class Scheme:
 _SCHEME_LIST = (
     Scheme("rk8", 8, 1.0, True, _rk_chunk, _DOP853, constant=1e-6, sweep_exponent=0.75,
            halvings=3, tol_share=0.1),
-    Scheme("rk4", 4, 1.0, True, _rk_chunk, _doubled(_RK4, 4), fixed_tableau=_RK4,
+    Scheme("rk4", 4, 1.0, True, _rk_chunk, _DP5, fixed_tableau=_RK4,
            constant=0.02, halvings=2, tol_share=0.05),
     Scheme("euler", 1, 0.5, False, _euler_substep, kernel=_euler_kernel, constant=2.0),
     Scheme("midpoint", 2, math.inf, False, _midpoint_substep, kernel=_midpoint_kernel,
