@@ -31,10 +31,11 @@ from typing import Any
 
 import numba
 import numpy as np
+from numba.extending import register_jitable
 from roller_gym import validation
-from roller_gym.physics import Scene
+from roller_gym.physics import Scene, trig
 from roller_gym.physics import equations as eq
-from roller_gym.physics.integrators import STEP_FIELDS
+from roller_gym.physics.integrators import CHUNK, PARALLEL_THRESHOLD, STEP_FIELDS
 from roller_gym.task import (
     OBSERVATION_FIELDS,
     observation_values,
@@ -324,49 +325,67 @@ assert STEP_FIELDS[_S_TOL_MET] == "tol_met" and CONTEXT_FIELDS[_C_PSI_RATE] == "
 assert OUTCOME_ROWS[_O_SUCCESS] == "is_success" and OUTCOME_ROWS[_O_TARGET_PSI] == "target_psi"
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
-def _outcome_kernel(result, context, constants, observed, out, obs):
-    """Each roller's outcome: ``result`` (STEP_FIELDS rows), ``context`` (CONTEXT_FIELDS
-    rows) and the task's ``constants`` (TASK_CONSTANTS) into ``out`` (OUTCOME_ROWS rows) and
-    its observation into ``obs`` (rollers × len(observed), the fields numbered ``observed``
-    of OBSERVATION_FIELDS)."""
+@register_jitable
+def _outcome_of(i, result, context, constants, observed, out, obs):
+    """Roller i's outcome: its ``result`` (STEP_FIELDS rows), ``context`` (CONTEXT_FIELDS
+    rows) and the task's ``constants`` (TASK_CONSTANTS) into its column of ``out``
+    (OUTCOME_ROWS rows) and its observation into row i of ``obs`` (the fields numbered
+    ``observed`` of OBSERVATION_FIELDS). Compiled, for one roller at a time, by the loops
+    below (measured faster, on all cores, than the same formulas on whole rows in NumPy)."""
     band, margin, w_p, speed_margin, w_v, w_u = (constants[0], constants[1], constants[2],
                                                  constants[3], constants[4], constants[5])
     success_speed, max_torque, symmetric = constants[6], constants[7], constants[8]
+    with_target = constants[9] != 0.0
+    phi, phi_dot = result[_S_PHI, i], result[_S_PHI_DOT, i]
+    finite, failed = result[_S_FINITE, i] != 0.0, result[_S_FINITE, i] == 0.0
+    lift, slip, estimate = result[_S_LIFT, i], result[_S_SLIP, i], result[_S_ERR, i]
+    tau, target, target_rate = context[_C_TORQUE, i], context[_C_TARGET, i], context[
+        _C_TARGET_RATE, i]
+    target_torque, q, rate = (context[_C_TARGET_TORQUE, i], context[_C_Q, i],
+                              context[_C_PSI_RATE, i])
+    error = position_error(phi, target, q, symmetric)
+    speed_error = phi_dot - target_rate
+    reward = step_reward(error, speed_error, (tau - target_torque) / max_torque, band,
+                         margin, w_p, speed_margin, w_v, w_u)
+    lifting, slipping = lift <= 0.0, slip < 0.0
+    out[_O_REWARD, i] = trig.select(failed, 0.0, reward)  # a failed step earns nothing
+    out[_O_TERMINATED, i] = trig.select(lifting | slipping | failed, 1.0, 0.0)
+    out[_O_PHI, i], out[_O_PHI_DOT, i], out[_O_PSI, i] = phi, phi_dot, rate * phi
+    out[_O_TORQUE, i] = tau
+    out[_O_NORMAL, i], out[_O_FRICTION, i] = result[_S_NORMAL, i], result[_S_FRICTION, i]
+    out[_O_ENERGY, i], out[_O_SUBSTEPS, i] = result[_S_ENERGY, i], result[_S_SUBSTEPS, i]
+    out[_O_LIFTING, i] = trig.select(lifting, 1.0, 0.0)
+    out[_O_SLIPPING, i] = trig.select(slipping, 1.0, 0.0)
+    out[_O_NONFINITE, i] = trig.select(failed, 1.0, 0.0)
+    out[_O_LIFT, i], out[_O_SLIP, i] = lift, slip
+    # inf where a finished step has no estimate (NaN from the integrator): info values
+    # then compare equal across identical runs (Gymnasium's checker)
+    out[_O_ERR, i] = trig.select((estimate != estimate) & finite, math.inf, estimate)
+    out[_O_TOL_MET, i] = result[_S_TOL_MET, i]
+    out[_O_TARGET_PHI, i], out[_O_TARGET_PSI, i] = target, rate * target
+    out[_O_TARGET_RATE, i], out[_O_TARGET_TORQUE, i] = target_rate, target_torque
+    out[_O_ERROR, i] = error
+    out[_O_SUCCESS, i] = trig.select(step_success(error, speed_error, band, success_speed),
+                                     1.0, 0.0)
+    values = observation_values(phi, phi_dot, target, rate, target_rate, with_target)
+    for j in range(observed.size):
+        obs[i, j] = values[observed[j]]
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _outcome_loop(result, context, constants, observed, out, obs):
+    """Every roller's outcome (:func:`_outcome_of`), one after the other."""
     for i in range(result.shape[1]):
-        phi, phi_dot = result[_S_PHI, i], result[_S_PHI_DOT, i]
-        finite = result[_S_FINITE, i] != 0.0
-        lift, slip, estimate = result[_S_LIFT, i], result[_S_SLIP, i], result[_S_ERR, i]
-        tau, target, target_rate = context[_C_TORQUE, i], context[_C_TARGET, i], context[
-            _C_TARGET_RATE, i]
-        target_torque, q, rate = (context[_C_TARGET_TORQUE, i], context[_C_Q, i],
-                                  context[_C_PSI_RATE, i])
-        error = position_error(phi, target, q, symmetric)
-        speed_error = phi_dot - target_rate
-        reward = step_reward(error, speed_error, (tau - target_torque) / max_torque, band,
-                             margin, w_p, speed_margin, w_v, w_u)
-        lifting, slipping = lift <= 0.0, slip < 0.0
-        out[_O_REWARD, i] = reward if finite else 0.0  # a failed step earns nothing
-        out[_O_TERMINATED, i] = 1.0 if (lifting or slipping or not finite) else 0.0
-        out[_O_PHI, i], out[_O_PHI_DOT, i], out[_O_PSI, i] = phi, phi_dot, rate * phi
-        out[_O_TORQUE, i] = tau
-        out[_O_NORMAL, i], out[_O_FRICTION, i] = result[_S_NORMAL, i], result[_S_FRICTION, i]
-        out[_O_ENERGY, i], out[_O_SUBSTEPS, i] = result[_S_ENERGY, i], result[_S_SUBSTEPS, i]
-        out[_O_LIFTING, i] = 1.0 if lifting else 0.0
-        out[_O_SLIPPING, i] = 1.0 if slipping else 0.0
-        out[_O_NONFINITE, i] = 0.0 if finite else 1.0
-        out[_O_LIFT, i], out[_O_SLIP, i] = lift, slip
-        # inf where a finished step has no estimate (NaN from the integrator): info values
-        # then compare equal across identical runs (Gymnasium's checker)
-        out[_O_ERR, i] = math.inf if (estimate != estimate and finite) else estimate
-        out[_O_TOL_MET, i] = result[_S_TOL_MET, i]
-        out[_O_TARGET_PHI, i], out[_O_TARGET_PSI, i] = target, rate * target
-        out[_O_TARGET_RATE, i], out[_O_TARGET_TORQUE, i] = target_rate, target_torque
-        out[_O_ERROR, i] = error
-        out[_O_SUCCESS, i] = 1.0 if step_success(error, speed_error, band, success_speed) else 0.0
-        values = observation_values(phi, phi_dot, target, rate, target_rate)
-        for j in range(observed.size):
-            obs[i, j] = values[observed[j]]
+        _outcome_of(i, result, context, constants, observed, out, obs)
+
+
+@numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")
+def _outcome_parallel(result, context, constants, observed, out, obs):
+    """Every roller's outcome (:func:`_outcome_of`), in chunks on all cores."""
+    n = result.shape[1]
+    for chunk in numba.prange((n + CHUNK - 1) // CHUNK):
+        for i in range(chunk * CHUNK, min(n, (chunk + 1) * CHUNK)):
+            _outcome_of(i, result, context, constants, observed, out, obs)
 
 
 @dataclass
@@ -390,18 +409,19 @@ class OutcomeKernel:
     """
 
     def __init__(self, task: Any, num: int) -> None:
-        self.constants = task.constants()
+        self.constants = task.constants
         self.observed = np.array([_FIELD_NUMBER[f] for f in task.observation],
                                  dtype=np.int64)
         self.context = np.zeros((len(CONTEXT_FIELDS), num))
         self.table = np.empty((len(OUTCOME_ROWS), num))
         self.observation = np.empty((num, self.observed.size), dtype=np.float32)
+        self._kernel = _outcome_parallel if num >= PARALLEL_THRESHOLD else _outcome_loop
 
     def run(self, result: np.ndarray) -> None:
         """The outcome of the rollers' ``result`` (STEP_FIELDS rows × rollers, float64) under
         the context in :attr:`context`."""
-        _outcome_kernel(result, self.context, self.constants, self.observed, self.table,
-                        self.observation)
+        self._kernel(result, self.context, self.constants, self.observed, self.table,
+                     self.observation)
 
 
 def outcome(task: Any, result: Any, target: Any, q: Any, psi_rate: Any, tau: Any,
@@ -416,14 +436,15 @@ def outcome(task: Any, result: Any, target: Any, q: Any, psi_rate: Any, tau: Any
     """
     values = [getattr(result, f) for f in STEP_FIELDS]
     context = [tau, target, target_rate, target_torque, q, psi_rate]
-    shape = np.broadcast_shapes(*(np.shape(v) for v in values + context))
+    shape = np.broadcast(*values, *context).shape
     n = math.prod(shape)
     kernel = OutcomeKernel(task, n)
-    for row, value in enumerate(context):
-        kernel.context[row] = np.broadcast_to(np.asarray(value, float), shape).reshape(n)
-    table = np.array([np.broadcast_to(np.asarray(v, float), shape).reshape(n)
-                      for v in values]).reshape(len(STEP_FIELDS), n)
-    kernel.run(table)
+    table = np.empty((len(STEP_FIELDS), *shape))
+    for rows, numbers in ((table, values),
+                          (kernel.context.reshape(len(context), *shape), context)):
+        for row, value in enumerate(numbers):  # broadcast as they are written
+            rows[row] = value
+    kernel.run(table.reshape(len(STEP_FIELDS), n))
     rows = info_rows(kernel.table, tuple(INFO_KEYS))
     scalar = shape == ()
     info = {k: v[0] if scalar else v.reshape(shape) for k, v in rows.items()}

@@ -78,6 +78,9 @@ OBSERVATION_FIELDS: dict[str, tuple[str, str]] = {
     "target_speed": ("tanh(φ*' / 10 rad/s): how fast the target moves, squashed", "1"),
 }
 
+_TARGET_FIELDS = ("cos_psi_target", "sin_psi_target", "cos_phi_target", "sin_phi_target",
+                  "target_speed")
+
 #: The registry: task name -> task class (see :func:`register`).
 TASKS: dict[str, type[Task]] = {}
 
@@ -184,7 +187,7 @@ class Task:
     @property
     def observes_target(self) -> bool:
         """Whether the observation carries the target."""
-        return "cos_psi_target" in self.observation
+        return any(field in _TARGET_FIELDS for field in self.observation)
 
     @classmethod
     def index(cls, field: str) -> int:
@@ -304,6 +307,7 @@ class Task:
         return 0.0
 
     # -- per step (the formulas are the module's compiled functions, see below) -------
+    @functools.cached_property
     def constants(self) -> np.ndarray:
         """The task's numbers the per-step formulas take, in :data:`TASK_CONSTANTS` order."""
         return np.array([float(getattr(self, name)) for name in TASK_CONSTANTS])
@@ -336,7 +340,7 @@ class Task:
         ``target_torque``)."""
         return step_reward(step["position_error"], step["phi_dot"] - step["target_phi_dot"],
                            (step["torque"] - step["target_torque"]) / self.max_torque,
-                           *self.constants()[:_REWARD_CONSTANTS])
+                           *self.constants[:_REWARD_CONSTANTS])
 
     def success(self, step: Mapping[str, Any]):
         """Inside the success band, moving with the target (:func:`step_success`)."""
@@ -352,7 +356,7 @@ class Task:
 #: The task's class variables the per-step formulas take, in order (the reward's first).
 TASK_CONSTANTS = ("success_band", "position_margin", "precision_weight", "speed_margin",
                   "speed_weight", "control_weight", "success_speed", "max_torque",
-                  "symmetric_target")
+                  "symmetric_target", "observes_target")
 _REWARD_CONSTANTS = 6
 
 
@@ -361,8 +365,10 @@ def position_error(phi, target, q, symmetric):
     """The position error [rad of φ], wrap(q (φ − φ*))/q (see the module docs); with
     ``symmetric`` (1.0) the error to the nearer of ±φ*."""
     error = rewards.wrap_angle(q * (phi - target)) / q
-    mirror = rewards.wrap_angle(q * (phi + target)) / q
-    return trig.select((symmetric != 0.0) & (np.abs(mirror) < np.abs(error)), mirror, error)
+    if symmetric != 0.0:
+        mirror = rewards.wrap_angle(q * (phi + target)) / q
+        error = trig.select(np.abs(mirror) < np.abs(error), mirror, error)
+    return error
 
 
 @register_jitable
@@ -383,16 +389,21 @@ def step_success(error, speed_error, band, success_speed):
 
 
 @register_jitable
-def observation_values(phi, phi_dot, target, rate, target_rate):
+def observation_values(phi, phi_dot, target, rate, target_rate, with_target=True):
     """Every field of :data:`OBSERVATION_FIELDS`, in its order (the formulas listed there);
-    ``rate`` = dψ/dφ, ``target_rate`` φ*' [rad/s]."""
+    ``rate`` = dψ/dφ, ``target_rate`` φ*' [rad/s]. Without ``with_target`` the target's
+    fields are left 0.0 (not computed: for a task that does not observe them)."""
     sin_psi, cos_psi = trig.sincos(rate * phi)
     sin_phi, cos_phi = trig.sincos(phi)
-    sin_psi_target, cos_psi_target = trig.sincos(rate * target)
-    sin_phi_target, cos_phi_target = trig.sincos(target)
-    return (cos_psi, sin_psi, cos_phi, sin_phi, np.tanh(phi_dot / SPEED_SCALE),
-            cos_psi_target, sin_psi_target, cos_phi_target, sin_phi_target,
-            np.tanh(target_rate / SPEED_SCALE))
+    speed = np.tanh(phi_dot / SPEED_SCALE)
+    sin_psi_target, cos_psi_target, sin_phi_target, cos_phi_target = 0.0, 0.0, 0.0, 0.0
+    target_speed = 0.0
+    if with_target:
+        sin_psi_target, cos_psi_target = trig.sincos(rate * target)
+        sin_phi_target, cos_phi_target = trig.sincos(target)
+        target_speed = np.tanh(target_rate / SPEED_SCALE)
+    return (cos_psi, sin_psi, cos_phi, sin_phi, speed, cos_psi_target, sin_psi_target,
+            cos_phi_target, sin_phi_target, target_speed)
 
 
 def per_scene(function, scene: Scene) -> np.ndarray:

@@ -3,10 +3,11 @@
 ``gymnasium.make_vec(ID, num_envs=N)`` builds it (registered as the tasks'
 ``vector_entry_point``). A step costs a fixed number of Python operations whatever N is:
 the actions are checked as one array, the batch stepper advances every roller in one
-compiled call, and reward, termination, info and the episode starts of autoreset are
-array operations of the episode core (:mod:`roller_gym.episode`), the same code the single
-environment runs. Sub-environment i, seeded ``seed + i``, reproduces the single environment
-seeded ``seed + i`` exactly.
+compiled call, reward, termination, info and observation come from one more
+(:class:`roller_gym.episode.OutcomeKernel`, the one the single environment runs on its one
+roller), and the episode starts of autoreset are array operations of the episode core
+(:mod:`roller_gym.episode`). Sub-environment i, seeded ``seed + i``, reproduces the single
+environment seeded ``seed + i`` exactly.
 
 Autoreset (``autoreset_mode=``, Gymnasium's three modes):
 

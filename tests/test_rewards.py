@@ -153,3 +153,27 @@ def test_a_task_may_not_override_what_the_kernel_computes():
     with pytest.raises(ValueError, match=r"RollerGreedyTest overrides reward: .*TASK_CONSTANTS"):
         register(Greedy)
     assert "RollerGreedyTest" not in TASKS
+
+
+def test_the_outcome_of_a_roller_is_the_same_alone_and_in_a_large_batch():
+    """A batch large enough to run on all cores (``PARALLEL_THRESHOLD`` rollers) gives each
+    roller bit for bit the outcome (every info row and the observation) it gets alone."""
+    from roller_gym import episode
+    from roller_gym.hold import HoldTask
+    from roller_gym.physics.integrators import PARALLEL_THRESHOLD, STEP_FIELDS
+
+    n, task = PARALLEL_THRESHOLD + 5, HoldTask()
+    rng = np.random.default_rng(3)
+    result = rng.normal(size=(len(STEP_FIELDS), n))
+    finite = STEP_FIELDS.index("finite")
+    result[finite] = rng.uniform(size=n) < 0.9
+    result[STEP_FIELDS.index("error_estimate"), rng.uniform(size=n) < 0.2] = np.nan
+    big = episode.OutcomeKernel(task, n)
+    big.context[:] = rng.normal(size=big.context.shape)
+    big.run(result)
+    for i in rng.choice(n, 40, replace=False):
+        one = episode.OutcomeKernel(task, 1)
+        one.context[:] = big.context[:, i:i + 1]
+        one.run(np.ascontiguousarray(result[:, i:i + 1]))
+        np.testing.assert_array_equal(one.table[:, 0], big.table[:, i])
+        np.testing.assert_array_equal(one.observation[0], big.observation[i])

@@ -27,6 +27,7 @@ randomization); all functions of :mod:`roller_gym.physics` broadcast over them.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, fields, replace
 from typing import Any
@@ -130,9 +131,10 @@ class Scene:
         """The tuple ``(m, r, kappa, e, k, g, damping)`` every equation of the physics takes."""
         return (self.m, self.r, self.kappa, self.e, self.k, self.g, self.damping)
 
-    @property
+    @functools.cached_property
     def batch_size(self) -> int | None:
-        """Number of rollers when fields are arrays, else ``None``."""
+        """Number of rollers when fields are arrays, else ``None`` (the scene is frozen: found
+        once)."""
         shapes = [np.shape(getattr(self, f.name)) for f in fields(self)]
         shape = np.broadcast_shapes(*shapes)
         return int(np.prod(shape)) if shape else None
