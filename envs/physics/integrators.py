@@ -817,7 +817,7 @@ class _Base:
         """Views and kernel choices that refer to the buffers (again after unpickling)."""
         self._results = self._io[_OUT:]  # the STEP_FIELDS rows
 
-    def _warn(self) -> None:
+    def _warn(self, stacklevel: int) -> None:
         if self.substeps is not None:  # fixed substeps: tol_met informs, no warning
             return
         if not self._warned:
@@ -825,7 +825,7 @@ class _Base:
             warnings.warn(
                 f"tol={self.tol!r} is out of reach of float64 for some step (method "
                 f"{self.method!r}, dt={self.dt!r}): those steps report tol_met=False; a looser "
-                "tol avoids this", RuntimeWarning, stacklevel=3)
+                "tol avoids this", RuntimeWarning, stacklevel=stacklevel)
 
 
 class Stepper(_Base):
@@ -867,18 +867,21 @@ class Stepper(_Base):
         """One control step from (φ [rad], φ' [rad/s]) at torque τ [N·m]; returns the
         result as a table (:data:`STEP_FIELDS` rows × 1 roller, float64), a view of the
         stepper's buffer, valid until the next call (what the environment reads)."""
+        return self._run(phi, phi_dot, tau, 4)
+
+    def _run(self, phi: float, phi_dot: float, tau: float, stacklevel: int) -> np.ndarray:
         flat = self._flat
         flat[_PHI_IN], flat[_W_IN], flat[_TAU] = phi, phi_dot, tau
         self._serial(self._io, self._tab, self._cfg)
         if flat[_TOL_MET] == 0.0 and flat[_FINITE] != 0.0:
-            self._warn()
+            self._warn(stacklevel)  # pointing at the caller of run() or advance()
         return self._results
 
     def advance(self, phi: float, phi_dot: float, tau: float) -> tuple:
         """One control step from (φ [rad], φ' [rad/s]) at torque τ [N·m]: the fields of
         :class:`StepResult` in :data:`STEP_FIELDS` order, as Python float, int and bool."""
         (p, w, a, nsub, finite, normal, friction, energy, lift, slip, err,
-         met) = self.run(phi, phi_dot, tau)[:, 0].tolist()
+         met) = self._run(phi, phi_dot, tau, 4)[:, 0].tolist()
         return (p, w, a, int(nsub), finite != 0.0, normal, friction, energy, lift, slip, err,
                 met != 0.0)
 
@@ -934,19 +937,23 @@ class BatchStepper(_Base):
         """One control step of every roller (arrays of ``num``); returns the result as a
         table (:data:`STEP_FIELDS` rows × ``num``, float64), a view of the stepper's buffer,
         valid until the next call."""
+        return self._run(phi, phi_dot, tau, 4)
+
+    def _run(self, phi: np.ndarray, phi_dot: np.ndarray, tau: np.ndarray,
+             stacklevel: int) -> np.ndarray:
         io = self._io
         io[_PHI_IN], io[_W_IN], io[_TAU] = phi, phi_dot, tau
         if np.isnan(io[_M]).any():
             raise ValueError("some rollers have no scene: call set_scenes first")
         self._kernel(io, self._tab, self._cfg)
         if not ((io[_TOL_MET] != 0.0) | (io[_FINITE] == 0.0)).all():
-            self._warn()
+            self._warn(stacklevel)  # pointing at the caller of run() or advance()
         return self._results
 
     def advance(self, phi: np.ndarray, phi_dot: np.ndarray, tau: np.ndarray) -> StepResult:
         """One control step of every roller; arrays of ``num``. The result's arrays are views
         of the stepper's own buffers, valid until the next call."""
-        io = self.run(phi, phi_dot, tau)
+        io = self._run(phi, phi_dot, tau, 4)
         np.copyto(self._substeps, io[_NSUB - _OUT], casting="unsafe")
         np.not_equal(io[_FINITE - _OUT], 0.0, out=self._finite)
         np.not_equal(io[_TOL_MET - _OUT], 0.0, out=self._tol_met)
