@@ -312,8 +312,8 @@ CONTEXT_FIELDS = ("torque", "target_phi", "target_phi_dot", "target_torque", "wr
 #: The rows of the outcome's table: reward, terminated, then the info in INFO_KEYS order.
 OUTCOME_ROWS = ("reward", "terminated", *INFO_KEYS)
 _O = {name: i for i, name in enumerate(OUTCOME_ROWS)}
-(_S_PHI, _S_PHI_DOT, _, _S_SUBSTEPS, _S_FINITE, _S_NORMAL, _S_FRICTION, _S_ENERGY, _S_LIFT,
- _S_SLIP, _S_ERR, _S_TOL_MET) = range(len(STEP_FIELDS))
+(_S_PHI, _S_PHI_DOT, _S_PHI_DDOT, _S_SUBSTEPS, _S_FINITE, _S_NORMAL, _S_FRICTION, _S_ENERGY,
+ _S_LIFT, _S_SLIP, _S_ERR, _S_TOL_MET) = range(len(STEP_FIELDS))
 (_C_TORQUE, _C_TARGET, _C_TARGET_RATE, _C_TARGET_TORQUE, _C_Q,
  _C_PSI_RATE) = range(len(CONTEXT_FIELDS))
 assert STEP_FIELDS[_S_TOL_MET] == "tol_met" and CONTEXT_FIELDS[_C_PSI_RATE] == "psi_rate"
