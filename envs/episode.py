@@ -35,7 +35,7 @@ from numba.extending import register_jitable
 from roller_gym import validation
 from roller_gym.physics import Scene, trig
 from roller_gym.physics import equations as eq
-from roller_gym.physics.integrators import CHUNK, PARALLEL_THRESHOLD, STEP_FIELDS
+from roller_gym.physics.integrators import CHUNK, PARALLEL_THRESHOLD, STEP_FIELDS, row_table
 from roller_gym.task import (
     OBSERVATION_FIELDS,
     observation_values,
@@ -325,67 +325,115 @@ assert STEP_FIELDS[_S_TOL_MET] == "tol_met" and CONTEXT_FIELDS[_C_PSI_RATE] == "
 assert OUTCOME_ROWS[_O_SUCCESS] == "is_success" and OUTCOME_ROWS[_O_TARGET_PSI] == "target_psi"
 
 
+# The kernel works on blocks of rollers in a scratch vector of rows a compile-time number of
+# elements apart (_B): the loop that computes the outcome then reads and writes one array at
+# fixed offsets, which LLVM can prove free of overlap and runs in SIMD lanes (on the rows of
+# the tables, whose distance is known only at run time, it would need an overlap check per pair
+# of rows, and gives up). Rows are copied in and out of the scratch by one-row loops.
+_B = 136  # a block's rollers and pad: 128 + 8 (rows not a power of two apart)
+_BLOCK = 128
+_N_OBS = len(OBSERVATION_FIELDS)
+# scratch rows: the inputs, the outcome's computed rows, then the observation's values
+(_B_PHI, _B_PHI_DOT, _B_FINITE, _B_LIFT, _B_SLIP, _B_ERR_IN, _B_TORQUE, _B_TARGET,
+ _B_TARGET_RATE, _B_TARGET_TORQUE, _B_Q, _B_RATE) = range(12)
+_B_INPUTS = ((_S_PHI, _S_PHI_DOT, _S_FINITE, _S_LIFT, _S_SLIP, _S_ERR),
+             (_C_TORQUE, _C_TARGET, _C_TARGET_RATE, _C_TARGET_TORQUE, _C_Q, _C_PSI_RATE))
+_B_COMPUTED = (_O_REWARD, _O_TERMINATED, _O_PSI, _O_LIFTING, _O_SLIPPING, _O_NONFINITE,
+               _O_ERR, _O_TARGET_PSI, _O_ERROR, _O_SUCCESS)
+_B_OBS = 12 + len(_B_COMPUTED)
+_B_ROWS = _B_OBS + _N_OBS
+# the outcome's rows that are the step's or the context's own numbers
+_PASSED = ((_O_PHI, _S_PHI), (_O_PHI_DOT, _S_PHI_DOT), (_O_NORMAL, _S_NORMAL),
+           (_O_FRICTION, _S_FRICTION), (_O_ENERGY, _S_ENERGY), (_O_SUBSTEPS, _S_SUBSTEPS),
+           (_O_LIFT, _S_LIFT), (_O_SLIP, _S_SLIP), (_O_TOL_MET, _S_TOL_MET))
+_PASSED_CONTEXT = ((_O_TORQUE, _C_TORQUE), (_O_TARGET_PHI, _C_TARGET),
+                   (_O_TARGET_RATE, _C_TARGET_RATE), (_O_TARGET_TORQUE, _C_TARGET_TORQUE))
+
+
 @register_jitable
-def _outcome_of(i, result, context, constants, observed, out, obs):
-    """Roller i's outcome: its ``result`` (STEP_FIELDS rows), ``context`` (CONTEXT_FIELDS
-    rows) and the task's ``constants`` (TASK_CONSTANTS) into its column of ``out``
-    (OUTCOME_ROWS rows) and its observation into row i of ``obs`` (the fields numbered
-    ``observed`` of OBSERVATION_FIELDS). Compiled, for one roller at a time, by the loops
-    below (measured faster, on all cores, than the same formulas on whole rows in NumPy)."""
+def _outcome_block(b, m, constants):
+    """The outcome of the block's m rollers in the scratch ``b`` (rows _B apart): from the
+    input rows into the computed rows and the observation's rows (the formulas are
+    :mod:`roller_gym.task`'s)."""
     band, margin, w_p, speed_margin, w_v, w_u = (constants[0], constants[1], constants[2],
                                                  constants[3], constants[4], constants[5])
     success_speed, max_torque, symmetric = constants[6], constants[7], constants[8]
     with_target = constants[9] != 0.0
-    phi, phi_dot = result[_S_PHI, i], result[_S_PHI_DOT, i]
-    finite, failed = result[_S_FINITE, i] != 0.0, result[_S_FINITE, i] == 0.0
-    lift, slip, estimate = result[_S_LIFT, i], result[_S_SLIP, i], result[_S_ERR, i]
-    tau, target, target_rate = context[_C_TORQUE, i], context[_C_TARGET, i], context[
-        _C_TARGET_RATE, i]
-    target_torque, q, rate = (context[_C_TARGET_TORQUE, i], context[_C_Q, i],
-                              context[_C_PSI_RATE, i])
-    error = position_error(phi, target, q, symmetric)
-    speed_error = phi_dot - target_rate
-    reward = step_reward(error, speed_error, (tau - target_torque) / max_torque, band,
-                         margin, w_p, speed_margin, w_v, w_u)
-    lifting, slipping = lift <= 0.0, slip < 0.0
-    out[_O_REWARD, i] = trig.select(failed, 0.0, reward)  # a failed step earns nothing
-    out[_O_TERMINATED, i] = trig.select(lifting | slipping | failed, 1.0, 0.0)
-    out[_O_PHI, i], out[_O_PHI_DOT, i], out[_O_PSI, i] = phi, phi_dot, rate * phi
-    out[_O_TORQUE, i] = tau
-    out[_O_NORMAL, i], out[_O_FRICTION, i] = result[_S_NORMAL, i], result[_S_FRICTION, i]
-    out[_O_ENERGY, i], out[_O_SUBSTEPS, i] = result[_S_ENERGY, i], result[_S_SUBSTEPS, i]
-    out[_O_LIFTING, i] = trig.select(lifting, 1.0, 0.0)
-    out[_O_SLIPPING, i] = trig.select(slipping, 1.0, 0.0)
-    out[_O_NONFINITE, i] = trig.select(failed, 1.0, 0.0)
-    out[_O_LIFT, i], out[_O_SLIP, i] = lift, slip
-    # inf where a finished step has no estimate (NaN from the integrator): info values
-    # then compare equal across identical runs (Gymnasium's checker)
-    out[_O_ERR, i] = trig.select((estimate != estimate) & finite, math.inf, estimate)
-    out[_O_TOL_MET, i] = result[_S_TOL_MET, i]
-    out[_O_TARGET_PHI, i], out[_O_TARGET_PSI, i] = target, rate * target
-    out[_O_TARGET_RATE, i], out[_O_TARGET_TORQUE, i] = target_rate, target_torque
-    out[_O_ERROR, i] = error
-    out[_O_SUCCESS, i] = trig.select(step_success(error, speed_error, band, success_speed),
-                                     1.0, 0.0)
-    values = observation_values(phi, phi_dot, target, rate, target_rate, with_target)
-    for j in range(observed.size):
-        obs[i, j] = values[observed[j]]
+    for i in range(m):
+        phi, phi_dot = b[_B_PHI * _B + i], b[_B_PHI_DOT * _B + i]
+        failed = b[_B_FINITE * _B + i] == 0.0
+        lift, slip, estimate = b[_B_LIFT * _B + i], b[_B_SLIP * _B + i], b[_B_ERR_IN * _B + i]
+        tau, target = b[_B_TORQUE * _B + i], b[_B_TARGET * _B + i]
+        target_rate, target_torque = b[_B_TARGET_RATE * _B + i], b[_B_TARGET_TORQUE * _B + i]
+        q, rate = b[_B_Q * _B + i], b[_B_RATE * _B + i]
+        error = position_error(phi, target, q, symmetric)
+        speed_error = phi_dot - target_rate
+        reward = step_reward(error, speed_error, (tau - target_torque) / max_torque, band,
+                             margin, w_p, speed_margin, w_v, w_u)
+        lifting, slipping = lift <= 0.0, slip < 0.0
+        o = 12 * _B + i
+        b[o] = trig.select(failed, 0.0, reward)  # a failed step earns nothing
+        b[o + _B] = trig.select(lifting | slipping | failed, 1.0, 0.0)  # terminated
+        b[o + 2 * _B] = rate * phi  # ψ
+        b[o + 3 * _B] = trig.select(lifting, 1.0, 0.0)
+        b[o + 4 * _B] = trig.select(slipping, 1.0, 0.0)
+        b[o + 5 * _B] = trig.select(failed, 1.0, 0.0)
+        # inf where a finished step has no estimate (NaN from the integrator): info values
+        # then compare equal across identical runs (Gymnasium's checker)
+        b[o + 6 * _B] = trig.select((estimate != estimate) & (not failed), math.inf, estimate)
+        b[o + 7 * _B] = rate * target  # ψ*
+        b[o + 8 * _B] = error
+        b[o + 9 * _B] = trig.select(step_success(error, speed_error, band, success_speed),
+                                    1.0, 0.0)
+        values = observation_values(phi, phi_dot, target, rate, target_rate, with_target)
+        v = _B_OBS * _B + i
+        (b[v], b[v + _B], b[v + 2 * _B], b[v + 3 * _B], b[v + 4 * _B], b[v + 5 * _B],
+         b[v + 6 * _B], b[v + 7 * _B], b[v + 8 * _B], b[v + 9 * _B]) = values
+
+
+@register_jitable
+def _outcome_range(lo, hi, result, context, constants, observed, out, obs, b):
+    """The outcome of rollers lo..hi−1 (see :class:`OutcomeKernel`), block by block in the
+    scratch ``b`` (_B_ROWS · _B elements)."""
+    for start in range(lo, hi, _BLOCK):
+        m = min(_BLOCK, hi - start)
+        for k in range(6):
+            row, crow = _B_INPUTS[0][k], _B_INPUTS[1][k]
+            for i in range(m):
+                b[k * _B + i] = result[row, start + i]
+            for i in range(m):
+                b[(k + 6) * _B + i] = context[crow, start + i]
+        _outcome_block(b, m, constants)
+        for k in range(len(_B_COMPUTED)):
+            row = _B_COMPUTED[k]
+            for i in range(m):
+                out[row, start + i] = b[(12 + k) * _B + i]
+        for pair in _PASSED:
+            for i in range(m):
+                out[pair[0], start + i] = result[pair[1], start + i]
+        for pair in _PASSED_CONTEXT:
+            for i in range(m):
+                out[pair[0], start + i] = context[pair[1], start + i]
+        for i in range(m):
+            for j in range(observed.size):
+                obs[start + i, j] = b[(_B_OBS + observed[j]) * _B + i]
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _outcome_loop(result, context, constants, observed, out, obs):
-    """Every roller's outcome (:func:`_outcome_of`), one after the other."""
-    for i in range(result.shape[1]):
-        _outcome_of(i, result, context, constants, observed, out, obs)
+def _outcome_loop(result, context, constants, observed, out, obs, scratch):
+    """Every roller's outcome (:func:`_outcome_range`), on one core, in ``scratch``."""
+    _outcome_range(0, result.shape[1], result, context, constants, observed, out, obs,
+                   scratch)
 
 
 @numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")
-def _outcome_parallel(result, context, constants, observed, out, obs):
-    """Every roller's outcome (:func:`_outcome_of`), in chunks on all cores."""
+def _outcome_parallel(result, context, constants, observed, out, obs, scratch):
+    """Every roller's outcome (:func:`_outcome_range`), in chunks on all cores (each chunk
+    in a scratch of its own; ``scratch`` is unused)."""
     n = result.shape[1]
     for chunk in numba.prange((n + CHUNK - 1) // CHUNK):
-        for i in range(chunk * CHUNK, min(n, (chunk + 1) * CHUNK)):
-            _outcome_of(i, result, context, constants, observed, out, obs)
+        _outcome_range(chunk * CHUNK, min(n, (chunk + 1) * CHUNK), result, context, constants,
+                       observed, out, obs, np.empty(_B_ROWS * _B))
 
 
 @dataclass
@@ -412,16 +460,17 @@ class OutcomeKernel:
         self.constants = task.constants
         self.observed = np.array([_FIELD_NUMBER[f] for f in task.observation],
                                  dtype=np.int64)
-        self.context = np.zeros((len(CONTEXT_FIELDS), num))
-        self.table = np.empty((len(OUTCOME_ROWS), num))
+        self.context = row_table(len(CONTEXT_FIELDS), num)
+        self.table = row_table(len(OUTCOME_ROWS), num)
         self.observation = np.empty((num, self.observed.size), dtype=np.float32)
         self._kernel = _outcome_parallel if num >= PARALLEL_THRESHOLD else _outcome_loop
+        self._scratch = np.empty(_B_ROWS * _B if num < PARALLEL_THRESHOLD else 0)
 
     def run(self, result: np.ndarray) -> None:
         """The outcome of the rollers' ``result`` (STEP_FIELDS rows × rollers, float64) under
         the context in :attr:`context`."""
         self._kernel(result, self.context, self.constants, self.observed, self.table,
-                     self.observation)
+                     self.observation, self._scratch)
 
 
 def outcome(task: Any, result: Any, target: Any, q: Any, psi_rate: Any, tau: Any,

@@ -360,7 +360,7 @@ TASK_CONSTANTS = ("success_band", "position_margin", "precision_weight", "speed_
 _REWARD_CONSTANTS = 6
 
 
-@register_jitable
+@register_jitable(inline="always")
 def position_error(phi, target, q, symmetric):
     """The position error [rad of φ], wrap(q (φ − φ*))/q (see the module docs); with
     ``symmetric`` (1.0) the error to the nearer of ±φ*."""
@@ -371,7 +371,7 @@ def position_error(phi, target, q, symmetric):
     return error
 
 
-@register_jitable
+@register_jitable(inline="always")
 def step_reward(error, speed_error, control_error, band, position_margin, precision_weight,
                 speed_margin, speed_weight, control_weight):
     """The reward in [0, 1] (formula in the module docs) from the position error ε [rad of φ],
@@ -382,26 +382,26 @@ def step_reward(error, speed_error, control_error, band, position_margin, precis
             * rewards.blend(rewards.near(control_error, 1.0), control_weight))
 
 
-@register_jitable
+@register_jitable(inline="always")
 def step_success(error, speed_error, band, success_speed):
     """|ε| <= band [rad of φ] and |φ' − φ*'| <= success_speed [rad/s]."""
     return (np.abs(error) <= band) & (np.abs(speed_error) <= success_speed)
 
 
-@register_jitable
+@register_jitable(inline="always")
 def observation_values(phi, phi_dot, target, rate, target_rate, with_target=True):
     """Every field of :data:`OBSERVATION_FIELDS`, in its order (the formulas listed there);
     ``rate`` = dψ/dφ, ``target_rate`` φ*' [rad/s]. Without ``with_target`` the target's
     fields are left 0.0 (not computed: for a task that does not observe them)."""
     sin_psi, cos_psi = trig.sincos(rate * phi)
     sin_phi, cos_phi = trig.sincos(phi)
-    speed = np.tanh(phi_dot / SPEED_SCALE)
+    speed = trig.tanh(phi_dot / SPEED_SCALE)
     sin_psi_target, cos_psi_target, sin_phi_target, cos_phi_target = 0.0, 0.0, 0.0, 0.0
     target_speed = 0.0
     if with_target:
         sin_psi_target, cos_psi_target = trig.sincos(rate * target)
         sin_phi_target, cos_phi_target = trig.sincos(target)
-        target_speed = np.tanh(target_rate / SPEED_SCALE)
+        target_speed = trig.tanh(target_rate / SPEED_SCALE)
     return (cos_psi, sin_psi, cos_phi, sin_phi, speed, cos_psi_target, sin_psi_target,
             cos_phi_target, sin_phi_target, target_speed)
 

@@ -113,6 +113,89 @@ def test_float64_arrays_from_python_get_the_compiled_bits_in_any_layout():
     assert trig.sin(np.empty((0, 3))).shape == (0, 3)
 
 
+def _exp_sample(seed: int = 4) -> np.ndarray:
+    """exp's arguments: the whole range (overflow at 709.78, subnormals below −708.4, 0 below
+    −745.1), the range the rewards use, tiny ones and the edges."""
+    rng = np.random.default_rng(seed)
+    return np.concatenate([
+        rng.uniform(-750, 712, 1500), rng.uniform(-30, 3, 1500),
+        10.0 ** rng.uniform(-300, 0, 300) * rng.choice([-1, 1], 300),
+        [0.0, -0.0, 709.782712893384, 709.7827128933841, -708.3964185322641,
+         -745.1332191019411, -745.1332191019412, 1.0, -1.0, 0.5 * math.log(2.0)],
+    ])
+
+
+def _tanh_sample(seed: int = 5) -> np.ndarray:
+    """tanh's arguments: both forms (|x| below and above 0.625), tiny and saturated ones."""
+    rng = np.random.default_rng(seed)
+    return np.concatenate([
+        rng.uniform(-25, 25, 1500), rng.uniform(-1, 1, 1500),
+        10.0 ** rng.uniform(-300, 0, 300) * rng.choice([-1, 1], 300),
+        [0.0, -0.0, 0.625, -0.625, np.nextafter(0.625, 0.0), 19.06, 400.0],
+    ])
+
+
+@pytest.mark.parametrize(("ours", "ref", "sample", "ulps"),
+                         [(trig._exp, mpmath.exp, _exp_sample, 1.0),
+                          (trig._tanh, mpmath.tanh, _tanh_sample, 2.0)])
+def test_exp_and_tanh_within_their_ulps_of_the_exact_value(ours, ref, sample, ulps):
+    """The branch-free exp (1 ulp) and tanh (2 ulp: its form 1 − 2/(e^{2|x|} + 1) above
+    |x| = 0.625 rounds three times) against mpmath at 50 digits, subnormal and overflowing
+    results included; inf and NaN as libm's."""
+    x = sample()
+    with np.errstate(over="ignore"):
+        got = ours(x)
+    exact = [ref(mpmath.mpf(float(v))) for v in x]
+    rounded = np.array([float(v) for v in exact])
+    overflow = np.isinf(rounded)  # beyond float64: the exact value rounds to inf
+    assert np.array_equal(got[overflow], rounded[overflow])
+    err = np.array([abs(mpmath.mpf(float(a)) - b) for a, b in
+                    zip(got[~overflow], np.array(exact, dtype=object)[~overflow], strict=True)],
+                   dtype=float)
+    # in units of the last place, subnormal ones included (their spacing is 5e-324)
+    assert (err <= ulps * np.spacing(np.maximum(np.abs(rounded[~overflow]), 5e-324))).all()
+    with np.errstate(all="ignore"):
+        special = ours(np.array([np.inf, -np.inf, np.nan]))
+    libm = {mpmath.exp: np.exp, mpmath.tanh: np.tanh}[ref]
+    assert np.array_equal(special, libm(np.array([np.inf, -np.inf, np.nan])), equal_nan=True)
+
+
+def test_exp_and_tanh_compiled_give_the_bits_of_their_numpy_evaluation():
+    """Compiled (a SIMD loop) and evaluated by NumPy, the same source gives the same bits;
+    from Python, float64 arrays take the compiled loop and scalars NumPy's own (within 1 ulp
+    of libm's exp, 2 of its tanh)."""
+    x, t = _exp_sample(6), _tanh_sample(7)
+    with np.errstate(over="ignore", invalid="ignore"):
+        assert np.array_equal(trig.exp(x), trig._exp(x))
+        assert np.array_equal(trig.tanh(t), trig._tanh(t))
+    assert trig.exp(0.3) == np.exp(0.3) and trig.tanh(0.3) == np.tanh(0.3)
+    for x0 in (-7.25, 0.3, 11.0):
+        assert abs(trig.exp(np.full(64, x0))[0] - math.exp(x0)) <= np.spacing(math.exp(x0))
+        assert (abs(trig.tanh(np.full(64, x0))[0] - math.tanh(x0))
+                <= 2 * np.spacing(abs(math.tanh(x0))))
+
+    @numba.njit(error_model="numpy")
+    def both(x, out):
+        for i in range(x.size):
+            out[i] = trig.exp(x[i]) + trig.tanh(x[i])
+
+    out = np.empty(64)
+    both(np.linspace(-3, 3, 64), out)
+    assert "vector.body" in both.inspect_llvm(both.signatures[0])
+
+
+def test_the_outcome_of_a_block_of_rollers_runs_in_simd_lanes():
+    """The step's outcome (reward, flags, info and observation values: exp, tanh and sines
+    included) is computed in one loop that LLVM runs in SIMD lanes."""
+    import gymnasium as gym
+    from roller_gym import episode
+
+    fn = numba.njit(error_model="numpy", nogil=True)(episode._outcome_block)
+    constants = gym.make("roller_gym/RollerHold-v1").unwrapped.task.constants
+    fn(np.zeros(episode._B_ROWS * episode._B), 16, constants)
+    assert "vector.body" in fn.inspect_llvm(fn.signatures[0])
+
+
 @pytest.mark.parametrize("lanes", ["_accel_lanes", "_margin_lanes", "_end_lanes"])
 def test_the_loops_over_rollers_run_in_simd_lanes(lanes):
     # compiled afresh (the kernels' cache hides their IR), with the kernels' own options

@@ -151,7 +151,7 @@ def measure_arithmetic(stepper: Any, base: Any, tau: np.ndarray, repeats: int) -
     from roller_gym.physics import integrators as integ
 
     n = base.num_envs
-    par = stepper.scene_table()
+    par = np.ascontiguousarray(stepper.scene_table())  # contiguous rows, as in the kernel
     out = np.empty(n)
 
     def rhs() -> None:

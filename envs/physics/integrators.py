@@ -64,16 +64,22 @@ the work left. The loops that evaluate the equations (``_accel_lanes``, ``_margi
 ``_end_lanes``) and the three that accept or reject substeps have no branch and no call in
 their bodies (the sines are :mod:`roller_gym.physics.trig`'s, inlined; choices are selects),
 so LLVM runs them in SIMD lanes. Accepting is three loops rather than one because LLVM
-vectorizes a loop only if the rows it touches need few pairwise overlap checks. The kernels
+vectorizes a loop only if the rows it touches need few pairwise overlap checks. The
+per-roller rules of a substep (its size, accepting it, the next size, the clock) are
+functions of their own, which the lane loops and the one-roller kernel both call. The kernels
 are compiled with ``error_model="numpy"``: a division by zero gives inf or NaN, reported as a
 failed step, instead of raising.
+
+**One roller.** A batch of one (what :class:`Stepper` advances) runs ``_rk_one``: the same
+arithmetic in the same order, without lanes, in about half the time the lanes take.
 
 **Layout.** The kernels work on one float64 table per batch, ``io`` of shape
 ``(len(ROWS), n)``: one row per name of :data:`ROWS` (the scene's :data:`SCENE_FIELDS`, the
 inputs :data:`INPUT_FIELDS`, what is carried :data:`CARRY_FIELDS`, the outputs
 :data:`STEP_FIELDS`), one column per roller, so a roller's numbers never depend on the other
-columns: the scalar stepper is the batch kernel on one column and gives bit for bit what the
-batch gives for that roller.
+columns: a roller's step is bit for bit the same alone and in any batch. A batch's table and
+a chunk's scratch have rows a little longer than their rollers (:func:`row_table`), so that
+rows are not a power of two apart in memory.
 """
 
 from __future__ import annotations
@@ -105,6 +111,7 @@ __all__ = [
     "StepResult",
     "Stepper",
     "predicted_substeps",
+    "row_table",
     "scene_arrays",
     "step",
 ]
@@ -401,10 +408,93 @@ def _end_lanes(phi, w, tau, par, n, out):
 # -- the adaptive kernel: explicit Runge–Kutta pairs, a chunk of rollers together ----------------
 
 #: Rollers advanced together (each with its own step size) by one task.
-CHUNK = 256
+CHUNK = 512
+#: Unused elements at the end of each row of a chunk's scratch block and of a batch's tables
+#: (:func:`row_table`), so that rows are not a power of two apart: the same element of many
+#: rows would otherwise fall into one set of the cache, and a loop that reads many rows at
+#: once (the stages read up to 30) would miss it at every element.
+_PAD = 8
+
+
+def row_table(rows: int, n: int) -> np.ndarray:
+    """A zeroed float64 table of ``rows`` rows of ``n`` rollers whose rows lie ``n + _PAD``
+    elements apart in memory (a view): what the batch kernels read and write a roller's
+    column of (see ``_PAD``)."""
+    return np.zeros((rows, n + _PAD))[:, :n]
 _SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0
 #: Attempts (accepted or rejected substeps) after which a roller still running is failed.
 _MAX_ATTEMPTS = 4 * MAX_SUBSTEPS
+
+
+@numba.extending.register_jitable
+def _first_size(io, col, phi_dot, dt, tol, nfixed, cfg):
+    """The size [s] a roller's first substep wants: the fixed one; else where the last step's
+    controller left off, split even over what is left; else the prediction."""
+    if nfixed > 0:
+        return dt / nfixed
+    if io[_H_NEXT, col] > 0.0:
+        return dt / math.ceil(dt / io[_H_NEXT, col] * (1.0 - 1e-9))
+    guess = _substeps(abs(phi_dot), io[_M, col], io[_RR, col], io[_KAPPA, col], io[_E, col],
+                      io[_K, col], io[_G, col], io[_C, col], dt, tol, cfg[4], cfg[5], cfg[6],
+                      cfg[7])
+    return dt / guess
+
+
+@numba.extending.register_jitable
+def _attempt_size(fixed, nfixed, hdes, count, t, dt):
+    """(h [s], last): the size of a roller's next attempt, and 1.0 if it would end the step."""
+    if fixed:
+        return hdes, 1.0 if count + 1 >= nfixed else 0.0
+    rest = dt - t
+    return min(hdes, rest), 1.0 if hdes >= rest else 0.0
+
+
+@numba.extending.register_jitable
+def _judge(h, e5p, e5w, e3p, e3w, phi, w, phin, wn, a_new, count, hforce, t, hdes, rejected,
+           last, status, dt, share, fixed, halvings):
+    """Accept or reject one roller's attempt of size h, from its error sums (scipy's DOP853
+    form; E3 = 0 gives |h E5·K|), and the size of its next: selects only, no branch.
+
+    Returns (accepted, its error estimate, the next size [s], the roller's status, hforce).
+    """
+    dp = e5p * e5p + 0.01 * e3p * e3p
+    dw = e5w * e5w + 0.01 * e3w * e3w
+    errp = h * e5p * e5p / math.sqrt(trig.select(dp > 0.0, dp, 1.0))
+    errw = h * e5w * e5w / math.sqrt(trig.select(dw > 0.0, dw, 1.0))
+    err = max(errp, errw)
+    fin = _finite(phin) & _finite(wn) & _finite(a_new) & _finite(err)
+    # past MAX_ADAPTIVE_SUBSTEPS accepted substeps, the rest in as many more
+    start = (count == MAX_ADAPTIVE_SUBSTEPS) & (hforce == 0.0)
+    hforce = trig.select(start, (dt - t) / MAX_ADAPTIVE_SUBSTEPS, hforce)
+    floor = max(1e-12 * dt, hforce)
+    ratio = trig.select(h > 0.0, err * dt / (share * h), 0.0)
+    # an estimate at the level of float64 rounding: no smaller substep can do better
+    big = max(max(abs(phi), abs(w)), max(abs(phin), abs(wn)))
+    forced = (h <= floor) | (err <= ROUNDOFF_FACTOR * _EPS * big)
+    accept = trig.select(fixed, fin, fin & ((ratio <= 1.0) | forced))
+    fail = (not fin) & (fixed | forced)
+    ends = accept & (last != 0.0)
+    status = trig.select(ends, 1.0, trig.select(fail, 2.0, status))
+    # the next size: h · clip(0.9 ratio^(−1/order), 0.2, 10), the root as square roots
+    q = math.sqrt(math.sqrt(ratio))
+    q = trig.select(halvings >= 3, math.sqrt(q), q)
+    factor = min(_MAX_FACTOR, max(_MIN_FACTOR, _SAFETY / q))  # ratio 0: the largest
+    factor = trig.select(fin, factor, _MIN_FACTOR)
+    factor = trig.select(rejected != 0.0, min(factor, 1.0), factor)
+    h_new = trig.select(fixed, hdes, max(h * factor, floor))
+    return accept, err, h_new, status, hforce
+
+
+@numba.extending.register_jitable
+def _tick(accept, last, t, h, count, err_sum, err, hwant, h_new, carry, dt):
+    """A roller's clock [s], accepted count, error sum, rejected flag and carried size [s]
+    after an attempt of size h (the size carried on is the size wanted, not the last one cut
+    short at dt)."""
+    ends = accept & (last != 0.0)
+    t = trig.select(ends, dt, trig.select(accept, t + h, t))
+    taken = trig.select(accept, 1.0, 0.0)
+    return (t, count + taken, err_sum + trig.select(accept, err, 0.0), 1.0 - taken,
+            trig.select(ends, max(hwant, h_new), carry))
 
 
 @_jit
@@ -422,7 +512,7 @@ def _rk_chunk(io, lo, hi, tab, cfg):
     fixed = nfixed > 0
     # one scratch block: the stages, then one row per per-roller quantity
     nf = len(SCENE_FIELDS)
-    scratch = np.empty((2 * (s + 1) + nf + 31, n))
+    scratch = np.empty((2 * (s + 1) + nf + 31, n + _PAD))
     kp = scratch[: s + 1]  # stage velocities φ'
     kw = scratch[s + 1: 2 * (s + 1)]  # stage accelerations φ''
     par = scratch[2 * (s + 1): 2 * (s + 1) + nf]
@@ -449,28 +539,14 @@ def _rk_chunk(io, lo, hi, tab, cfg):
         phi[i], w[i] = io[_PHI_IN, col], io[_W_IN, col]
         kp[0, i] = w[i]
         t[i], lift[i], slip[i], err_sum[i] = 0.0, np.inf, np.inf, 0.0
-        if fixed:
-            hdes[i] = dt / nfixed
-        elif io[_H_NEXT, col] > 0.0:  # where the last step's controller left off, split even
-            hdes[i] = dt / math.ceil(dt / io[_H_NEXT, col] * (1.0 - 1e-9))
-        else:
-            guess = _substeps(abs(w[i]), par[0, i], par[1, i], par[2, i], par[3, i], par[4, i],
-                              par[5, i], par[6, i], dt, tol, cfg[4], cfg[5], cfg[6], cfg[7])
-            hdes[i] = dt / guess
+        hdes[i] = _first_size(io, col, w[i], dt, tol, nfixed, cfg)
     _accel_lanes(phi, w, tau, par, n, kw[0])
     for _attempt in range(_MAX_ATTEMPTS):
         if na == 0:
             break
         # this attempt's sizes, and the margins at the start of the substep
         for i in range(na):
-            if fixed:
-                h = hdes[i]
-                last[i] = 1.0 if count[i] + 1 >= nfixed else 0.0
-            else:
-                rest = dt - t[i]
-                h = min(hdes[i], rest)
-                last[i] = 1.0 if hdes[i] >= rest else 0.0
-            hh[i] = h if status[i] == 0 else 0.0
+            hh[i], last[i] = _attempt_size(fixed, nfixed, hdes[i], count[i], t[i], dt)
             hwant[i] = hdes[i]
         _margin_lanes(phi, w, kw[0], par, na, lift, slip)
         # the stages
@@ -490,7 +566,7 @@ def _rk_chunk(io, lo, hi, tab, cfg):
         # the last stage's weights are b: its state is the new state
         for i in range(na):
             wn[i] = kp[s, i]
-        # the error estimates (scipy's DOP853 form; E3 = 0 gives |h E5·K|)
+        # the error sums
         for i in range(na):
             e5p[i], e5w[i], e3p[i], e3w[i] = 0.0, 0.0, 0.0, 0.0
         for j in range(s + 1):
@@ -505,34 +581,11 @@ def _rk_chunk(io, lo, hi, tab, cfg):
         # rows it would have to check pairwise for overlap too many times).
         accepted, err_now, h_new = acc_p, e3p, e3w  # rows free until the next attempt
         for i in range(na):
-            h = hh[i]
-            dp = e5p[i] * e5p[i] + 0.01 * e3p[i] * e3p[i]
-            dw = e5w[i] * e5w[i] + 0.01 * e3w[i] * e3w[i]
-            errp = h * e5p[i] * e5p[i] / math.sqrt(trig.select(dp > 0.0, dp, 1.0))
-            errw = h * e5w[i] * e5w[i] / math.sqrt(trig.select(dw > 0.0, dw, 1.0))
-            err = max(errp, errw)
-            fin = _finite(phin[i]) & _finite(wn[i]) & _finite(kw[s, i]) & _finite(err)
-            # past MAX_ADAPTIVE_SUBSTEPS accepted substeps, the rest in as many more
-            start = (count[i] == MAX_ADAPTIVE_SUBSTEPS) & (hforce[i] == 0.0)
-            hforce[i] = trig.select(start, (dt - t[i]) / MAX_ADAPTIVE_SUBSTEPS, hforce[i])
-            floor = max(1e-12 * dt, hforce[i])
-            ratio = trig.select(h > 0.0, err * dt / (share * h), 0.0)
-            # an estimate at the level of float64 rounding: no smaller substep can do better
-            big = max(max(abs(phi[i]), abs(w[i])), max(abs(phin[i]), abs(wn[i])))
-            forced = (h <= floor) | (err <= ROUNDOFF_FACTOR * _EPS * big)
-            accept = trig.select(fixed, fin, fin & ((ratio <= 1.0) | forced))
-            fail = (not fin) & (fixed | forced)
-            ends = accept & (last[i] != 0.0)
-            status[i] = trig.select(ends, 1.0, trig.select(fail, 2.0, status[i]))
-            # the next size: h · clip(0.9 ratio^(−1/order), 0.2, 10), the root as square roots
-            q = math.sqrt(math.sqrt(ratio))
-            q = trig.select(halvings >= 3, math.sqrt(q), q)
-            factor = min(_MAX_FACTOR, max(_MIN_FACTOR, _SAFETY / q))  # ratio 0: the largest
-            factor = trig.select(fin, factor, _MIN_FACTOR)
-            factor = trig.select(rejected[i] != 0.0, min(factor, 1.0), factor)
-            h_new[i] = trig.select(fixed, hdes[i], max(h * factor, floor))
+            accept, err_now[i], h_new[i], status[i], hforce[i] = _judge(
+                hh[i], e5p[i], e5w[i], e3p[i], e3w[i], phi[i], w[i], phin[i], wn[i], kw[s, i],
+                count[i], hforce[i], t[i], hdes[i], rejected[i], last[i], status[i], dt,
+                share, fixed, halvings)
             accepted[i] = trig.select(accept, 1.0, 0.0)
-            err_now[i] = err
         for i in range(na):  # the state of the accepted
             accept = accepted[i] != 0.0
             phi[i] = trig.select(accept, phin[i], phi[i])
@@ -540,15 +593,10 @@ def _rk_chunk(io, lo, hi, tab, cfg):
             kp[0, i] = trig.select(accept, kp[s, i], kp[0, i])
             kw[0, i] = trig.select(accept, kw[s, i], kw[0, i])
         for i in range(na):  # the clocks and counts
-            accept = accepted[i] != 0.0
-            ends = accept & (last[i] != 0.0)
-            t[i] = trig.select(ends, dt, trig.select(accept, t[i] + hh[i], t[i]))
-            count[i] += accepted[i]
-            err_sum[i] += trig.select(accept, err_now[i], 0.0)
-            rejected[i] = 1.0 - accepted[i]
+            t[i], count[i], err_sum[i], rejected[i], carry[i] = _tick(
+                accepted[i] != 0.0, last[i], t[i], hh[i], count[i], err_sum[i], err_now[i],
+                hwant[i], h_new[i], carry[i], dt)
             hdes[i] = h_new[i]
-            # carried to the next step: the size wanted, not the last one cut short at dt
-            carry[i] = trig.select(ends, max(hwant[i], h_new[i]), carry[i])
         i = 0
         while i < na:
             if status[i] != 0.0:
@@ -572,8 +620,65 @@ def _rk_chunk(io, lo, hi, tab, cfg):
 
 
 @_jit
+def _rk_one(io, tab, cfg):
+    """One roller (column 0 of ``io``) over one control step: :func:`_rk_chunk`'s arithmetic
+    in the same order, without its lanes (bit for bit the same result, at a fraction of the
+    latency). What :class:`Stepper` runs."""
+    s = tab.shape[0] - 3
+    dt, tol, nfixed, halvings = cfg[0], cfg[1], int(cfg[2]), int(cfg[3])
+    share = tol * cfg[8]
+    fixed = nfixed > 0
+    m, r, kappa, e = io[_M, 0], io[_RR, 0], io[_KAPPA, 0], io[_E, 0]
+    k, g, c, mu = io[_K, 0], io[_G, 0], io[_C, 0], io[_MU, 0]
+    tau, phi, w = io[_TAU, 0], io[_PHI_IN, 0], io[_W_IN, 0]
+    kp, kw = np.empty(s + 1), np.empty(s + 1)  # the stages' φ' and φ''
+    kp[0], kw[0] = w, eq.accel(phi, w, tau, m, r, kappa, e, k, g, c)
+    t, lift, slip, err_sum, hforce, count = 0.0, np.inf, np.inf, 0.0, 0.0, 0.0
+    status, rejected, carry = 0.0, 0.0, 0.0
+    hdes = _first_size(io, 0, w, dt, tol, nfixed, cfg)
+    for _attempt in range(_MAX_ATTEMPTS):
+        if status != 0.0:
+            break
+        h, last = _attempt_size(fixed, nfixed, hdes, count, t, dt)
+        li, si = _margins(phi, w, kw[0], m, r, kappa, e, g, mu)
+        lift, slip = min(lift, li), min(slip, si)
+        phin = phi
+        for st in range(1, s + 1):
+            acc_p, acc_w = 0.0, 0.0
+            for j in range(st):
+                a = tab[st, j]
+                if a != 0.0:
+                    acc_p += a * kp[j]
+                    acc_w += a * kw[j]
+            phin = phi + h * acc_p
+            kp[st] = w + h * acc_w
+            kw[st] = eq.accel(phin, kp[st], tau, m, r, kappa, e, k, g, c)
+        wn = kp[s]
+        e5p, e5w, e3p, e3w = 0.0, 0.0, 0.0, 0.0
+        for j in range(s + 1):
+            a3, a5 = tab[s + 1, j], tab[s + 2, j]
+            e3p += a3 * kp[j]
+            e3w += a3 * kw[j]
+            e5p += a5 * kp[j]
+            e5w += a5 * kw[j]
+        accept, err, h_new, status, hforce = _judge(
+            h, e5p, e5w, e3p, e3w, phi, w, phin, wn, kw[s], count, hforce, t, hdes, rejected,
+            last, status, dt, share, fixed, halvings)
+        if accept:
+            phi, w, kp[0], kw[0] = phin, wn, kp[s], kw[s]
+        t, count, err_sum, rejected, carry = _tick(accept, last, t, h, count, err_sum, err,
+                                                   hdes, h_new, carry, dt)
+        hdes = h_new
+    io[_H_NEXT, 0] = 0.0 if fixed or status != 1.0 else carry
+    _finish(io, 0, status == 1.0, phi, w, tau, count, lift, slip, err_sum, err_sum <= share)
+
+
+@_jit
 def _rk_serial(io, tab, cfg):
     n = io.shape[1]
+    if n == 1:  # one roller (Stepper): the same arithmetic without lanes
+        _rk_one(io, tab, cfg)
+        return
     for lo in range(0, n, CHUNK):
         _rk_chunk(io, lo, min(lo + CHUNK, n), tab, cfg)
 
@@ -902,6 +1007,7 @@ class BatchStepper(_Base):
             raise ValueError(f"num={num!r} must be an integer >= 1")
         super().__init__(int(num), method, dt, tol, substeps)
         self.num = int(num)
+        self._io = row_table(len(ROWS), self.num)
         self._io[: len(SCENE_FIELDS)] = np.nan  # no scene yet
         self._substeps = np.zeros(self.num, dtype=np.int64)
         self._finite = np.zeros(self.num, dtype=bool)
@@ -911,6 +1017,10 @@ class BatchStepper(_Base):
         self._link()
 
     def _link(self) -> None:
+        if self._io.base is None:  # unpickled: a contiguous copy, padded again
+            io = row_table(len(ROWS), self.num)
+            io[...] = self._io
+            self._io = io
         super()._link()
         self._kernel = self._parallel if self.num >= PARALLEL_THRESHOLD else self._serial
 
