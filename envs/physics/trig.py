@@ -37,9 +37,9 @@ in a compiled loop: 1.4 ns per element with AVX-512 and 4.7 with AVX2 (measured)
 NumPy's ``sin``, which calls libm for float64, takes 14 to 16.
 Called from Python with anything else (scalars, small arrays, complex numbers for
 complex-step derivatives) they are NumPy's ``sin``, ``cos``, ``exp`` and ``tanh``. Both faces
-are within an ulp or two of the exact value, so scalars can differ from arrays in the last bit; arrays and the kernels agree
-bit for bit, and so do the kernels among themselves (a roller's step is the same alone or in
-a batch).
+are within an ulp or two of the exact value, so scalars can differ from arrays in the last
+bit; arrays and the kernels agree bit for bit, and so do the kernels among themselves (a
+roller's step is the same alone or in a batch).
 """
 
 from __future__ import annotations
@@ -219,23 +219,6 @@ def _each(loop, x: np.ndarray, outputs: int) -> tuple[np.ndarray, ...]:
     return tuple(out.reshape(x.shape) for out in outs)
 
 
-# Compiled, sin and cos are the polynomial forms, inlined where they are called so that the
-# loop that calls them keeps no call (and vectorizes).
-@overload(sin, inline="always", jit_options={"nogil": True})
-def _sin_compiled(x):
-    return _sin
-
-
-@overload(cos, inline="always", jit_options={"nogil": True})
-def _cos_compiled(x):
-    return _cos
-
-
-@overload(sincos, inline="always", jit_options={"nogil": True})
-def _sincos_compiled(x):
-    return _sincos
-
-
 @njit(cache=True, nogil=True, error_model="numpy")
 def _sin_loop(x, out):
     """out[i] = sin(x[i]), the branch-free form (a loop LLVM runs in SIMD lanes)."""
@@ -361,14 +344,19 @@ def tanh(x):
     return _each(_tanh_loop, x, 1)[0] if _looped(x) else np.tanh(x)
 
 
-@overload(exp, inline="always", jit_options={"nogil": True})
-def _exp_compiled(x):
-    return _exp
+# Compiled, each function is its branch-free form, inlined where it is called so that the loop
+# that calls it keeps no call (and vectorizes).
+def _compiled_as(form):
+    """numba's overload of a function of x: its branch-free ``form``."""
+
+    def implementation(x):
+        return form
+
+    return implementation
 
 
-@overload(tanh, inline="always", jit_options={"nogil": True})
-def _tanh_compiled(x):
-    return _tanh
+for _face, _form in ((sin, _sin), (cos, _cos), (sincos, _sincos), (exp, _exp), (tanh, _tanh)):
+    overload(_face, inline="always", jit_options={"nogil": True})(_compiled_as(_form))
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
