@@ -35,7 +35,13 @@ from numba.extending import register_jitable
 from roller_gym import validation
 from roller_gym.physics import Scene, trig
 from roller_gym.physics import equations as eq
-from roller_gym.physics.integrators import CHUNK, PARALLEL_THRESHOLD, STEP_FIELDS, row_table
+from roller_gym.physics.integrators import (
+    CHUNK,
+    PARALLEL_THRESHOLD,
+    STEP_FIELDS,
+    contact_state,
+    row_table,
+)
 from roller_gym.task import (
     OBSERVATION_FIELDS,
     observation_values,
@@ -69,20 +75,28 @@ _FIELDS = tuple(f.name for f in fields(Scene))
 _FIELD_NUMBER = {name: i for i, name in enumerate(OBSERVATION_FIELDS)}
 
 
-def _mix(x: np.ndarray) -> np.ndarray:
+@register_jitable
+def _mix(x):
     """SplitMix64's finalizer on uint64 (wrapping arithmetic)."""
     x = (x ^ (x >> np.uint64(30))) * _M1
     x = (x ^ (x >> np.uint64(27))) * _M2
     return x ^ (x >> np.uint64(31))
 
 
+@numba.vectorize(["float64(uint64, uint64, uint64)"], cache=True, nopython=True)
+def _uniform(seed, episode, draw):
+    """The uniform of one (seed, episode, draw): a NumPy ufunc, so it broadcasts."""
+    s = _mix(seed + _GOLDEN)
+    x = _mix(s + episode * _GOLDEN)
+    x = _mix(x + (draw + np.uint64(1)) * _M1)
+    return np.float64(x >> np.uint64(11)) * 2.0**-53
+
+
 def uniform(seed: np.ndarray, episode: np.ndarray, draw: np.ndarray | int) -> np.ndarray:
-    """Uniforms in [0, 1): one per element of the broadcast (seed, episode, draw)."""
-    with np.errstate(over="ignore"):
-        s = _mix(np.asarray(seed, dtype=np.uint64) + _GOLDEN)
-        x = _mix(s + np.asarray(episode, dtype=np.uint64) * _GOLDEN)
-        x = _mix(x + (np.asarray(draw, dtype=np.uint64) + np.uint64(1)) * _M1)
-    return (x >> np.uint64(11)).astype(np.float64) * 2.0**-53
+    """Uniforms in [0, 1): one per element of the broadcast (seed, episode, draw), a
+    counter-based stream (SplitMix64's finalizer, compiled)."""
+    return _uniform(np.asarray(seed, dtype=np.uint64), np.asarray(episode, dtype=np.uint64),
+                    np.asarray(draw, dtype=np.uint64))
 
 
 def random_seed() -> int:
@@ -530,17 +544,10 @@ class RestState:
 
 def at_start(scene: Scene, phi: np.ndarray, phi_dot: np.ndarray) -> RestState:
     """The contact forces, energy and margins of start states under zero torque."""
-    m, r, kappa, e, k, g, c = scene.params
-    mu = scene.mu
-    a = eq.accel(phi, phi_dot, 0.0, m, r, kappa, e, k, g, c)
-    normal, friction = eq.contact_forces(phi, phi_dot, a, m, r, kappa, e, g)
-    lift, slip = eq.margins(normal, friction, m, g, mu)
+    a, normal, friction, energy, lift, slip = contact_state(scene, phi, phi_dot, 0.0)
     n = len(phi)
-    energy = eq.energy(phi, phi_dot, m, r, kappa, e, k, g)
-    return RestState(
-        phi, phi_dot, a, np.zeros(n, np.int64), np.ones(n, bool), normal, friction,
-        energy, np.broadcast_to(lift, (n,)), np.broadcast_to(slip, (n,)),
-    )
+    return RestState(phi, phi_dot, a, np.zeros(n, np.int64), np.ones(n, bool), normal,
+                     friction, energy, lift, slip)
 
 
 def state_option(value: Any, scene: Scene, n: int) -> tuple[np.ndarray, np.ndarray]:

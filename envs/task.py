@@ -53,6 +53,7 @@ import numpy as np
 from numba.extending import register_jitable
 from roller_gym import rewards
 from roller_gym.physics import Scene, contact, equations, equilibria, holding_torque, trig
+from roller_gym.physics.integrators import contact_state, scene_arrays
 
 __all__ = ["NAMESPACE", "OBSERVATION_FIELDS", "SPEED_SCALE", "TASKS", "TASK_CONSTANTS", "Task",
            "get_task", "hold_range", "observation_values", "per_scene", "position_error",
@@ -275,25 +276,34 @@ class Task:
         limit = (math.radians(60.0) / np.asarray(q, float)).reshape(-1, 1)
         return limit * (2.0 * u_phi - 1.0), 2.0 * u_dot - 1.0
 
+    @property
+    def start_torques(self) -> tuple[float, float, float]:
+        """The torques [N·m] a start state must roll under: −max_torque, 0, +max_torque."""
+        return (-self.max_torque, 0.0, self.max_torque)
+
     def start_accepted(self, phi: np.ndarray, phi_dot: np.ndarray, scene: Scene) -> np.ndarray:
-        """Whether the roller rolls at each candidate (N > 0, |F| <= μN) under any torque
-        within the limit (−max_torque, 0 and +max_torque)."""
-        rows = {f: np.asarray(getattr(scene, f), float).reshape(-1, 1)
-                for f in ("m", "r", "e", "k", "g", "mu", "damping")}
-        m, r, e, k, g, mu, c = (rows[f] for f in ("m", "r", "e", "k", "g", "mu", "damping"))
-        kappa = np.asarray(scene.kappa, float).reshape(-1, 1)
-        ok = np.ones(np.broadcast_shapes(phi.shape, m.shape), bool)
-        for normal, friction in self.start_contacts(phi, phi_dot, m, r, kappa, e, k, g, c):
-            ok &= (normal > 0) & (np.abs(friction) <= mu * normal)
-        return ok
+        """Whether the roller rolls at each candidate of shape (n, K) (N > 0, |F| <= μN, as
+        margins N/(m g) > 0 and (μN − |F|)/(m g) >= 0) under every torque of
+        :attr:`start_torques`: one compiled call over all candidates and torques."""
+        shape = np.broadcast_shapes(np.shape(phi), np.shape(phi_dot),
+                                    (scene.batch_size or 1, 1))
+        torques = self.start_torques
+        # one lane per (torque, roller, candidate)
+        par = np.tile(np.repeat(scene_arrays(scene, shape[0]), shape[1], axis=1), len(torques))
+        state = contact_state(
+            par, np.tile(np.broadcast_to(phi, shape).reshape(-1), len(torques)),
+            np.tile(np.broadcast_to(phi_dot, shape).reshape(-1), len(torques)),
+            np.repeat(torques, shape[0] * shape[1]))
+        rolls = (state[4] > 0.0) & (state[5] >= 0.0)
+        return rolls.reshape(len(torques), *shape).all(axis=0)
 
     def start_contacts(self, phi: Any, phi_dot: Any, m: Any, r: Any, kappa: Any, e: Any,
                        k: Any, g: Any, c: Any) -> list[tuple[Any, Any]]:
-        """The contact forces (N, F) [N] at the state under each torque a start must roll
-        under (−max_torque, 0, +max_torque): plain arithmetic on the equations, so floats,
-        arrays and intervals (:mod:`roller_gym.intervals`) alike."""
+        """The contact forces (N, F) [N] at the state under each torque of
+        :attr:`start_torques`: plain arithmetic on the equations, so floats, arrays and
+        intervals (:mod:`roller_gym.intervals`) alike (the feasibility proofs)."""
         out = []
-        for tau in (-self.max_torque, 0.0, self.max_torque):
+        for tau in self.start_torques:
             a = equations.accel(phi, phi_dot, tau, m, r, kappa, e, k, g, c)
             out.append(equations.contact_forces(phi, phi_dot, a, m, r, kappa, e, g))
         return out

@@ -846,3 +846,24 @@ def test_rk4_error_control_is_scipys_rk45_step():
     assert out.error_estimate == pytest.approx(np.max(np.abs(scipy_error)), rel=1e-9)
     classical = step(scene, phi, w, tau, DT, method="rk4", substeps=1)  # fixed substeps
     assert abs(classical.phi - out.phi) > 1e3 * abs(out.phi) * 1e-16
+
+
+def test_contact_state_is_the_equations_at_the_states():
+    """contact_state (compiled, one call) gives φ'', N, F, E and the margins of the equations
+    evaluated by NumPy at the same states, on random scenes (a batch) and states; where the
+    forces are undefined (a speed beyond float64's range) the margins are NaN, as the
+    equations' own."""
+    n = 300
+    params, phi, w, tau = _adversarial_sample(n, 91)
+    scene = Scene(m=params[0], r=params[1], R=params[2], e=params[3], k=params[4],
+                  damping=params[6])
+    w[:3] = (1e300, -1e300, np.inf)
+    got = integrators.contact_state(scene, phi, w, tau)
+    with np.errstate(all="ignore"):
+        a = eq.accel(phi, w, tau, *scene.params)
+        normal, friction = eq.contact_forces(phi, w, a, *scene.params[:4], scene.g)
+        want = (a, normal, friction, eq.energy(phi, w, *scene.params[:6]),
+                *eq.margins(normal, friction, scene.m, scene.g, scene.mu))
+    for name, x, y in zip(integrators.CONTACT_FIELDS, got, want, strict=True):
+        np.testing.assert_allclose(x, y, rtol=1e-9, atol=1e-12, err_msg=name)
+    assert np.isnan(got[4:, :3]).all()

@@ -154,3 +154,24 @@ def test_lqr_tracking_follows_the_moving_target():
     assert np.mean([e.total_return for e in episodes]) >= TASKS["RollerTrack"].reward_threshold
     worst = max(float(np.max(np.abs(e.error[50:]))) for e in episodes)
     assert worst < 0.05 * math.pi  # after the first 2.5 s it stays within 0.16 rad
+
+
+@pytest.mark.parametrize("name", list(TASKS))
+def test_start_accepted_is_the_rule_on_start_contacts(name):
+    """A start is accepted exactly where the contact forces of ``start_contacts`` (NumPy, the
+    form the feasibility proofs use) give N > 0 and |F| <= μN under every start torque: the
+    compiled check over (torque, roller, candidate) lanes keeps them in order."""
+    task = TASKS[name]()
+    rng = np.random.default_rng(4)
+    scene = roller_gym.Scene(m=rng.uniform(0.5, 2, 7), e=rng.uniform(0, 0.09, 7), R=1.0)
+    phi, phi_dot = rng.uniform(-3, 3, (7, 9)), rng.uniform(-12, 12, (7, 9))
+    got = task.start_accepted(phi, phi_dot, scene)
+    col = {f: np.broadcast_to(np.asarray(getattr(scene, f), float), (7,))[:, None]
+           for f in ("m", "r", "e", "k", "g", "damping", "mu", "kappa")}
+    kappa = col["kappa"]
+    want = np.ones(phi.shape, bool)
+    for normal, friction in task.start_contacts(phi, phi_dot, col["m"], col["r"], kappa,
+                                                col["e"], col["k"], col["g"], col["damping"]):
+        want &= (normal > 0) & (np.abs(friction) <= col["mu"] * normal)
+    assert got.shape == phi.shape and 0 < want.sum() < want.size
+    np.testing.assert_array_equal(got, want)

@@ -100,6 +100,7 @@ from scipy.integrate._ivp.rk import RK45
 
 __all__ = [
     "CARRY_FIELDS",
+    "CONTACT_FIELDS",
     "INPUT_FIELDS",
     "METHODS",
     "ROWS",
@@ -110,6 +111,7 @@ __all__ = [
     "Scheme",
     "StepResult",
     "Stepper",
+    "contact_state",
     "predicted_substeps",
     "row_table",
     "scene_arrays",
@@ -203,16 +205,18 @@ def scene_arrays(scene: Scene, n: int | None = None) -> np.ndarray:
     A scalar scene is broadcast to ``n`` rollers (1 if ``n`` is None); a batch scene gives its
     rollers (``n`` must then be None or its size).
     """
-    values = dict(zip(("m", "r", "kappa", "e", "k", "g", "damping"), scene.params, strict=True))
-    values["mu"] = scene.mu
+    values = (*scene.params, scene.mu)  # the order of SCENE_FIELDS
     size = scene.batch_size
     if n is None:
         n = size or 1
     elif size is not None and size != n:
         raise ValueError(f"n={n} does not match the scene's batch size {size}")
     out = np.empty((len(SCENE_FIELDS), n))
-    for i, name in enumerate(SCENE_FIELDS):
-        out[i] = np.broadcast_to(np.asarray(values[name], dtype=float).reshape(-1), (n,))
+    if size is None:
+        out[...] = np.array(values, dtype=float)[:, None]
+    else:
+        for i, value in enumerate(values):
+            out[i] = np.asarray(value, dtype=float).reshape(-1)  # broadcast if a scalar
     return out
 
 
@@ -1069,6 +1073,36 @@ class BatchStepper(_Base):
         np.not_equal(io[_TOL_MET - _OUT], 0.0, out=self._tol_met)
         return StepResult(*(self._typed.get(f, row) for f, row in zip(STEP_FIELDS, io,
                                                                        strict=True)))
+
+
+#: The rows of :func:`contact_state`'s table.
+CONTACT_FIELDS = ("phi_ddot", "normal_force", "friction_force", "energy", "liftoff_margin",
+                  "slip_margin")
+
+
+def contact_state(scene: Scene | np.ndarray, phi: np.ndarray, phi_dot: np.ndarray,
+                  tau: np.ndarray | float) -> np.ndarray:
+    """What holds at states, compiled (the kernels' own loop, which costs one call where the
+    same equations on small NumPy arrays cost dozens): a table of :data:`CONTACT_FIELDS` rows
+    (φ'' [rad/s²], N [N], F [N], E [J], N/(m g), (μN − |F|)/(m g)) and one column per state.
+
+    Args:
+        scene: a scalar scene, or a batch of as many rollers as states, or their numbers
+            as :func:`scene_arrays` gives them (one column per state).
+        phi, phi_dot: the states (φ [rad], φ' [rad/s]), 1-D arrays of the same length.
+        tau: the torque [N·m] (a float, or an array of that length).
+    """
+    n = len(phi)
+    out = np.empty((len(CONTACT_FIELDS), n))
+    out[4:] = np.inf
+    tau = np.broadcast_to(np.asarray(tau, dtype=float), (n,))
+    _end_lanes(np.ascontiguousarray(phi, dtype=float), np.ascontiguousarray(phi_dot, dtype=float),
+               np.ascontiguousarray(tau),
+               np.ascontiguousarray(scene) if isinstance(scene, np.ndarray)
+               else scene_arrays(scene, n), n, out)
+    undefined = np.isnan(out[1]) | np.isnan(out[2])  # the margins are NaN with the forces
+    out[4:, undefined] = np.nan  # (the loop keeps the smaller of inf and each margin)
+    return out
 
 
 def step(
