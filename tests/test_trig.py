@@ -158,6 +158,7 @@ def test_exp_and_tanh_within_their_ulps_of_the_exact_value(ours, ref, sample, ul
         special = ours(np.array([np.inf, -np.inf, np.nan]))
     libm = {mpmath.exp: np.exp, mpmath.tanh: np.tanh}[ref]
     assert np.array_equal(special, libm(np.array([np.inf, -np.inf, np.nan])), equal_nan=True)
+    assert np.signbit(ours(np.array([-0.0]))) == np.signbit(libm(np.array([-0.0])))
 
 
 def test_exp_and_tanh_compiled_give_the_bits_of_their_numpy_evaluation():

@@ -330,6 +330,7 @@ def _tanh(x):
     z = x * x
     small = x + x * z * ((_TP0 * z + _TP1) * z + _TP2) / (((z + _TQ0) * z + _TQ1) * z + _TQ2)
     large = 1.0 - 2.0 / (_exp(2.0 * np.abs(x)) + 1.0)
+    small = select(x == 0.0, x, small)  # tanh(−0) = −0
     return select(np.abs(x) < 0.625, small, select(x < 0.0, -large, large))
 
 
