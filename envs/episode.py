@@ -350,11 +350,14 @@ _N_OBS = len(OBSERVATION_FIELDS)
 # scratch rows: the inputs, the outcome's computed rows, then the observation's values
 (_B_PHI, _B_PHI_DOT, _B_FINITE, _B_LIFT, _B_SLIP, _B_ERR_IN, _B_TORQUE, _B_TARGET,
  _B_TARGET_RATE, _B_TARGET_TORQUE, _B_Q, _B_RATE) = range(12)
-_B_INPUTS = ((_S_PHI, _S_PHI_DOT, _S_FINITE, _S_LIFT, _S_SLIP, _S_ERR),
-             (_C_TORQUE, _C_TARGET, _C_TARGET_RATE, _C_TARGET_TORQUE, _C_Q, _C_PSI_RATE))
+# the input rows' sources: the step's rows, then the context's
+_B_STEP_ROWS = (_S_PHI, _S_PHI_DOT, _S_FINITE, _S_LIFT, _S_SLIP, _S_ERR)
+_B_CONTEXT_ROWS = (_C_TORQUE, _C_TARGET, _C_TARGET_RATE, _C_TARGET_TORQUE, _C_Q, _C_PSI_RATE)
+_B_OUT = len(_B_STEP_ROWS) + len(_B_CONTEXT_ROWS)  # the first computed row
+assert _B_OUT == _B_RATE + 1
 _B_COMPUTED = (_O_REWARD, _O_TERMINATED, _O_PSI, _O_LIFTING, _O_SLIPPING, _O_NONFINITE,
                _O_ERR, _O_TARGET_PSI, _O_ERROR, _O_SUCCESS)
-_B_OBS = 12 + len(_B_COMPUTED)
+_B_OBS = _B_OUT + len(_B_COMPUTED)
 _B_ROWS = _B_OBS + _N_OBS
 # the outcome's rows that are the step's or the context's own numbers
 _PASSED = ((_O_PHI, _S_PHI), (_O_PHI_DOT, _S_PHI_DOT), (_O_NORMAL, _S_NORMAL),
@@ -385,7 +388,7 @@ def _outcome_block(b, m, constants):
         reward = step_reward(error, speed_error, (tau - target_torque) / max_torque, band,
                              margin, w_p, speed_margin, w_v, w_u)
         lifting, slipping = lift <= 0.0, slip < 0.0
-        o = 12 * _B + i
+        o = _B_OUT * _B + i
         b[o] = trig.select(failed, 0.0, reward)  # a failed step earns nothing
         b[o + _B] = trig.select(lifting | slipping | failed, 1.0, 0.0)  # terminated
         b[o + 2 * _B] = rate * phi  # ψ
@@ -411,17 +414,19 @@ def _outcome_range(lo, hi, result, context, constants, observed, out, obs, b):
     scratch ``b`` (_B_ROWS · _B elements)."""
     for start in range(lo, hi, _BLOCK):
         m = min(_BLOCK, hi - start)
-        for k in range(6):
-            row, crow = _B_INPUTS[0][k], _B_INPUTS[1][k]
+        for k in range(len(_B_STEP_ROWS)):
+            row = _B_STEP_ROWS[k]
             for i in range(m):
                 b[k * _B + i] = result[row, start + i]
+        for k in range(len(_B_CONTEXT_ROWS)):
+            row, first = _B_CONTEXT_ROWS[k], len(_B_STEP_ROWS) + k
             for i in range(m):
-                b[(k + 6) * _B + i] = context[crow, start + i]
+                b[first * _B + i] = context[row, start + i]
         _outcome_block(b, m, constants)
         for k in range(len(_B_COMPUTED)):
             row = _B_COMPUTED[k]
             for i in range(m):
-                out[row, start + i] = b[(12 + k) * _B + i]
+                out[row, start + i] = b[(_B_OUT + k) * _B + i]
         for pair in _PASSED:
             for i in range(m):
                 out[pair[0], start + i] = result[pair[1], start + i]

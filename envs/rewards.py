@@ -18,6 +18,7 @@ from roller_gym.physics import trig
 
 __all__ = ["blend", "near", "tolerance", "wrap_angle"]
 
+
 @register_jitable(inline="always")
 def near(x, margin, value_at_margin=0.1):
     """exp(ln(value_at_margin)·(x/margin)²): 1 at x = 0, ``value_at_margin`` at |x| = margin."""

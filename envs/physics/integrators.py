@@ -425,6 +425,8 @@ def row_table(rows: int, n: int) -> np.ndarray:
     elements apart in memory (a view): what the batch kernels read and write a roller's
     column of (see ``_PAD``)."""
     return np.zeros((rows, n + _PAD))[:, :n]
+
+
 _SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0
 #: Attempts (accepted or rejected substeps) after which a roller still running is failed.
 _MAX_ATTEMPTS = 4 * MAX_SUBSTEPS
@@ -907,8 +909,13 @@ class _Base:
         sch = self.scheme
         self._cfg = np.array([dt, tol, substeps or 0, sch.halvings, sch.order, sch.constant,
                               sch.stable_step, sch.sweep_exponent, sch.tol_share], dtype=float)
-        self._io = np.zeros((len(ROWS), num))
+        self._io = self._new_io(num)
         self._warned = False
+
+    @staticmethod
+    def _new_io(num: int) -> np.ndarray:
+        """The zeroed ``io`` table of ``num`` rollers."""
+        return np.zeros((len(ROWS), num))
 
     def __getstate__(self) -> dict:
         state = dict(self.__dict__)
@@ -1011,7 +1018,6 @@ class BatchStepper(_Base):
             raise ValueError(f"num={num!r} must be an integer >= 1")
         super().__init__(int(num), method, dt, tol, substeps)
         self.num = int(num)
-        self._io = row_table(len(ROWS), self.num)
         self._io[: len(SCENE_FIELDS)] = np.nan  # no scene yet
         self._substeps = np.zeros(self.num, dtype=np.int64)
         self._finite = np.zeros(self.num, dtype=bool)
@@ -1020,9 +1026,14 @@ class BatchStepper(_Base):
                        "tol_met": self._tol_met}
         self._link()
 
+    @staticmethod
+    def _new_io(num: int) -> np.ndarray:
+        """The zeroed ``io`` table, its rows padded (:func:`row_table`)."""
+        return row_table(len(ROWS), num)
+
     def _link(self) -> None:
         if self._io.base is None:  # unpickled: a contiguous copy, padded again
-            io = row_table(len(ROWS), self.num)
+            io = self._new_io(self.num)
             io[...] = self._io
             self._io = io
         super()._link()
