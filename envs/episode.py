@@ -260,13 +260,13 @@ def _draw_states(task: Any, scene: Scene, target: np.ndarray, seed: np.ndarray,
     n = len(seed)
     phi, phi_dot = np.zeros(n), np.zeros(n)
     todo = np.arange(n)
-    draws = _STATE_DRAW + 2 * np.arange(CANDIDATES)
+    # candidate j of a round takes draws 2j (φ) and 2j + 1 (φ')
+    draws = _STATE_DRAW + np.arange(2 * CANDIDATES).reshape(CANDIDATES, 2)
     for round_ in range(ROUNDS):
         sub = take(scene, todo, n)
-        d = draws + 2 * CANDIDATES * round_
-        u_phi = uniform(seed[todo, None], episode[todo, None], d)
-        u_dot = uniform(seed[todo, None], episode[todo, None], d + 1)
-        c_phi, c_dot = task.start_candidates(u_phi, u_dot, sub)
+        u = uniform(seed[todo, None, None], episode[todo, None, None],
+                    draws + 2 * CANDIDATES * round_)
+        c_phi, c_dot = task.start_candidates(u[..., 0], u[..., 1], sub)
         ok = task.start_accepted(c_phi, c_dot, sub)
         found = ok.any(axis=1)
         first = np.argmax(ok, axis=1)
@@ -515,7 +515,8 @@ def outcome(task: Any, result: Any, target: Any, q: Any, psi_rate: Any, tau: Any
     kernel.run(table.reshape(len(STEP_FIELDS), n))
     rows = info_rows(kernel.table, tuple(INFO_KEYS))
     scalar = shape == ()
-    info = {k: v[0] if scalar else v.reshape(shape) for k, v in rows.items()}
+    info = {k: v[0] if scalar else v if v.shape == shape else v.reshape(shape)
+            for k, v in rows.items()}
     reward, terminated = kernel.table[_O_REWARD], kernel.table[_O_TERMINATED] != 0.0
     if scalar:
         return Outcome(reward[0], terminated[0], info, kernel.observation[0])

@@ -288,14 +288,16 @@ class Task:
         shape = np.broadcast_shapes(np.shape(phi), np.shape(phi_dot),
                                     (scene.batch_size or 1, 1))
         torques = self.start_torques
-        # one lane per (torque, roller, candidate)
-        par = np.tile(np.repeat(scene_arrays(scene, shape[0]), shape[1], axis=1), len(torques))
-        state = contact_state(
-            par, np.tile(np.broadcast_to(phi, shape).reshape(-1), len(torques)),
-            np.tile(np.broadcast_to(phi_dot, shape).reshape(-1), len(torques)),
-            np.repeat(torques, shape[0] * shape[1]))
-        rolls = (state[4] > 0.0) & (state[5] >= 0.0)
-        return rolls.reshape(len(torques), *shape).all(axis=0)
+        lanes = (len(torques), *shape)  # one lane per (torque, roller, candidate)
+        state = np.empty((3, *lanes))  # broadcast as they are written
+        state[0], state[1] = phi, phi_dot
+        state[2] = np.reshape(torques, (-1, 1, 1))
+        numbers = scene_arrays(scene, shape[0])
+        par = np.empty((len(numbers), *lanes))
+        par[...] = numbers[:, None, :, None]
+        margins = contact_state(par.reshape(len(numbers), -1), *state.reshape(3, -1))[4:]
+        rolls = (margins[0] > 0.0) & (margins[1] >= 0.0)
+        return rolls.reshape(lanes).all(axis=0)
 
     def start_contacts(self, phi: Any, phi_dot: Any, m: Any, r: Any, kappa: Any, e: Any,
                        k: Any, g: Any, c: Any) -> list[tuple[Any, Any]]:
@@ -418,8 +420,11 @@ def observation_values(phi, phi_dot, target, rate, target_rate, with_target=True
 
 def per_scene(function, scene: Scene) -> np.ndarray:
     """``function(scalar scene)`` for each roller of a batch scene, computed once per
-    distinct scene (float results, as an array of the batch's size)."""
-    n = scene.batch_size or 1
+    distinct scene (float results, as an array of the batch's size; of 1 for a scalar
+    scene)."""
+    if scene.batch_size is None:
+        return np.array([function(scene)], dtype=float)
+    n = scene.batch_size
     rows = np.stack([np.broadcast_to(np.asarray(getattr(scene, f.name), float), (n,))
                      for f in dataclasses.fields(Scene)], axis=1)
     unique, inverse = np.unique(rows, axis=0, return_inverse=True)

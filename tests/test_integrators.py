@@ -858,6 +858,7 @@ def test_contact_state_is_the_equations_at_the_states():
     scene = Scene(m=params[0], r=params[1], R=params[2], e=params[3], k=params[4],
                   damping=params[6])
     w[:3] = (1e300, -1e300, np.inf)
+    w[3] = 1.5e154  # N and F overflow to inf (and μN − |F| to NaN)
     got = integrators.contact_state(scene, phi, w, tau)
     with np.errstate(all="ignore"):
         a = eq.accel(phi, w, tau, *scene.params)
@@ -867,3 +868,30 @@ def test_contact_state_is_the_equations_at_the_states():
     for name, x, y in zip(integrators.CONTACT_FIELDS, got, want, strict=True):
         np.testing.assert_allclose(x, y, rtol=1e-9, atol=1e-12, err_msg=name)
     assert np.isnan(got[4:, :3]).all()
+    assert not np.isfinite(got[1:3, 3]).all()  # the overflow case is exercised
+
+
+def test_contact_state_refuses_mismatched_lengths():
+    """A speed, torque or scene table of another length than φ is an error naming it, not a
+    read past the end of an array."""
+    scene, phi = preset("paper"), np.linspace(-0.3, 0.3, 6)
+    with pytest.raises(ValueError, match="phi_dot"):
+        integrators.contact_state(scene, phi, np.zeros(2), 0.0)
+    with pytest.raises(ValueError, match="tau"):
+        integrators.contact_state(scene, phi, np.zeros(6), np.zeros(5))
+    with pytest.raises(ValueError, match="scene"):
+        integrators.contact_state(integrators.scene_arrays(scene), phi, np.zeros(6), 0.0)
+
+
+def test_pickled_batch_stepper_keeps_its_padded_rows_and_its_steps():
+    """A BatchStepper of a power-of-two batch, pickled and loaded: its table's rows are
+    padded again (``row_table``), and it takes the same step as the original."""
+    import pickle
+
+    stepper = integrators.BatchStepper(4096, dt=DT, tol=1e-8)
+    stepper.set_scenes(preset("paper"))
+    phi, w = np.linspace(-1, 1, 4096), np.linspace(2, -2, 4096)
+    stepper.run(phi, w, 0.1 * w)  # a carried substep size to continue from
+    copy = pickle.loads(pickle.dumps(stepper))
+    assert copy._io.strides == stepper._io.strides == (8 * (4096 + integrators._PAD), 8)
+    np.testing.assert_array_equal(copy.run(phi, w, 0.2 * phi), stepper.run(phi, w, 0.2 * phi))

@@ -1032,7 +1032,7 @@ class BatchStepper(_Base):
         return row_table(len(ROWS), num)
 
     def _link(self) -> None:
-        if self._io.base is None:  # unpickled: a contiguous copy, padded again
+        if self._io.strides[0] != (self.num + _PAD) * self._io.itemsize:  # unpickled: padded again
             io = self._new_io(self.num)
             io[...] = self._io
             self._io = io
@@ -1104,15 +1104,23 @@ def contact_state(scene: Scene | np.ndarray, phi: np.ndarray, phi_dot: np.ndarra
         tau: the torque [N·m] (a float, or an array of that length).
     """
     n = len(phi)
+    par = (np.ascontiguousarray(scene, dtype=float) if isinstance(scene, np.ndarray)
+           else scene_arrays(scene, n))
+    for name, value, shape in (("phi_dot", phi_dot, (n,)), ("tau", tau, (n,)),
+                               ("scene", par, (len(SCENE_FIELDS), n))):
+        if np.ndim(value) and np.shape(value) != shape:
+            raise ValueError(f"{name} has shape {np.shape(value)}; {n} states need {shape}")
+    lanes = np.empty((3, n))  # contiguous rows of φ, φ' and τ (broadcast as they are written)
+    lanes[0], lanes[1], lanes[2] = phi, phi_dot, tau
     out = np.empty((len(CONTACT_FIELDS), n))
-    out[4:] = np.inf
-    tau = np.broadcast_to(np.asarray(tau, dtype=float), (n,))
-    _end_lanes(np.ascontiguousarray(phi, dtype=float), np.ascontiguousarray(phi_dot, dtype=float),
-               np.ascontiguousarray(tau),
-               np.ascontiguousarray(scene) if isinstance(scene, np.ndarray)
-               else scene_arrays(scene, n), n, out)
-    undefined = np.isnan(out[1]) | np.isnan(out[2])  # the margins are NaN with the forces
-    out[4:, undefined] = np.nan  # (the loop keeps the smaller of inf and each margin)
+    out[4:] = np.inf  # the loop keeps the smaller of these and each state's margins
+    _end_lanes(lanes[0], lanes[1], lanes[2], par, n, out)
+    # where a force is not finite, the margins are the equations' own (NaN, not that inf)
+    odd = ~(np.isfinite(out[1]) & np.isfinite(out[2]))
+    if odd.any():
+        with np.errstate(all="ignore"):
+            out[4:, odd] = eq.margins(out[1, odd], out[2, odd], par[_M, odd], par[_G, odd],
+                                      par[_MU, odd])
     return out
 
 
