@@ -277,13 +277,23 @@ def peers_missing() -> dict[str, str]:
 
 
 def machine() -> dict[str, Any]:
+    """The machine measured on: the CPU as Linux names it (with its family, model, clock and
+    widest SIMD, which set the kernels' speed: a virtual machine's name alone can hide them),
+    its cores, the OS, Python and the packages' versions."""
     cpu = platform.processor() or platform.machine()
     try:
+        info: dict[str, str] = {}
         for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
+            key, _, value = line.partition(":")
+            if not key.strip():
+                break  # the first processor's block is enough
+            info.setdefault(key.strip(), value.strip())
+        flags = info.get("flags", "").split()
+        simd = next((name for flag, name in (("avx512f", "AVX-512"), ("avx2", "AVX2"))
+                     if flag in flags), "no AVX2")
+        cpu = (f"{info.get('model name', cpu)} (family {info.get('cpu family', '?')} model "
+               f"{info.get('model', '?')}, {float(info.get('cpu MHz', 'nan')):.0f} MHz, {simd})")
+    except (OSError, ValueError):
         pass
     versions = package_versions(("roller-gym", "gymnasium", "numpy", "numba",
                                  "stable-baselines3", "torch"))
