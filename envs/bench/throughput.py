@@ -389,7 +389,7 @@ def render(results: dict[str, Any]) -> str:
         "measured in the same run. Regenerate with `make throughput` (in an environment with "
         "the optional peers, the extra `peers`) or `python -m roller_gym.bench.throughput "
         "measure --out docs`; render the committed results again with `render`.", "",
-        f"Measured {results['date']} on {m['cpu']} ({m['cores']} cores), {m['os']}, Python "
+        f"Measured {results['date']} on {m['cpu']}, {m['cores']} cores, {m['os']}, Python "
         f"{m['python']}; " + ", ".join(f"{k} {v}" for k, v in m["versions"].items() if v)
         + (" — a quick (smoke) run" if results["quick"] else "") + ".", "",
         "## Targets", "", "| target | measured | met |", "|---|---:|:---:|",
