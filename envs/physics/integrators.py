@@ -808,7 +808,9 @@ class Scheme:
         halvings: the adaptive controller takes the 2^halvings-th root of the error ratio
             (2 or 3: the kernel takes it as square roots, which vectorize).
         tol_share: the share of ``tol`` the accepted substeps' error estimates may add up to
-            (below 1: room for what the estimates miss, measured in the tests).
+            (below 1: room for what the estimates miss, measured in the tests). rk4's 0.05 is
+            also what keeps its energy drift over 1e5 zero-torque steps within the tests'
+            bound of 5e-9 J (measured on "paper" at tol 1e-9: 3.9e-9 J; at 0.1, 9.0e-9 J).
     """
 
     name: str
