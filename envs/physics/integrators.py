@@ -1104,6 +1104,12 @@ def contact_state(scene: Scene | np.ndarray, phi: np.ndarray, phi_dot: np.ndarra
             as :func:`scene_arrays` gives them (one column per state).
         phi, phi_dot: the states (φ [rad], φ' [rad/s]), 1-D arrays of the same length.
         tau: the torque [N·m] (a float, or an array of that length).
+
+    Where a force is not finite (a speed beyond float64's range), the margins are the
+    equations' own (NaN where they are undefined), so such a state never passes as rolling.
+
+    Raises:
+        ValueError: ``phi_dot``, ``tau`` or the scene's numbers do not have one value per state.
     """
     n = len(phi)
     par = (np.ascontiguousarray(scene, dtype=float) if isinstance(scene, np.ndarray)
