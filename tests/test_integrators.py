@@ -858,7 +858,6 @@ def test_contact_state_is_the_equations_at_the_states():
     scene = Scene(m=params[0], r=params[1], R=params[2], e=params[3], k=params[4],
                   damping=params[6])
     w[:3] = (1e300, -1e300, np.inf)
-    w[3] = 1.5e154  # N and F overflow to inf (and μN − |F| to NaN)
     got = integrators.contact_state(scene, phi, w, tau)
     with np.errstate(all="ignore"):
         a = eq.accel(phi, w, tau, *scene.params)
@@ -868,7 +867,20 @@ def test_contact_state_is_the_equations_at_the_states():
     for name, x, y in zip(integrators.CONTACT_FIELDS, got, want, strict=True):
         np.testing.assert_allclose(x, y, rtol=1e-9, atol=1e-12, err_msg=name)
     assert np.isnan(got[4:, :3]).all()
-    assert not np.isfinite(got[1:3, 3]).all()  # the overflow case is exercised
+
+
+def test_contact_state_margins_where_both_forces_overflow_are_the_equations_nan():
+    """On "paper" at φ' = 1.5e154 rad/s, N and F both overflow to +inf: μN − |F| is inf − inf,
+    NaN in the equations, and so is the slip margin (not the inf the compiled loop starts
+    from): a state with it never passes a "slip margin >= 0" check as rolling."""
+    scene, phi, w = preset("paper"), 0.3, 1.5e154
+    got = integrators.contact_state(scene, np.array([phi]), np.array([w]), 0.0)[:, 0]
+    with np.errstate(all="ignore"):
+        a = eq.accel(phi, w, 0.0, *scene.params)
+        normal, friction = eq.contact_forces(phi, w, a, *scene.params[:4], scene.g)
+        lift, slip = eq.margins(normal, friction, scene.m, scene.g, scene.mu)
+    assert np.isposinf([normal, friction, got[1], got[2]]).all() and np.isnan(slip)
+    np.testing.assert_array_equal(got[4:], [lift, slip])
 
 
 def test_contact_state_refuses_mismatched_lengths():
