@@ -18,7 +18,7 @@ from roller_gym import episode, validation
 from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig
 from roller_gym.episode import CONTEXT_FIELDS, OUTCOME_ROWS, OutcomeKernel
 from roller_gym.physics import Scene
-from roller_gym.physics.integrators import Stepper
+from roller_gym.physics.integrators import DEFAULT_METHOD, Stepper
 from roller_gym.task import Task, get_task, psi_rate, wrap_rate
 
 __all__ = ["RollerEnv"]
@@ -41,8 +41,9 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         max_torque: the torque [N·m] an action of ±1 applies; default: the task's.
         tolerance: the integrator's target state error per control step (φ [rad],
             φ' [rad/s]); it sets the number of substeps.
-        integrator: ``"rk8"`` (8th order at automatic substeps; the default and the
-            fastest at tight tolerances), ``"rk4"``, ``"euler"`` (semi-implicit, Pendulum's
+        integrator: ``"taylor"`` (the series of the motion to degree 18, its substeps
+            chosen from its own error estimate; the default and the fastest), ``"rk8"`` and
+            ``"rk4"`` (error-controlled Runge–Kutta), ``"euler"`` (semi-implicit, Pendulum's
             scheme), ``"midpoint"`` (implicit, energy-stable) or ``"dop853"`` (scipy's
             adaptive, slow: a reference).
         substeps: a fixed number of substeps per control step instead of the automatic rule.
@@ -68,7 +69,7 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         dt: float = DEFAULT_DT,
         max_torque: float | None = None,
         tolerance: float = DEFAULT_TOLERANCE,
-        integrator: str = "rk8",
+        integrator: str = DEFAULT_METHOD,
         substeps: int | None = None,
         randomize: Mapping[str, tuple[float, float]] | None = None,
         render_mode: str | None = None,

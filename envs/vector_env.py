@@ -32,7 +32,7 @@ from gymnasium.vector.utils import batch_space
 from roller_gym import episode, validation
 from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig, resolve_scene
 from roller_gym.physics import Scene
-from roller_gym.physics.integrators import BatchStepper
+from roller_gym.physics.integrators import DEFAULT_METHOD, BatchStepper
 from roller_gym.task import Task, get_task, psi_rate, wrap_rate
 
 __all__ = ["RollerVectorEnv"]
@@ -80,7 +80,7 @@ class RollerVectorEnv(VectorEnv):
         dt: float = DEFAULT_DT,
         max_torque: float | None = None,
         tolerance: float = DEFAULT_TOLERANCE,
-        integrator: str = "rk8",
+        integrator: str = DEFAULT_METHOD,
         substeps: int | None = None,
         randomize: Mapping[str, tuple[float, float]] | None = None,
         render_mode: str | None = None,
@@ -98,7 +98,8 @@ class RollerVectorEnv(VectorEnv):
         )
         if integrator == "dop853":
             raise ValueError("integrator='dop853' is a reference for the single environment; "
-                             "the vector environment takes 'rk8', 'rk4', 'euler' or 'midpoint'")
+                             "the vector environment takes 'taylor', 'rk8', 'rk4', 'euler' or "
+                             "'midpoint'")
         self.autoreset_mode = _autoreset_mode(autoreset_mode)
         self.metadata = {**type(self).metadata, "autoreset_mode": self.autoreset_mode}
         task = self.task = self.config.task

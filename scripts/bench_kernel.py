@@ -2,8 +2,9 @@
 
 Prints:
 
-* the batch stepper (``BatchStepper.advance``, default settings: "paper", dt 0.05 s,
-  tol 1e-8, rk8) in ns per roller-step at 4,096 and 65,536 rollers, random start states
+* the batch stepper (``BatchStepper.advance``: "paper", dt 0.05 s, tol 1e-8, rk8, the
+  error-controlled Runge–Kutta pair; the environments' default, taylor, is timed in
+  ``docs/THROUGHPUT.md``) in ns per roller-step at 4,096 and 65,536 rollers, random start states
   around the bottom and random torques; against the same count of right-hand-side
   evaluations alone (``equations.accel`` in a compiled parallel loop, no control logic) and
   against Gymnasium's CartPoleVectorEnv at the same number of sub-environments;

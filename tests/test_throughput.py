@@ -56,13 +56,16 @@ def test_render_has_every_section_and_no_gap():
 def test_envpool_and_the_arithmetic_are_reported_where_measured():
     res = copy.deepcopy(RESULTS)
     res["vector"]["4096"].update({"EnvPool Pendulum-v1": 2e6, "rhs_ns": 10.0, "substeps": 1.0,
-                                  "rhs_per_step": 14.0, "kernel_threads": 2})
+                                  "unit": "expansion", "unit_ns": 30.0,
+                                  "units_per_step": 1.0, "kernel_threads": 2})
     res["vector"]["65536"].update({"EnvPool Pendulum-v1": 2e6, "rhs_ns": 10.0, "substeps": 1.0,
-                                   "rhs_per_step": 14.0, "kernel_threads": 2})
+                                   "unit": "expansion", "unit_ns": 30.0,
+                                   "units_per_step": 1.0, "kernel_threads": 2})
     ours = {w: (v, met) for w, v, _t, met in throughput.verdict_envpool(res)}
     assert sorted(ours.values()) == [(0.5, False), (1.5, True)]
     assert throughput.verdict_envpool(RESULTS) == []  # not measured: no verdict
     page = throughput.render(res)
     assert "| 4,096 | 2,000,000 | 1.50 |" in page
-    # kernel 4e6 roller-steps/s on 2 threads: 500 core-ns, against 14 evaluations of 10 ns
-    assert "| 4,096 | 10.00 | 1.00 | 500 | 3.6 |" in page
+    # kernel 4e6 roller-steps/s on 2 threads: 500 core-ns, against 1 expansion of 30 ns
+    assert "| 4,096 | 10.00 | 30.00 | 1.00 | 500 | 16.7 |" in page
+    assert "kernel / its expansions" in page

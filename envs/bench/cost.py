@@ -1,4 +1,4 @@
-"""The cost of the error control: the automatic substep count of rk8 and rk4 against the
+"""The cost of the error control: the automatic substep count of taylor, rk8 and rk4 against the
 smallest fixed count of equal substeps that meets the same tolerance, on the same steps.
 
 :func:`measure` returns plain data (saved by :mod:`roller_gym.bench.report` under the
@@ -22,7 +22,8 @@ drum; e/r up to 0.999, k/r down to 0.01; |τ| up to 5 m g r; |φ'| up to 15 sqrt
   skipped (the tolerance is out of reach of float64 there).
 
 The ratio automatic / smallest is reported per tolerance and scheme, counted in
-right-hand-side evaluations (the same as substeps for rk8; rk4's substep under error control
+right-hand-side evaluations (the same as substeps for rk8, and for taylor, whose substeps are
+one expansion each; rk4's substep under error control
 is a Dormand–Prince 5(4) step of 6 evaluations, its fixed substep one classical step of 4): its
 median,
 99th percentile and largest, with the share of steps whose automatic error is within ``tol``.
@@ -80,7 +81,7 @@ class CostConfig:
     steps: int = 300  # independent control steps of the stateless variant
     trajectories: int = 40  # trajectories of the carried variant ...
     trajectory_steps: int = 6  # ... of this many control steps (the first one left out)
-    methods: tuple[str, ...] = ("rk8", "rk4")
+    methods: tuple[str, ...] = ("taylor", "rk8", "rk4")
     tols: tuple[float, ...] = (1e-6, 1e-8)
     seed: int = 1
 

@@ -43,17 +43,22 @@ Results = dict[str, Any]
 RESULTS_FILE = Path("benchmarks") / "workprecision.json"
 PAGE = "BENCHMARKS.md"
 
-OUR_FAMILIES = ("euler", "rk4", "rk4 auto", "rk8", "rk8 auto", "midpoint", "dop853")
+OUR_FAMILIES = ("euler", "rk4", "rk4 auto", "rk8", "rk8 auto", "taylor", "taylor auto",
+                "midpoint", "dop853")
 MJ_FAMILIES = ("MuJoCo default", "MuJoCo tuned")
 COLORS = {"euler": "tab:red", "rk4": "tab:blue", "rk4 auto": "tab:green", "rk8": "tab:cyan",
-          "rk8 auto": "tab:olive", "midpoint": "tab:purple", "dop853": "tab:gray",
+          "rk8 auto": "tab:olive", "taylor": "tab:pink", "taylor auto": "black",
+          "midpoint": "tab:purple", "dop853": "tab:gray",
           "MuJoCo default": "tab:orange", "MuJoCo tuned": "tab:brown"}
 MARKERS = {"euler": "v", "rk4": "o", "rk4 auto": "s", "rk8": "h", "rk8 auto": "p",
+           "taylor": "<", "taylor auto": "*",
            "midpoint": "D", "dop853": "^", "MuJoCo default": "X", "MuJoCo tuned": "P"}
 #: MuJoCo's integrators in words.
 _INTEGRATORS = {"Euler": "semi-implicit Euler"}
-#: Right-hand-side evaluations per substep of the compiled Runge–Kutta schemes.
-STAGES = {"rk8": 12, "rk4": 4}
+#: The work of one substep of each compiled error-controlled scheme, in words.
+SUBSTEP_WORK = {"rk8": "12 right-hand sides", "rk4": "4 right-hand sides",
+                "taylor": "one expansion to degree 18 (the sines once, then products of "
+                          "series)"}
 
 
 # ================================================================================================
@@ -362,7 +367,9 @@ def section_method(results: Results) -> list[str]:
         f"{st['tolerance']:.0e}) with the Dormand–Prince 5(4) pair (scipy's RK45 tableau, its "
         "5th-order solution carried on); "
         "`rk8`, `rk8 auto` = the same with the 8th-order Dormand–Prince tableau and its "
-        "embedded estimate (the environments' default integrator: "
+        "embedded estimate; `taylor`, `taylor auto` = the Taylor series of the motion to "
+        "degree 18, n fixed substeps or each substep's size chosen from the expansion's "
+        "last two terms (the environments' default integrator: "
         f"`{st['method']}`); `midpoint` = implicit midpoint, n fixed substeps; "
         "`dop853` = scipy's, at rtol = atol = tol.",
         "",
@@ -619,7 +626,8 @@ def section_cost(results: Results) -> list[str]:
                 "`roller-gym benchmark` measures it.", ""]
     st = results["cost"]["settings"]
     L += [
-        f"Is the automatic substep count of `rk8` and `rk4` near the fewest substeps that "
+        "Is the automatic substep count of each error-controlled scheme near the fewest "
+        "substeps that "
         f"would do? On {st['steps']} random hard control steps of dt = {st['dt']} s (seed "
         f"{st['seed']}): scenes inside a cylinder, nearly tight (R/r − 1 down to 0.005), on a "
         "floor and on a drum; e/r up to 0.999, k/r down to 0.01; |τ| up to 5 m g r; |φ'| up "
@@ -628,7 +636,8 @@ def section_cost(results: Results) -> list[str]:
         "whose n equal substeps of the same scheme end within tol of the reference (DOP853 "
         f"at rtol = atol = {st['reference_tol']:g}), found by doubling n and then bisecting "
         "between n/2 and n. `ratio` = automatic / smallest fixed, per step, counted in "
-        "right-hand-side evaluations: the same as substeps for `rk8`; `rk4` takes "
+        "right-hand-side evaluations: the same as substeps for `rk8` and `taylor` (one "
+        "expansion a substep, automatic or fixed); `rk4` takes "
         "Dormand–Prince 5(4) substeps of 6 evaluations under error control and classical "
         "steps of 4 with fixed substeps. Skipped: steps "
         f"whose reference's own error (against a run at 10 × rtol) exceeds "
@@ -735,8 +744,8 @@ def section_targets(results: Results) -> list[str]:
         text += (
             f"Missed: {r / target:.2f} of the target. The physics kernel alone runs at "
             f"{rk:.2f} × CartPoleVectorEnv ({per_roller[n]:,.0f} ns per roller per control "
-            f"step: {method}, ≥ 1 substep of {STAGES.get(method, 'several')} right-hand "
-            "sides, and the contact margins at every substep), against "
+            f"step: {method}, ≥ 1 substep of {SUBSTEP_WORK.get(method, 'several stages')}, "
+            "and the contact margins at every substep), against "
             f"{1e9 / v['CartPoleVectorEnv']:,.0f} ns per sub-environment for CartPole's whole "
             "step (one Euler step in a few NumPy operations). The environment runs at "
             f"{100 * v['ours'] / v['kernel']:.0f} % of this kernel's rate, but the kernel "
@@ -753,12 +762,9 @@ def section_targets(results: Results) -> list[str]:
             )
         text += (
             "The kernel already evaluates the equations in SIMD lanes and the autoreset is "
-            "vectorized; what is left is the kernel's own arithmetic. To close it: fewer "
-            "right-hand sides per step (rk8's error estimates overstate its error, so it "
-            "takes about twice the substeps the smallest fixed count needs: part 5) and less "
-            "work between them (the stage sums, error estimates and margins cost about as "
-            "much as the evaluations: `docs/THROUGHPUT.md`, the kernel against its "
-            "arithmetic)."
+            "vectorized; what is left is the kernel's own arithmetic and, as the kernel "
+            "gets cheaper, the environment's work around it (`docs/THROUGHPUT.md`: the "
+            "share of a step outside the kernel, and the kernel against its arithmetic)."
         )
         notes.append(text)
     c, mj_target = compare_mujoco(results, paper), TARGETS["mujoco_speedup"]
@@ -830,13 +836,16 @@ def section_targets(results: Results) -> list[str]:
                "it overstates the error of what is carried, most on the stiff scenes; a "
                "substep costs 6 evaluations, against 4 for a classical one"
                if row["method"] == "rk4" else
+               "for taylor is the size of the expansion's last two terms, which overstates "
+               "what the terms left out add"
+               if row["method"] == "taylor" else
                "for rk8 is DOP853's blended 5th/3rd-order one: it overstates the 8th-order "
                "step's error, most on the stiff scenes")
             + ", and the accepted substeps' estimates may add up to only the scheme's "
             "tol_share of tol (room for what the estimates miss). To close it: a sharper "
             "error estimate (a larger tol_share or a bolder step-size controller alone lets "
             "some steps exceed tol)"
-            + ("; or rk8, which is closer." if row["method"] == "rk4" else ".")
+            + ("; or taylor or rk8, which are closer." if row["method"] == "rk4" else ".")
         )
     notes.append(
         "- Timings are best-of-repeats; if other processes share the machine, absolute "

@@ -139,15 +139,16 @@ def measure_vector(sizes: Sequence[int], steps: int, repeats: int,
     return out
 
 
-#: Right-hand-side evaluations of an rk8 control step: 12 per attempted substep (the first
-#: stage reuses the last one's), the one at the start, and the one at the end (the outputs).
-RHS_PER_SUBSTEP, RHS_PER_STEP = 12, 2
+#: Right-hand-side evaluations of a Runge–Kutta control step besides its substeps' stages:
+#: the one at the start and the one at the end (the outputs).
+RHS_PER_STEP = 2
 
 
 def measure_arithmetic(stepper: Any, base: Any, tau: np.ndarray, repeats: int) -> dict[str, Any]:
-    """How close the kernel is to its arithmetic: one right-hand-side evaluation per roller
-    (the kernel's own compiled lane loop over φ''), timed alone, and the kernel's cost in
-    such evaluations (its substeps counted, its rejected attempts not)."""
+    """How close the kernel is to its arithmetic: the unit of its substeps per roller (the
+    kernel's own compiled lane loop, timed alone: for a Runge–Kutta scheme one evaluation of
+    φ'', for ``"taylor"`` one expansion with its size and values), and the kernel's cost in
+    such units (its substeps counted, rejected attempts not)."""
     from roller_gym.physics import integrators as integ
 
     n = base.num_envs
@@ -163,8 +164,28 @@ def measure_arithmetic(stepper: Any, base: Any, tau: np.ndarray, repeats: int) -
     import numba
 
     threads = numba.get_num_threads() if n >= integ.PARALLEL_THRESHOLD else 1
-    return {"rhs_ns": rhs_ns, "substeps": substeps, "kernel_threads": threads,
-            "rhs_per_step": RHS_PER_SUBSTEP * substeps + RHS_PER_STEP}
+    scheme = stepper.scheme
+    if scheme.tableau is not None:
+        return {"rhs_ns": rhs_ns, "unit": "φ'' evaluation", "unit_ns": rhs_ns,
+                "substeps": substeps, "kernel_threads": threads,
+                "units_per_step": scheme.evaluations(False) * substeps + RHS_PER_STEP}
+    # taylor: the substep loop's table (the scene's rows, then φ, φ', τ, the time left and
+    # the smallest size) and its lane-by-lane output
+    x = np.empty((len(integ.SCENE_FIELDS) + len(integ._T_IN), n))  # C order, as the kernel's
+    x[: len(integ.SCENE_FIELDS)] = par
+    for row, value in zip(x[len(integ.SCENE_FIELDS):], (base.phi, base.phi_dot, tau, stepper.dt,
+                                                          1e-12 * stepper.dt), strict=True):
+        row[:] = value
+    lanes = np.empty(integ._T_WIDTH * n)
+    rate = stepper.tol * scheme.tol_share / stepper.dt
+
+    def expand() -> None:
+        for _ in range(20):
+            integ._taylor_lanes(x, n, 0.0, rate, lanes)
+
+    return {"rhs_ns": rhs_ns, "unit": "expansion", "unit_ns": best_time(expand, repeats)
+            / (20 * n) * 1e9, "substeps": substeps, "kernel_threads": threads,
+            "units_per_step": substeps}
 
 
 def _envpool(n: int) -> Any:
@@ -433,19 +454,22 @@ def render(results: dict[str, Any]) -> str:
             lines.append(f"| {int(n):,} | " + " | ".join(
                 f"{v[p]:,.0f} | {v['ours'] / v[p]:.2f}" if p in v else "– | –" for p in peers)
                 + " |")
-    if all("rhs_ns" in v for v in results["vector"].values()):
+    if all("unit_ns" in v for v in results["vector"].values()):
+        unit = next(iter(results["vector"].values()))["unit"]
         lines += ["", "How close the kernel is to its arithmetic: one evaluation of φ'' per "
-                  "roller (the kernel's own compiled loop over rollers, timed alone on one "
-                  "core), and the kernel's cost per core against the evaluations its accepted "
-                  "substeps need (the rest is rejected attempts, error control, margins and "
-                  "outputs):", "",
-                  "| sub-environments | one φ'' evaluation, ns/roller | substeps per step | "
-                  "kernel, core-ns/roller-step | kernel / its evaluations |",
-                  "|---:|---:|---:|---:|---:|"]
+                  f"roller and one {unit} (the unit of the default integrator's substeps), "
+                  "each the kernel's own compiled loop over rollers, timed alone on one core; "
+                  f"and the kernel's cost per core against the {unit}s its substeps need (the "
+                  "rest is rejected attempts where there are any, the contact margins at every "
+                  "substep, the end state's fields and the outputs):", "",
+                  f"| sub-environments | one φ'' evaluation, ns/roller | one {unit}, "
+                  "ns/roller | substeps per step | kernel, core-ns/roller-step | "
+                  f"kernel / its {unit}s |", "|---:|---:|---:|---:|---:|---:|"]
         for n, v in results["vector"].items():
             kernel_ns = 1e9 / v["kernel"] * v["kernel_threads"]
-            lines.append(f"| {int(n):,} | {v['rhs_ns']:.2f} | {v['substeps']:.2f} | "
-                         f"{kernel_ns:.0f} | {kernel_ns / (v['rhs_ns'] * v['rhs_per_step']):.1f} |")
+            lines.append(f"| {int(n):,} | {v['rhs_ns']:.2f} | {v['unit_ns']:.2f} | "
+                         f"{v['substeps']:.2f} | {kernel_ns:.0f} | "
+                         f"{kernel_ns / (v['unit_ns'] * v['units_per_step']):.1f} |")
     single, ppo = results["single"], results["ppo"]
     lines += ["", "## One environment and SB3", "",
               f"- `gymnasium.make(\"{TASK}\")`: {single['ours']:,.0f} steps/s; Pendulum-v1 "

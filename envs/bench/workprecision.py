@@ -106,6 +106,7 @@ class Config:
     euler_substeps: tuple[int, ...] = (1, 10, 100, 1000, 10000)
     rk4_substeps: tuple[int, ...] = (1, 2, 4, 8, 16, 32, 64, 128, 256, 1024, 4096)
     rk8_substeps: tuple[int, ...] = (1, 2, 4, 8, 16, 32, 64, 256, 1024)
+    taylor_substeps: tuple[int, ...] = (1, 2, 4, 8, 16, 64, 256)
     auto_tols: tuple[float, ...] = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12)
     midpoint_substeps: tuple[int, ...] = (1, 4, 16, 64, 256, 1024, 4096)
     dop853_tols: tuple[float, ...] = (1e-4, 1e-6, 1e-8, 1e-10, 1e-12)
@@ -125,6 +126,7 @@ class Config:
         return cls(
             quick, horizon_s=2.0, repeats=2, scenes=("paper", "floor"),
             euler_substeps=(1, 10, 100), rk4_substeps=(1, 4, 16, 64), rk8_substeps=(1, 4),
+            taylor_substeps=(1, 4),
             auto_tols=(1e-4, 1e-6, 1e-8, 1e-10), midpoint_substeps=(1, 16),
             dop853_tols=(1e-6, 1e-12), mujoco_default_n=(25,), mujoco_tuned_n=(25, 100),
             energy_horizon_s=20.0, vector_sizes=(1, 16, 256), env_steps=1000, ppo_steps=128,
@@ -333,7 +335,8 @@ def kernel_families(cfg: Config) -> list[tuple[str, str, tuple[float, ...]]]:
     tols = tuple(sorted({*cfg.auto_tols, DEFAULT_TOL}, reverse=True))
     return [("euler", "euler", cfg.euler_substeps), ("rk4", "rk4", cfg.rk4_substeps),
             ("rk4 auto", "rk4", tols), ("rk8", "rk8", cfg.rk8_substeps),
-            ("rk8 auto", "rk8", tols), ("midpoint", "midpoint", cfg.midpoint_substeps)]
+            ("rk8 auto", "rk8", tols), ("taylor", "taylor", cfg.taylor_substeps),
+            ("taylor auto", "taylor", tols), ("midpoint", "midpoint", cfg.midpoint_substeps)]
 
 
 def build_runs(cfg: Config, name: str, scene: Scene, torques: list[float]) -> list[Run]:
@@ -676,7 +679,7 @@ def measure(cfg: Config, command: str, progress: Callable[[str], None] = print
     date = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
     mujoco.set_mju_user_warning(lambda _msg: None)  # divergence is detected from mjData
     # warm up the compiled kernels (compilation is not what is measured)
-    for method in ("rk4", "rk8", "euler", "midpoint"):
+    for method in ("rk4", "rk8", "taylor", "euler", "midpoint"):
         Stepper(SCENES["paper"], method=method, dt=DT, tol=DEFAULT_TOL).advance(0.1, 0.0, 0.0)
     results = []
     for name in cfg.scenes:

@@ -29,6 +29,7 @@ from roller_gym.physics import trig
 __all__ = [
     "accel",
     "accel_concentric",
+    "accel_terms",
     "contact_forces",
     "d2inertia",
     "d2potential",
@@ -120,11 +121,25 @@ def accel(phi, phi_dot, tau, m, r, kappa, e, k, g, c):
 
     (k² + e² + r² − 2er cos θ) φ'' + (e r / s) φ'² sin θ + g (r sin ψ + e sin φ) = (τ − c φ')/m
 
-    (e r R/(R − r) of the paper is e r / s.) This is the form that drives the simulation.
+    (e r R/(R − r) of the paper is e r / s.) This is the form that drives the simulation:
+    φ'' = L/D with (L, D) the first two of :func:`accel_terms`.
+    """
+    lhs, inertia, _, _, _, _, _ = accel_terms(phi, phi_dot, tau, m, r, kappa, e, k, g, c)
+    return lhs / inertia
+
+
+@register_jitable(inline="always")
+def accel_terms(phi, phi_dot, tau, m, r, kappa, e, k, g, c):
+    """The parts of :func:`accel`: (L [N·m/kg], D [m²], sin θ, cos θ, sin ψ, cos ψ, sin φ),
+    φ'' = L/D with
+
+    L = (τ − c φ')/m − (e r / s) φ'² sin θ − g (r sin ψ + e sin φ),
+    D = k² + e² + r² − 2er cos θ (J_I/m).
 
     It takes two sine–cosine pairs (:func:`~roller_gym.physics.trig.sincos`), of θ/2 and of
-    ψ, instead of four sines: sin θ = 2 sin(θ/2) cos(θ/2), k² + e² + r² − 2er cos θ =
-    k² + (r − e)² + 4re sin²(θ/2), and, since φ = θ − ψ, sin φ = sin θ cos ψ − cos θ sin ψ.
+    ψ, instead of four sines: sin θ = 2 sin(θ/2) cos(θ/2), D = k² + (r − e)² + 4re
+    sin²(θ/2) (no cancellation), and, since φ = θ − ψ, sin φ = sin θ cos ψ − cos θ sin ψ.
+    The Taylor series of the motion (:mod:`roller_gym.physics.taylor`) starts from them.
     """
     s = 1.0 - r * kappa
     theta = phi / s
@@ -138,7 +153,8 @@ def accel(phi, phi_dot, tau, m, r, kappa, e, k, g, c):
         - e * r / s * phi_dot * phi_dot * sin_t
         - g * (r * sin_psi + e * sin_phi)
     )
-    return lhs / (k * k + (r - e) * (r - e) + 4.0 * r * e * h * h)
+    inertia = k * k + (r - e) * (r - e) + 4.0 * r * e * h * h
+    return lhs, inertia, sin_t, cos_t, sin_psi, cos_psi, sin_phi
 
 
 @register_jitable(inline="always")

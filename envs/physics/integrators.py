@@ -5,9 +5,13 @@
 ==============  =====  ========  ==================================================================
 name            order  control   what it is for
 ==============  =====  ========  ==================================================================
-``"rk8"``       8      adaptive  the default everywhere: Dormand–Prince 8(5,3) (scipy's DOP853
-                                 tableau), compiled, with its embedded 5th- and 3rd-order error
-                                 estimators and a step-size controller per roller
+``"taylor"``    18     adaptive  the default everywhere: the Taylor series of the motion to degree
+                                 18 (:mod:`roller_gym.physics.taylor`), compiled; each substep's
+                                 size is chosen from its own last terms after expanding, so no
+                                 substep is rejected, and the sines are evaluated once a substep
+``"rk8"``       8      adaptive  Dormand–Prince 8(5,3) (scipy's DOP853 tableau), compiled, with its
+                                 embedded 5th- and 3rd-order error estimators and a step-size
+                                 controller per roller (rejected substeps are taken again)
 ``"rk4"``       4      adaptive  Runge–Kutta of order 4: under error control the Dormand–Prince
                                  5(4) pair (scipy's RK45 tableau, 6 evaluations a substep: the
                                  estimate is of its embedded 4th-order solution's error, the
@@ -21,6 +25,14 @@ name            order  control   what it is for
                                  over long horizons at zero torque
 ``"dop853"``    8      adaptive  scipy's ``solve_ivp(method="DOP853")``: the reference (slow)
 ==============  =====  ========  ==================================================================
+
+**Error control (taylor).** A substep expands the motion at its start to degree p = 18 and
+takes the largest size h whose last two terms, t₁ h^(p−1) and t₂ hᵖ (t the larger of |φ|'s
+and |φ'|'s coefficient), are each within ``tol_share · tol · h / dt`` (two terms, because one
+coefficient can vanish by accident): the estimates of a control step's substeps add up to at
+most its share of ``tol``, as for the Runge–Kutta pairs below, and no substep is taken twice.
+Where float64 rounding of the state exceeds that share, the substep is as long as its terms
+allow at that rounding instead (the tolerance is then reported as out of reach, below).
 
 **Error control (rk8, rk4).** Each roller's control step is a sequence of substeps whose sizes
 follow its own trajectory: a substep of size h is accepted when its estimated local error
@@ -44,8 +56,8 @@ than ``tol_share · tol`` reports ``tol_met=False`` (its tolerance was not verif
 scenes, the estimates can miss part of the error (local errors also grow along the step), so
 each scheme's estimates may add up to only ``tol_share · tol``.
 
-**Fixed-substep schemes (euler, midpoint)** and rk8/rk4 with ``substeps=n`` take n equal
-substeps; for euler and midpoint n is, unless given, predicted from the scene's fastest time
+**Fixed-substep schemes (euler, midpoint)** and taylor, rk8 and rk4 with ``substeps=n`` take n
+equal substeps; for euler and midpoint n is, unless given, predicted from the scene's fastest time
 scale and the speed at the start (taken again with more if the speed reached asks for more).
 
 **Failure.** Where a step cannot stay finite, ``finite`` is False, φ and φ' are the state
@@ -73,6 +85,13 @@ failed step, instead of raising.
 **One roller.** A batch of one (what :class:`Stepper` advances) runs ``_rk_one``: the same
 arithmetic in the same order, without lanes, in about half the time the lanes take.
 
+**The Taylor kernel** (``_taylor_chunk``, ``_taylor_one``) has the same structure: running
+rollers in lanes that shrink, one loop over lanes per part of a substep. Its substep
+(``_taylor_substep``: the expansion, the size, the polynomials' values) is one function of
+straight-line code that both kernels call, compiled once and inlined by LLVM
+(``forceinline``); its lane loop reads one table and writes another, lane by lane, so that
+LLVM needs a single overlap check to run a body that long in SIMD lanes.
+
 **Layout.** The kernels work on one float64 table per batch, ``io`` of shape
 ``(len(ROWS), n)``: one row per name of :data:`ROWS` (the scene's :data:`SCENE_FIELDS`, the
 inputs :data:`INPUT_FIELDS`, what is carried :data:`CARRY_FIELDS`, the outputs
@@ -91,6 +110,7 @@ from dataclasses import dataclass, fields
 
 import numba
 import numpy as np
+from roller_gym.physics import _taylor_series as series
 from roller_gym.physics import equations as eq
 from roller_gym.physics import trig
 from roller_gym.physics.scene import Scene
@@ -679,26 +699,218 @@ def _rk_one(io, tab, cfg):
     _finish(io, 0, status == 1.0, phi, w, tau, count, lift, slip, err_sum, err_sum <= share)
 
 
-@_jit
-def _rk_serial(io, tab, cfg):
+@numba.extending.register_jitable(inline="always")
+def _serial(io, tab, cfg, one, chunk):
+    """A batch kernel on one core: ``one`` for a batch of one roller (a Stepper: the same
+    arithmetic without lanes), else ``chunk`` over chunks of CHUNK rollers."""
     n = io.shape[1]
-    if n == 1:  # one roller (Stepper): the same arithmetic without lanes
-        _rk_one(io, tab, cfg)
+    if n == 1:
+        one(io, tab, cfg)
         return
     for lo in range(0, n, CHUNK):
-        _rk_chunk(io, lo, min(lo + CHUNK, n), tab, cfg)
+        chunk(io, lo, min(lo + CHUNK, n), tab, cfg)
+
+
+@numba.extending.register_jitable(inline="always")
+def _parallel(io, tab, cfg, chunk):
+    """A batch kernel on all cores: ``chunk`` over chunks of CHUNK rollers."""
+    n = io.shape[1]
+    for c in numba.prange((n + CHUNK - 1) // CHUNK):
+        lo = c * CHUNK
+        chunk(io, lo, min(lo + CHUNK, n), tab, cfg)
+
+
+# Each chunked scheme's kernels: the shared loops around its functions, a function of its own
+# per scheme so that numba caches it (as the fixed-substep kernels below).
+@_jit
+def _rk_serial(io, tab, cfg):
+    _serial(io, tab, cfg, _rk_one, _rk_chunk)
 
 
 @numba.njit(cache=True, parallel=True, nogil=True, error_model="numpy")
 def _rk_parallel(io, tab, cfg):
-    n = io.shape[1]
-    for chunk in numba.prange((n + CHUNK - 1) // CHUNK):
-        lo = chunk * CHUNK
-        _rk_chunk(io, lo, min(lo + CHUNK, n), tab, cfg)
+    _parallel(io, tab, cfg, _rk_chunk)
 
 
 #: Batches at least this large are advanced on all cores.
 PARALLEL_THRESHOLD = 2048
+
+
+# -- the Taylor kernel: one expansion a substep, its size chosen after expanding ----------------
+
+_T_IN = ("phi", "phi_dot", "tau", "rest", "floor")  # the rows a substep reads, after the scene's
+_T_OUT = ("phi", "phi_dot", "h", "err", "acc", "last")  # and what it gives, per lane
+(_TI_PHI, _TI_W, _TI_TAU, _TI_REST, _TI_FLOOR) = (len(SCENE_FIELDS) + i for i in range(5))
+_T_WIDTH = 8  # elements per lane in the substep loop's output (its fields, padded)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", forceinline=True)
+def _root(x):
+    """x^(1/16), as four square roots (which vectorize; a power does not)."""
+    return math.sqrt(math.sqrt(math.sqrt(math.sqrt(x))))
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", forceinline=True)
+def _taylor_substep(phi, w, tau, m, r, kappa, e, k, g, c, rest, floor, hfixed, rate):
+    """One substep of ``"taylor"`` from (φ, φ'): (φ, φ', h [s], its error estimate, φ'' at
+    the start, 1.0 if it reaches ``rest`` [s]).
+
+    The estimate is the size of the last two terms, t₁ h^(p−1) + t₂ hᵖ (p the degree, t the
+    largest of |X| and |V| at that power): two terms, as one coefficient can vanish by
+    accident where the next does not. With ``hfixed`` > 0 the substep is that long.
+    Otherwise h is the largest size whose terms are each within ``rate`` · h (the error
+    allowed per second): h₁ = (rate/t₁)^(1/(p−2)), and h₂ from t₂ h^(p−1) <= rate with
+    h^(p−1) taken as h₁ h^(p−2). Where float64 rounding of the state exceeds ``rate``, the
+    rounding replaces it (a smaller substep would only add rounding). At least ``floor``, at
+    most ``rest``. No branch: the batch runs it in SIMD lanes.
+    """
+    X, V = series.coefficients(phi, w, tau, m, r, kappa, e, k, g, c)
+    p = series.ORDER
+    t1 = max(abs(X[p - 1]), abs(V[p - 1]))
+    t2 = max(abs(X[p]), abs(V[p]))
+    allowed = max(rate, ROUNDOFF_FACTOR * _EPS * max(abs(phi), abs(w)))
+    h1 = trig.select(t1 > 0.0, _root(allowed / t1), math.inf)
+    near = min(h1, rest)
+    h2 = trig.select(t2 * near > 0.0, _root(allowed / (t2 * near)), math.inf)
+    free = max(_SAFETY * min(h1, h2), floor)
+    fixed = hfixed > 0.0
+    h = trig.select(fixed, hfixed, min(free, rest))
+    sq = h * h
+    h8 = sq * sq * (sq * sq)
+    err = (t1 + t2 * h) * (h8 * h8) * h  # t1 h^17 + t2 h^18
+    last = trig.select(free >= rest, 1.0, 0.0)
+    return series.value(X, h), series.value(V, h), h, err, V[1], last
+
+
+@_jit
+def _taylor_lanes(x, na, hfixed, rate, out):
+    """:func:`_taylor_substep` of lanes 0..na−1: the scene and state from the rows of ``x``,
+    the results lane by lane into ``out`` (_T_WIDTH elements a lane). Reading one table and
+    writing another, laid out so, is what lets LLVM vectorize a body this long: it needs
+    just one overlap check."""
+    for i in range(na):
+        o = np.uint64(i) * np.uint64(_T_WIDTH)  # unsigned: no wraparound check on the index
+        (out[o], out[o + np.uint64(1)], out[o + np.uint64(2)], out[o + np.uint64(3)],
+         out[o + np.uint64(4)], out[o + np.uint64(5)]) = _taylor_substep(
+            x[_TI_PHI, i], x[_TI_W, i], x[_TI_TAU, i], x[0, i], x[1, i], x[2, i], x[3, i],
+            x[4, i], x[5, i], x[6, i], x[_TI_REST, i], x[_TI_FLOOR, i], hfixed, rate)
+
+
+@numba.extending.register_jitable
+def _taylor_tick(fin, last, count, nfixed, t, h, err_sum, err, hforce, status, dt):
+    """A roller's (status, clock [s], accepted count, error sum, hforce [s]) after a substep
+    (``fin``: it stayed finite): selects only."""
+    last = trig.select(nfixed > 0, count + 1.0 >= nfixed, last != 0.0)
+    ends = fin & last
+    status = trig.select(ends, 1.0, trig.select(fin, status, 2.0))
+    t = trig.select(ends, dt, t + h)
+    count = count + trig.select(fin, 1.0, 0.0)
+    # past MAX_ADAPTIVE_SUBSTEPS substeps, the rest in at most as many more
+    start = (count == MAX_ADAPTIVE_SUBSTEPS) & (hforce == 0.0)
+    hforce = trig.select(start, (dt - t) / MAX_ADAPTIVE_SUBSTEPS, hforce)
+    return status, t, count, err_sum + err, hforce
+
+
+@_jit
+def _taylor_chunk(io, lo, hi, tab, cfg):
+    """Advance rollers (columns) lo..hi−1 of ``io`` over one control step with ``"taylor"``
+    (``cfg`` as for :func:`_rk_chunk`; ``tab`` unused): the running rollers in lanes
+    0..na−1, as there."""
+    n = hi - lo
+    dt, tol, nfixed = cfg[0], cfg[1], cfg[2]
+    share = tol * cfg[8]
+    hfixed = dt / nfixed if nfixed > 0 else 0.0
+    nf = len(SCENE_FIELDS)
+    x = np.empty((nf + len(_T_IN), n + _PAD))  # what the substep loop reads
+    par = x[:nf]
+    phi, w, tau, rest, floor = x[_TI_PHI], x[_TI_W], x[_TI_TAU], x[_TI_REST], x[_TI_FLOOR]
+    out = np.empty(_T_WIDTH * n)
+    rows = np.empty((14, n + _PAD))
+    phin, wn, hh, err, acc, last = rows[0], rows[1], rows[2], rows[3], rows[4], rows[5]
+    t, count, err_sum, hforce, status, slot = rows[6], rows[7], rows[8], rows[9], rows[10], rows[11]
+    lift, slip = rows[12], rows[13]
+    for i in range(n):
+        col = lo + i
+        for f in range(nf):
+            par[f, i] = io[f, col]
+        tau[i], phi[i], w[i] = io[_TAU, col], io[_PHI_IN, col], io[_W_IN, col]
+        t[i], count[i], err_sum[i], hforce[i], status[i], slot[i] = 0.0, 0.0, 0.0, 0.0, 0.0, i
+        lift[i], slip[i] = np.inf, np.inf
+    na = n
+    for _attempt in range(_MAX_ATTEMPTS):
+        if na == 0:
+            break
+        for i in range(na):
+            rest[i], floor[i] = dt - t[i], max(1e-12 * dt, hforce[i])
+        _taylor_lanes(x, na, hfixed, share / dt, out)
+        for i in range(na):
+            o = _T_WIDTH * i
+            phin[i], wn[i], hh[i], err[i], acc[i], last[i] = (
+                out[o], out[o + 1], out[o + 2], out[o + 3], out[o + 4], out[o + 5])
+        _margin_lanes(phi, w, acc, par, na, lift, slip)  # at the substep's start
+        for i in range(na):
+            fin = _finite(phin[i]) & _finite(wn[i]) & _finite(err[i])
+            status[i], t[i], count[i], err_sum[i], hforce[i] = _taylor_tick(
+                fin, last[i], count[i], nfixed, t[i], hh[i], err_sum[i], err[i], hforce[i],
+                status[i], dt)
+            phi[i] = trig.select(fin, phin[i], phi[i])
+            w[i] = trig.select(fin, wn[i], w[i])
+        i = 0
+        while i < na:
+            if status[i] != 0.0:
+                na -= 1
+                for f in range(nf):
+                    par[f, i], par[f, na] = par[f, na], par[f, i]
+                for v in (tau, phi, w, t, count, err_sum, hforce, status, slot, lift, slip):
+                    v[i], v[na] = v[na], v[i]
+            else:
+                i += 1
+    end = np.empty((6, n + _PAD))
+    end[4, :n], end[5, :n] = lift[:n], slip[:n]
+    _end_lanes(phi, w, tau, par, n, end)
+    for i in range(n):
+        col = lo + int(slot[i])
+        io[_H_NEXT, col] = 0.0
+        _write(io, col, status[i] == 1.0, phi[i], w[i], count[i], end[0, i], end[1, i],
+               end[2, i], end[3, i], end[4, i], end[5, i], err_sum[i], err_sum[i] <= share)
+
+
+@_jit
+def _taylor_one(io, tab, cfg):
+    """One roller (column 0 of ``io``) with ``"taylor"``: :func:`_taylor_chunk`'s arithmetic
+    without lanes (bit for bit the same result)."""
+    dt, tol, nfixed = cfg[0], cfg[1], cfg[2]
+    share = tol * cfg[8]
+    hfixed = dt / nfixed if nfixed > 0 else 0.0
+    m, r, kappa, e = io[_M, 0], io[_RR, 0], io[_KAPPA, 0], io[_E, 0]
+    k, g, c, mu = io[_K, 0], io[_G, 0], io[_C, 0], io[_MU, 0]
+    tau, phi, w = io[_TAU, 0], io[_PHI_IN, 0], io[_W_IN, 0]
+    t, count, err_sum, hforce, status = 0.0, 0.0, 0.0, 0.0, 0.0
+    lift, slip = np.inf, np.inf
+    for _attempt in range(_MAX_ATTEMPTS):
+        if status != 0.0:
+            break
+        phin, wn, h, err, a, last = _taylor_substep(
+            phi, w, tau, m, r, kappa, e, k, g, c, dt - t, max(1e-12 * dt, hforce), hfixed,
+            share / dt)
+        li, si = _margins(phi, w, a, m, r, kappa, e, g, mu)
+        lift, slip = min(lift, li), min(slip, si)
+        fin = _finite(phin) & _finite(wn) & _finite(err)
+        status, t, count, err_sum, hforce = _taylor_tick(fin, last, count, nfixed, t, h,
+                                                         err_sum, err, hforce, status, dt)
+        phi, w = trig.select(fin, phin, phi), trig.select(fin, wn, w)
+    io[_H_NEXT, 0] = 0.0
+    _finish(io, 0, status == 1.0, phi, w, tau, count, lift, slip, err_sum, err_sum <= share)
+
+
+@_jit
+def _taylor_serial(io, tab, cfg):
+    _serial(io, tab, cfg, _taylor_one, _taylor_chunk)
+
+
+@numba.njit(cache=True, parallel=True, nogil=True, error_model="numpy")
+def _taylor_parallel(io, tab, cfg):
+    _parallel(io, tab, cfg, _taylor_chunk)
 
 
 # -- the fixed-substep kernel ------------------------------------------------------------------
@@ -797,7 +1009,9 @@ class Scheme:
         adaptive: True if its substeps follow an error estimate (see the module docs).
         substep: its substep function (for the Runge–Kutta pairs, the shared pair kernel).
         kernel: for a fixed-substep scheme, its compiled kernel: ``_fixed_steps`` around
-            ``substep``, written as a function of its own (two lines) so that numba caches it.
+            ``substep``, written as a function of its own (two lines) so that numba caches it;
+            for ``"taylor"``, its serial kernel.
+        parallel: the kernel for large batches, where it is not ``kernel``.
         tableau: for an explicit Runge–Kutta pair, its coefficients (see ``_tableau``).
         fixed_tableau: the coefficients its fixed substeps (``substeps=n``) take, where they
             differ from ``tableau`` (rk4: classical RK4; under error control, Dormand–Prince
@@ -821,6 +1035,7 @@ class Scheme:
     tableau: np.ndarray | None = None
     fixed_tableau: np.ndarray | None = None
     kernel: Callable | None = None
+    parallel: Callable | None = None
     constant: float = 0.0
     sweep_exponent: float = 0.5
     halvings: int = 0
@@ -837,8 +1052,9 @@ class Scheme:
     def evaluations(self, fixed: bool) -> int:
         """Right-hand-side evaluations per substep of a Runge–Kutta pair (the first stage is
         the last substep's end, evaluated once): under error control, or with ``fixed``
-        substeps."""
-        return self.pair(fixed).shape[0] - 3
+        substeps. A substep of ``"taylor"`` is one expansion, counted as one."""
+        pair = self.pair(fixed)
+        return 1 if pair is None else pair.shape[0] - 3
 
 
 _SCHEME_LIST = (
@@ -849,13 +1065,15 @@ _SCHEME_LIST = (
     Scheme("euler", 1, 0.5, False, _euler_substep, kernel=_euler_kernel, constant=2.0),
     Scheme("midpoint", 2, math.inf, False, _midpoint_substep, kernel=_midpoint_kernel,
            constant=0.3),
+    Scheme("taylor", series.ORDER, 1.0, True, _taylor_substep, kernel=_taylor_serial,
+           parallel=_taylor_parallel, constant=1e-6, tol_share=0.3),
     Scheme("dop853", 8, math.inf, True, None),
 )
 #: The schemes by name.
 SCHEMES: dict[str, Scheme] = {s.name: s for s in _SCHEME_LIST}
 #: The schemes by name (the ``method`` arguments are its keys).
 METHODS = SCHEMES
-DEFAULT_METHOD = "rk8"
+DEFAULT_METHOD = "taylor"
 
 _KERNELS: dict[str, tuple[Callable, Callable]] = {}
 
@@ -868,7 +1086,7 @@ def _kernels(scheme: Scheme) -> tuple[Callable, Callable]:
         elif scheme.tableau is not None:
             pair = (_rk_serial, _rk_parallel)
         else:
-            pair = (scheme.kernel, scheme.kernel)
+            pair = (scheme.kernel, scheme.parallel or scheme.kernel)
         _KERNELS[scheme.name] = pair
     return _KERNELS[scheme.name]
 
@@ -951,7 +1169,7 @@ class Stepper(_Base):
 
     Args:
         scene: a scalar :class:`Scene`.
-        method: a name of :data:`SCHEMES` (default ``"rk8"``).
+        method: a name of :data:`SCHEMES` (default ``"taylor"``).
         dt: the control step [s].
         tol: the state error allowed per control step (φ in rad, φ' in rad/s).
         substeps: a fixed count of equal substeps instead of the error control.
