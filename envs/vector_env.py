@@ -32,7 +32,7 @@ from gymnasium.vector.utils import batch_space
 from roller_gym import episode, validation
 from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig, resolve_scene
 from roller_gym.physics import Scene
-from roller_gym.physics.integrators import DEFAULT_METHOD, BatchStepper
+from roller_gym.physics.integrators import DEFAULT_METHOD, METHODS, BatchStepper
 from roller_gym.task import Task, get_task, psi_rate, wrap_rate
 
 __all__ = ["RollerVectorEnv"]
@@ -97,9 +97,9 @@ class RollerVectorEnv(VectorEnv):
             render_modes=self.metadata["render_modes"], info_keys=info_keys,
         )
         if integrator == "dop853":
+            others = ", ".join(repr(m) for m in METHODS if m != "dop853")
             raise ValueError("integrator='dop853' is a reference for the single environment; "
-                             "the vector environment takes 'taylor', 'rk8', 'rk4', 'euler' or "
-                             "'midpoint'")
+                             f"the vector environment takes one of {others}")
         self.autoreset_mode = _autoreset_mode(autoreset_mode)
         self.metadata = {**type(self).metadata, "autoreset_mode": self.autoreset_mode}
         task = self.task = self.config.task

@@ -169,13 +169,12 @@ def measure_arithmetic(stepper: Any, base: Any, tau: np.ndarray, repeats: int) -
         return {"rhs_ns": rhs_ns, "unit": "φ'' evaluation", "unit_ns": rhs_ns,
                 "substeps": substeps, "kernel_threads": threads,
                 "units_per_step": scheme.evaluations(False) * substeps + RHS_PER_STEP}
-    # taylor: the substep loop's table (the scene's rows, then φ, φ', τ, the time left and
-    # the smallest size) and its lane-by-lane output
+    # taylor: the substep loop's table (the scene's rows, then its own) and its lane-by-lane
+    # output
     x = np.empty((len(integ.SCENE_FIELDS) + len(integ._T_IN), n))  # C order, as the kernel's
     x[: len(integ.SCENE_FIELDS)] = par
-    for row, value in zip(x[len(integ.SCENE_FIELDS):], (base.phi, base.phi_dot, tau, stepper.dt,
-                                                          1e-12 * stepper.dt), strict=True):
-        row[:] = value
+    x[integ._TI_PHI], x[integ._TI_W], x[integ._TI_TAU] = base.phi, base.phi_dot, tau
+    x[integ._TI_REST], x[integ._TI_FLOOR] = stepper.dt, 1e-12 * stepper.dt
     lanes = np.empty(integ._T_WIDTH * n)
     rate = stepper.tol * scheme.tol_share / stepper.dt
 

@@ -750,8 +750,9 @@ PARALLEL_THRESHOLD = 2048
 
 _T_IN = ("phi", "phi_dot", "tau", "rest", "floor")  # the rows a substep reads, after the scene's
 _T_OUT = ("phi", "phi_dot", "h", "err", "acc", "last", "rounding")  # what it gives, a lane
-(_TI_PHI, _TI_W, _TI_TAU, _TI_REST, _TI_FLOOR) = (len(SCENE_FIELDS) + i for i in range(5))
+(_TI_PHI, _TI_W, _TI_TAU, _TI_REST, _TI_FLOOR) = (len(SCENE_FIELDS) + i for i in range(len(_T_IN)))
 _T_WIDTH = 8  # elements per lane in the substep loop's output (its fields, padded)
+assert len(_T_OUT) <= _T_WIDTH
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy", forceinline=True)
