@@ -44,10 +44,11 @@ from roller_gym.physics.integrators import (
 )
 from roller_gym.task import (
     OBSERVATION_FIELDS,
-    observation_values,
     position_error,
+    state_observation,
     step_reward,
     step_success,
+    target_observation,
 )
 
 __all__ = [
@@ -256,24 +257,23 @@ def start_episodes(
 
 def _draw_states(task: Any, scene: Scene, target: np.ndarray, seed: np.ndarray,
                  episode: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The task's start states: the first of its candidates that it accepts, per roller."""
+    """The task's start states: the first of its candidates that it accepts, per roller.
+
+    Candidates are tried one at a time (round by round, CANDIDATES a round), each only where
+    no earlier one was accepted: the same starts as trying a round's all at once, for a
+    fraction of the checks where most first candidates are accepted."""
     n = len(seed)
     phi, phi_dot = np.zeros(n), np.zeros(n)
     todo = np.arange(n)
-    # candidate j of a round takes draws 2j (φ) and 2j + 1 (φ')
-    draws = _STATE_DRAW + np.arange(2 * CANDIDATES).reshape(CANDIDATES, 2)
-    for round_ in range(ROUNDS):
+    for candidate in range(ROUNDS * CANDIDATES):
+        # candidate j of a round takes draws 2j (φ) and 2j + 1 (φ')
         sub = take(scene, todo, n)
-        u = uniform(seed[todo, None, None], episode[todo, None, None],
-                    draws + 2 * CANDIDATES * round_)
-        c_phi, c_dot = task.start_candidates(u[..., 0], u[..., 1], sub)
-        ok = task.start_accepted(c_phi, c_dot, sub)
-        found = ok.any(axis=1)
-        first = np.argmax(ok, axis=1)
-        rows = np.flatnonzero(found)
-        phi[todo[rows]] = c_phi[rows, first[rows]]
-        phi_dot[todo[rows]] = c_dot[rows, first[rows]]
-        todo = todo[~found]
+        u = uniform(seed[todo, None], episode[todo, None],
+                    _STATE_DRAW + 2 * candidate + np.arange(2))
+        c_phi, c_dot = task.start_candidates(u[:, :1], u[:, 1:], sub)
+        ok = task.start_accepted(c_phi, c_dot, sub)[:, 0]
+        phi[todo[ok]], phi_dot[todo[ok]] = c_phi[ok, 0], c_dot[ok, 0]
+        todo = todo[~ok]
         if todo.size == 0:
             return phi, phi_dot
     # The fallback the task's feasibility check guarantees (rare: every candidate failed).
@@ -359,6 +359,7 @@ _B_COMPUTED = (_O_REWARD, _O_TERMINATED, _O_PSI, _O_LIFTING, _O_SLIPPING, _O_NON
                _O_ERR, _O_TARGET_PSI, _O_ERROR, _O_SUCCESS)
 _B_OBS = _B_OUT + len(_B_COMPUTED)
 _B_ROWS = _B_OBS + _N_OBS
+_B_TARGET_OBS = _B_OBS + list(OBSERVATION_FIELDS).index("cos_psi_target")  # 5 fields on
 # the outcome's rows that are the step's or the context's own numbers
 _PASSED = ((_O_PHI, _S_PHI), (_O_PHI_DOT, _S_PHI_DOT), (_O_NORMAL, _S_NORMAL),
            (_O_FRICTION, _S_FRICTION), (_O_ENERGY, _S_ENERGY), (_O_SUBSTEPS, _S_SUBSTEPS),
@@ -402,10 +403,17 @@ def _outcome_block(b, m, constants):
         b[o + 8 * _B] = error
         b[o + 9 * _B] = trig.select(step_success(error, speed_error, band, success_speed),
                                     1.0, 0.0)
-        values = observation_values(phi, phi_dot, target, rate, target_rate, with_target)
         v = _B_OBS * _B + i
-        (b[v], b[v + _B], b[v + 2 * _B], b[v + 3 * _B], b[v + 4 * _B], b[v + 5 * _B],
-         b[v + 6 * _B], b[v + 7 * _B], b[v + 8 * _B], b[v + 9 * _B]) = values
+        (b[v], b[v + _B], b[v + 2 * _B], b[v + 3 * _B],
+         b[v + 4 * _B]) = state_observation(phi, phi_dot, rate)
+    # the target's fields, for a task that observes them: in a loop of their own, as a branch
+    # in the loop above would be made a select, computing them always
+    if with_target:
+        for i in range(m):
+            v = _B_TARGET_OBS * _B + i
+            (b[v], b[v + _B], b[v + 2 * _B], b[v + 3 * _B],
+             b[v + 4 * _B]) = target_observation(b[_B_TARGET * _B + i], b[_B_RATE * _B + i],
+                                                 b[_B_TARGET_RATE * _B + i])
 
 
 @register_jitable
@@ -464,6 +472,8 @@ class Outcome:
     terminated: Any
     info: dict[str, Any]
     observation: np.ndarray
+    #: all of it as the kernel's table (OUTCOME_ROWS × rollers, float64; rollers flattened)
+    table: np.ndarray
 
 
 class OutcomeKernel:
@@ -472,24 +482,29 @@ class OutcomeKernel:
 
     ``table`` (``OUTCOME_ROWS`` × rollers, float64), ``observation`` (rollers × the task's
     observation size, float32) and ``context`` (``CONTEXT_FIELDS`` × rollers, for the caller
-    to fill) are its buffers; :meth:`run` overwrites the first two.
+    to fill) are its buffers; :meth:`run` overwrites the first two. With ``fresh``, every run
+    writes a new ``table`` instead, which the caller may then hand out (see :func:`info_rows`).
     """
 
-    def __init__(self, task: Any, num: int) -> None:
+    def __init__(self, task: Any, num: int, fresh: bool = False) -> None:
         self.constants = task.constants
         self.observed = np.array([_FIELD_NUMBER[f] for f in task.observation],
                                  dtype=np.int64)
         self.context = row_table(len(CONTEXT_FIELDS), num)
         self.table = row_table(len(OUTCOME_ROWS), num)
         self.observation = np.empty((num, self.observed.size), dtype=np.float32)
+        self.fresh = fresh
         self._kernel = _outcome_parallel if num >= PARALLEL_THRESHOLD else _outcome_loop
         self._scratch = np.empty(_B_ROWS * _B if num < PARALLEL_THRESHOLD else 0)
 
-    def run(self, result: np.ndarray) -> None:
+    def run(self, result: np.ndarray) -> np.ndarray:
         """The outcome of the rollers' ``result`` (STEP_FIELDS rows × rollers, float64) under
-        the context in :attr:`context`."""
+        the context in :attr:`context`; returns :attr:`table`."""
+        if self.fresh:
+            self.table = row_table(*self.table.shape, zeroed=False)
         self._kernel(result, self.context, self.constants, self.observed, self.table,
                      self.observation, self._scratch)
+        return self.table
 
 
 def outcome(task: Any, result: Any, target: Any, q: Any, psi_rate: Any, tau: Any,
@@ -513,21 +528,23 @@ def outcome(task: Any, result: Any, target: Any, q: Any, psi_rate: Any, tau: Any
         for row, value in enumerate(numbers):  # broadcast as they are written
             rows[row] = value
     kernel.run(table.reshape(len(STEP_FIELDS), n))
-    rows = info_rows(kernel.table, tuple(INFO_KEYS))
+    rows = info_rows(kernel.table, tuple(INFO_KEYS), views=True)  # the kernel is this call's
     scalar = shape == ()
     info = {k: v[0] if scalar else v if v.shape == shape else v.reshape(shape)
             for k, v in rows.items()}
     reward, terminated = kernel.table[_O_REWARD], kernel.table[_O_TERMINATED] != 0.0
     if scalar:
-        return Outcome(reward[0], terminated[0], info, kernel.observation[0])
+        return Outcome(reward[0], terminated[0], info, kernel.observation[0], kernel.table)
     return Outcome(reward.reshape(shape), terminated.reshape(shape), info,
-                   kernel.observation.reshape(*shape, -1))
+                   kernel.observation.reshape(*shape, -1), kernel.table)
 
 
-def info_rows(table: np.ndarray, keys: tuple[str, ...]) -> dict[str, np.ndarray]:
-    """The info arrays of ``keys`` from an outcome ``table``, each of its INFO_KEYS type
-    (new arrays: the table is overwritten at the next step)."""
-    return {key: table[_O[key]].astype(INFO_KEYS[key][0]) for key in keys}
+def info_rows(table: np.ndarray, keys: tuple[str, ...],
+              views: bool = False) -> dict[str, np.ndarray]:
+    """The info arrays of ``keys`` from an outcome ``table``, each of its INFO_KEYS type: new
+    arrays, or with ``views`` the float rows themselves (for a table never written again)."""
+    return {key: table[_O[key]] if views and INFO_KEYS[key][0] is float
+            else table[_O[key]].astype(INFO_KEYS[key][0]) for key in keys}
 
 
 @dataclass(frozen=True)

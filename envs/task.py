@@ -57,8 +57,8 @@ from roller_gym.physics.integrators import contact_state, scene_arrays
 
 __all__ = ["NAMESPACE", "OBSERVATION_FIELDS", "SPEED_SCALE", "TASKS", "TASK_CONSTANTS", "Task",
            "get_task", "hold_range", "observation_values", "per_scene", "position_error",
-           "psi_rate", "register", "step_reward", "step_success", "unstable_rest_positions",
-           "wrap_rate"]
+           "psi_rate", "register", "state_observation", "step_reward", "step_success",
+           "target_observation", "unstable_rest_positions", "wrap_rate"]
 
 #: The Gymnasium namespace of every task: ``roller_gym/<Task>-v<version>``.
 NAMESPACE = "roller_gym"
@@ -401,21 +401,30 @@ def step_success(error, speed_error, band, success_speed):
 
 
 @register_jitable(inline="always")
-def observation_values(phi, phi_dot, target, rate, target_rate, with_target=True):
-    """Every field of :data:`OBSERVATION_FIELDS`, in its order (the formulas listed there);
-    ``rate`` = dψ/dφ, ``target_rate`` φ*' [rad/s]. Without ``with_target`` the target's
-    fields are left 0.0 (not computed: for a task that does not observe them)."""
+def state_observation(phi, phi_dot, rate):
+    """The roller's own fields of :data:`OBSERVATION_FIELDS` (the first five, in order);
+    ``rate`` = dψ/dφ."""
     sin_psi, cos_psi = trig.sincos(rate * phi)
     sin_phi, cos_phi = trig.sincos(phi)
-    speed = trig.tanh(phi_dot / SPEED_SCALE)
-    sin_psi_target, cos_psi_target, sin_phi_target, cos_phi_target = 0.0, 0.0, 0.0, 0.0
-    target_speed = 0.0
-    if with_target:
-        sin_psi_target, cos_psi_target = trig.sincos(rate * target)
-        sin_phi_target, cos_phi_target = trig.sincos(target)
-        target_speed = trig.tanh(target_rate / SPEED_SCALE)
-    return (cos_psi, sin_psi, cos_phi, sin_phi, speed, cos_psi_target, sin_psi_target,
-            cos_phi_target, sin_phi_target, target_speed)
+    return cos_psi, sin_psi, cos_phi, sin_phi, trig.tanh(phi_dot / SPEED_SCALE)
+
+
+@register_jitable(inline="always")
+def target_observation(target, rate, target_rate):
+    """The target's fields of :data:`OBSERVATION_FIELDS` (the last five, in order);
+    ``target_rate`` φ*' [rad/s]."""
+    sin_psi_target, cos_psi_target = trig.sincos(rate * target)
+    sin_phi_target, cos_phi_target = trig.sincos(target)
+    return (cos_psi_target, sin_psi_target, cos_phi_target, sin_phi_target,
+            trig.tanh(target_rate / SPEED_SCALE))
+
+
+@register_jitable(inline="always")
+def observation_values(phi, phi_dot, target, rate, target_rate):
+    """Every field of :data:`OBSERVATION_FIELDS`, in its order (the formulas listed there);
+    ``rate`` = dψ/dφ, ``target_rate`` φ*' [rad/s]."""
+    return (*state_observation(phi, phi_dot, rate),
+            *target_observation(target, rate, target_rate))
 
 
 def per_scene(function, scene: Scene) -> np.ndarray:

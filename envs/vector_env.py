@@ -22,6 +22,7 @@ Autoreset (``autoreset_mode=``, Gymnasium's three modes):
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
@@ -39,6 +40,44 @@ __all__ = ["RollerVectorEnv"]
 
 _ROW = {name: i for i, name in enumerate(episode.OUTCOME_ROWS)}
 _CONTEXT = {name: i for i, name in enumerate(episode.CONTEXT_FIELDS)}
+
+
+@dataclass
+class _Starts:
+    """Episode starts of some sub-environments, ready to apply, a column (or row) each: their
+    scene, their target's parameters (rows), the step context they start with (CONTEXT_FIELDS
+    × rollers), their outcome table at the start (OUTCOME_ROWS × rollers: the state and the
+    reset info) and their observation (rows)."""
+
+    scene: Scene
+    target_params: np.ndarray
+    context: np.ndarray
+    table: np.ndarray
+    observation: np.ndarray
+
+    def take(self, idx: np.ndarray, size: int) -> _Starts:
+        """Those of sub-environments ``idx`` (self holds all ``size`` of them)."""
+        return _Starts(episode.take(self.scene, idx, size), self.target_params[idx],
+                       self.context[:, idx], self.table[:, idx], self.observation[idx])
+
+    def put(self, idx: np.ndarray, starts: _Starts, size: int) -> None:
+        """Replace those of sub-environments ``idx`` by ``starts`` (self holds all ``size``)."""
+        if starts.scene is not self.scene:
+            self.scene = episode.put(self.scene, idx, starts.scene, size)
+        self.target_params[idx] = starts.target_params
+        self.context[:, idx], self.table[:, idx] = starts.context, starts.table
+        self.observation[idx] = starts.observation
+
+
+_NONE = np.uint64(2**64 - 1)  # an episode number no start is drawn for
+# The rows of the outcome table that are the info (after reward and terminated).
+_INFO_ROWS = slice(2, None)
+assert episode.OUTCOME_ROWS[_INFO_ROWS] == tuple(episode.INFO_KEYS)
+
+
+def _context_row(name: str, doc: str) -> property:
+    """A row of the step's context table (a view: written in place, never rebound)."""
+    return property(lambda self: self._outcome.context[_CONTEXT[name]], doc=doc)
 
 
 def _autoreset_mode(value: AutoresetMode | str) -> AutoresetMode:
@@ -66,6 +105,15 @@ class RollerVectorEnv(VectorEnv):
         dt, max_torque, tolerance, integrator, substeps, randomize, render_mode, info_keys:
             as in :class:`roller_gym.roller_env.RollerEnv`, for every sub-environment.
     """
+
+    # The per-step numbers the outcome takes besides the integrator's (episode.CONTEXT_FIELDS)
+    # are the environment's own state, kept in the outcome's context table.
+    torque = _context_row("torque", "τ [N·m] of each sub-environment's last step (0 at a start)")
+    target = _context_row("target_phi", "each sub-environment's target φ* [rad]")
+    target_rate = _context_row("target_phi_dot", "how fast each target moves, φ*' [rad/s]")
+    target_torque = _context_row("target_torque", "τ* [N·m] that holds each roller at φ*")
+    _q = _context_row("wrap_rate", "the rate q errors are wrapped by [-]")
+    _psi_rate = _context_row("psi_rate", "dψ/dφ [-]")
 
     metadata: ClassVar[dict[str, Any]] = {
         "render_modes": ["rgb_array"],
@@ -128,21 +176,22 @@ class RollerVectorEnv(VectorEnv):
                                      tol=cfg.tolerance, substeps=cfg.substeps or None)
         self._scene = self._base  # a scalar Scene while every sub-environment shares it
         self._stepper.set_scenes(self._scene)
-        self._q = np.broadcast_to(np.asarray(wrap_rate(self._scene), float), (num_envs,)).copy()
-        self._psi_rate = np.broadcast_to(psi_rate(self._scene), (num_envs,)).copy()
+        # every step writes a new outcome table: its rows are handed out (reward, info)
+        self._outcome = episode.OutcomeKernel(task, num_envs, fresh=True)
+        self._q[:] = wrap_rate(self._scene)
+        self._psi_rate[:] = psi_rate(self._scene)
         self.phi = np.zeros(num_envs)
         self.phi_dot = np.zeros(num_envs)
-        self.target = episode.per_scene_target(task, self._scene, num_envs)
-        self.target_rate = np.zeros(num_envs)
-        self.target_torque = np.asarray(episode.target_torque(self._scene, self.target), float)
+        self.target[:] = episode.per_scene_target(task, self._scene, num_envs)
+        self.target_torque[:] = episode.target_torque(self._scene, self.target)
         self._target_params = np.repeat(self.target[:, None], task.target_size, axis=1)
-        self.torque = np.zeros(num_envs)
         self.steps = np.zeros(num_envs, dtype=np.int64)
         self._done = np.zeros(num_envs, dtype=bool)
         self._seeds = np.zeros(num_envs, np.uint64)
         self._episodes = np.zeros(num_envs, np.uint64)
         self._seeded = False
-        self._outcome = episode.OutcomeKernel(task, num_envs)
+        self._ahead: _Starts | None = None  # the next start of each, drawn ahead (_restart)
+        self._ahead_for = np.zeros(num_envs, np.uint64)  # the episode each was drawn for
         self._obs = np.zeros((num_envs, size), dtype=np.float32)  # the last observation
         self._renderers: list[Any] | None = None
 
@@ -169,30 +218,47 @@ class RollerVectorEnv(VectorEnv):
         return [self._scene.item(i) for i in range(self.num_envs)]
 
     # -- episode starts ------------------------------------------------------------------
-    def _start(self, idx: np.ndarray, options: Mapping[str, Any] | None) -> dict[str, Any]:
-        """Start new episodes in sub-environments ``idx``: their observation goes into the
-        last observation; returns their reset info."""
+    def _draw(self, idx: np.ndarray, episodes: np.ndarray,
+              options: Mapping[str, Any] | None) -> _Starts:
+        """The starts of episodes ``episodes`` of sub-environments ``idx`` (not applied)."""
         base = self._base if self._base.batch_size is None else episode.take(
             self._base, idx, self.num_envs)
-        start = episode.start_episodes(self.config, base, self._seeds[idx],
-                                       self._episodes[idx], options)
-        if self.config.randomize or (options or {}).get("scene") is not None:
-            self._scene = episode.put(self._scene, idx, start.scene, self.num_envs)
-            self._stepper.set_scenes(start.scene, idx)
-            self._q[idx] = wrap_rate(start.scene)
-            self._psi_rate[idx] = psi_rate(start.scene)
-        self._target_params[idx] = start.target_params
-        self.target[idx], self.target_rate[idx] = start.target, start.target_rate
-        self.target_torque[idx] = episode.target_torque(start.scene, start.target)
-        self.phi[idx], self.phi_dot[idx] = start.phi, start.phi_dot
+        start = episode.start_episodes(self.config, base, self._seeds[idx], episodes, options)
+        context = np.empty((len(episode.CONTEXT_FIELDS), idx.size))
+        for name, row in (("torque", 0.0), ("target_phi", start.target),
+                          ("target_phi_dot", start.target_rate),
+                          ("target_torque", episode.target_torque(start.scene, start.target)),
+                          ("wrap_rate", wrap_rate(start.scene)),
+                          ("psi_rate", psi_rate(start.scene))):
+            context[_CONTEXT[name]] = row
+        c = {name: context[i] for i, name in enumerate(episode.CONTEXT_FIELDS)}
+        out = episode.outcome(
+            self.task, episode.at_start(start.scene, start.phi, start.phi_dot),
+            target=c["target_phi"], q=c["wrap_rate"], psi_rate=c["psi_rate"], tau=0.0,
+            target_rate=c["target_phi_dot"], target_torque=c["target_torque"])
+        return _Starts(start.scene, start.target_params, context, out.table, out.observation)
+
+    def _apply(self, idx: np.ndarray, starts: _Starts, new_scene: bool) -> None:
+        """Start the episodes ``starts`` in sub-environments ``idx`` (``new_scene``: their
+        scene is not the base's)."""
+        if new_scene:
+            self._scene = episode.put(self._scene, idx, starts.scene, self.num_envs)
+            self._stepper.set_scenes(starts.scene, idx)
+        self._outcome.context[:, idx] = starts.context
+        self._target_params[idx] = starts.target_params
+        self.phi[idx], self.phi_dot[idx] = starts.table[_ROW["phi"]], starts.table[
+            _ROW["phi_dot"]]
         self._stepper.forget(idx)  # a new episode does not continue the last one's substeps
-        self.torque[idx] = 0.0
         self.steps[idx] = 0
-        rest = episode.at_start(start.scene, start.phi, start.phi_dot)
-        out = episode.outcome(self.task, rest, start.target, self._q[idx], self._psi_rate[idx],
-                              0.0, start.target_rate, self.target_torque[idx])
-        self._obs[idx] = out.observation
-        return out.info
+        self._obs[idx] = starts.observation
+
+    def _start(self, idx: np.ndarray, options: Mapping[str, Any] | None) -> np.ndarray:
+        """Start new episodes in sub-environments ``idx`` (a reset); returns their outcome
+        table at the start (OUTCOME_ROWS × idx)."""
+        starts = self._draw(idx, self._episodes[idx], options)
+        self._apply(idx, starts, bool(self.config.randomize)
+                    or (options or {}).get("scene") is not None)
+        return starts.table
 
     def reset(
         self,
@@ -220,6 +286,7 @@ class RollerVectorEnv(VectorEnv):
                              dtype=np.uint64)
             self._seeds[update] = fresh[update]
             self._episodes[update] = 0
+            self._ahead_for[update] = _NONE  # those drawn ahead came from the old seeds
             self._seeded = True
             if isinstance(seed, int | np.integer):
                 self._np_random, self._np_random_seed = seeding.np_random(int(seed))
@@ -237,78 +304,93 @@ class RollerVectorEnv(VectorEnv):
         a = validation.actions(actions, (self.num_envs, 1))[:, 0]
         if not self._seeded:
             raise RuntimeError("call reset() before step()")
-        tau = a * self.task.max_torque
+        tau = self.torque  # the context's row, written in place
+        np.multiply(a, self.task.max_torque, out=tau)
         results = self._stepper.run(self.phi, self.phi_dot, tau)
         self.steps += 1
         if self.task.moving_target:
-            self.target, self.target_rate = self.task.target_at(
+            self.target[:], self.target_rate[:] = self.task.target_at(
                 self._target_params, self.steps * self.config.dt)
-            self.target_torque = episode.target_torque(self._scene, self.target)
-        outcome = self._outcome
-        for name, row in zip(episode.CONTEXT_FIELDS, (tau, self.target, self.target_rate,
-                                                      self.target_torque, self._q,
-                                                      self._psi_rate), strict=True):
-            outcome.context[_CONTEXT[name]] = row
-        outcome.run(results)
-        table = outcome.table
-        self.phi, self.phi_dot, self.torque = table[_ROW["phi"]].copy(), table[
-            _ROW["phi_dot"]].copy(), tau
-        self._obs[:] = outcome.observation
-        reward = table[_ROW["reward"]].copy()
+            self.target_torque[:] = episode.target_torque(self._scene, self.target)
+        table = self._outcome.run(results)  # a new table: its rows are handed out as they are
+        self._obs[:] = self._outcome.observation
+        reward = table[_ROW["reward"]]
         terminated = table[_ROW["terminated"]] != 0.0
         truncated = self.steps >= self.max_episode_steps
-        info = episode.info_rows(table, self.config.info_keys)
-        everyone = np.ones(self.num_envs, dtype=bool)
-        info.update({f"_{k}": everyone for k in list(info)})
-
+        final: dict[str, Any] = {}
         if self.autoreset_mode == AutoresetMode.NEXT_STEP:
             # The sub-environments that ended last step start over now.
             restarted = np.flatnonzero(self._done)
             if restarted.size:
-                self._restart(restarted, info)
+                self._restart(restarted, table)
                 reward[restarted] = 0.0
-                terminated[restarted] = False
-                truncated[restarted] = False
+                terminated[restarted] = truncated[restarted] = False
             self._done = terminated | truncated
         elif self.autoreset_mode == AutoresetMode.SAME_STEP:
             ended = np.flatnonzero(terminated | truncated)
             if ended.size:
-                final_obs = np.full(self.num_envs, None, dtype=object)
-                last = self._observation()
-                for i in ended:  # per ended episode: Gymnasium's layout is an object array
-                    final_obs[i] = last[i]
-                final_info = {k: (v.copy() if isinstance(v, np.ndarray) and not k.startswith("_")
-                                  else v) for k, v in info.items()}
-                ended_mask = np.zeros(self.num_envs, dtype=bool)
-                ended_mask[ended] = True
-                final_info.update({f"_{k}": ended_mask for k in self.config.info_keys})
-                self._restart(ended, info)
-                info.update({"final_obs": final_obs, "_final_obs": ended_mask,
-                             "final_info": final_info, "_final_info": ended_mask})
+                final = self._final(ended, table)
+                self._restart(ended, table)
+        self.phi, self.phi_dot = table[_ROW["phi"]].copy(), table[_ROW["phi_dot"]].copy()
+        info = episode.info_rows(table, self.config.info_keys, views=True)
+        everyone = np.ones(self.num_envs, dtype=bool)
+        info.update({f"_{k}": everyone for k in list(info)})
+        info.update(final)
         return self._observation(), reward, terminated, truncated, info
 
-    def _restart(self, idx: np.ndarray, info: dict[str, Any]) -> None:
-        """Autoreset: new episodes in ``idx``, their reset info written into ``info``."""
+    def _final(self, ended: np.ndarray, table: np.ndarray) -> dict[str, Any]:
+        """SAME_STEP's report of the episodes ``ended`` before they start over: their last
+        observation and info (Gymnasium's layout: an object array, None where none ended;
+        each with its ``_`` mask)."""
+        ended_mask = np.zeros(self.num_envs, dtype=bool)
+        ended_mask[ended] = True
+        final_obs = np.full(self.num_envs, None, dtype=object)
+        last = self._observation()
+        for i in ended:  # per ended episode
+            final_obs[i] = last[i]
+        final_info = episode.info_rows(table, self.config.info_keys)  # copies: rows change
+        final_info.update({f"_{k}": ended_mask for k in self.config.info_keys})
+        return {"final_obs": final_obs, "_final_obs": ended_mask, "final_info": final_info,
+                "_final_info": ended_mask}
+
+    def _restart(self, idx: np.ndarray, table: np.ndarray) -> None:
+        """Autoreset: new episodes in ``idx``, their reset info written into the info rows of
+        the step's outcome ``table``.
+
+        A start is a pure function of the sub-environment's seed and episode number (the
+        counter-based streams of :mod:`roller_gym.episode`), so the next start of every
+        sub-environment is drawn ahead, many at once, and an autoreset only copies its
+        sub-environments' starts out (the same numbers as drawing them then). The starts
+        ahead are drawn again, for every sub-environment whose one is used up, when an
+        autoreset needs a used one."""
+        n = self.num_envs
+        following = self._episodes + np.uint64(1)
+        if self._ahead is None:
+            every = np.arange(n)
+            self._ahead, self._ahead_for = self._draw(every, following, None), following
+        elif (self._ahead_for[idx] != following[idx]).any():
+            stale = np.flatnonzero(self._ahead_for != following)
+            self._ahead.put(stale, self._draw(stale, following[stale], None), n)
+            self._ahead_for[stale] = following[stale]
         self._episodes[idx] += np.uint64(1)
-        rows = self._start(idx, None)
-        for key in self.config.info_keys:  # the step's own arrays (see _STATE_KEYS)
-            info[key][idx] = rows[key]
+        starts = self._ahead.take(idx, n)
+        self._apply(idx, starts, bool(self.config.randomize))
+        table[_INFO_ROWS, idx] = starts.table[_INFO_ROWS]
 
     # -- observation and info ------------------------------------------------------------
     def _observation(self) -> np.ndarray:
         """The observation of every sub-environment's current state (a new array)."""
         return self._obs.copy()
 
-    def _masked_info(self, rows: dict[str, Any], idx: np.ndarray) -> dict[str, Any]:
-        """A vector info whose rows ``idx`` hold ``rows`` and whose masks mark only them."""
+    def _masked_info(self, table: np.ndarray, idx: np.ndarray) -> dict[str, Any]:
+        """A vector info whose rows ``idx`` hold the outcome ``table`` (OUTCOME_ROWS × idx)
+        and whose masks mark only them."""
+        full = np.zeros((len(episode.OUTCOME_ROWS), self.num_envs))
+        full[:, idx] = table
+        info = episode.info_rows(full, self.config.info_keys, views=True)
         mask = np.zeros(self.num_envs, dtype=bool)
         mask[idx] = True
-        info: dict[str, Any] = {}
-        for key in self.config.info_keys:
-            column = np.zeros(self.num_envs, dtype=episode.INFO_KEYS[key][0])
-            column[idx] = rows[key]
-            info[key] = column
-            info[f"_{key}"] = mask
+        info.update({f"_{key}": mask for key in self.config.info_keys})
         return info
 
     # -- rendering -------------------------------------------------------------------------

@@ -450,11 +450,11 @@ CHUNK = 512
 _PAD = 8
 
 
-def row_table(rows: int, n: int) -> np.ndarray:
-    """A zeroed float64 table of ``rows`` rows of ``n`` rollers whose rows lie ``n + _PAD``
-    elements apart in memory (a view): what the batch kernels read and write a roller's
-    column of (see ``_PAD``)."""
-    return np.zeros((rows, n + _PAD))[:, :n]
+def row_table(rows: int, n: int, zeroed: bool = True) -> np.ndarray:
+    """A float64 table of ``rows`` rows of ``n`` rollers whose rows lie ``n + _PAD`` elements
+    apart in memory (a view): what the batch kernels read and write a roller's column of (see
+    ``_PAD``). Zeroed, unless ``zeroed`` is False (for a table that is written whole)."""
+    return (np.zeros if zeroed else np.empty)((rows, n + _PAD))[:, :n]
 
 
 _SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0
