@@ -38,7 +38,9 @@ from roller_gym.physics import equations as eq
 from roller_gym.physics.integrators import (
     CHUNK,
     PARALLEL_THRESHOLD,
+    SCHEMES,
     STEP_FIELDS,
+    BatchStepper,
     contact_state,
     row_table,
 )
@@ -463,6 +465,40 @@ def _outcome_parallel(result, context, constants, observed, out, obs, scratch):
                        observed, out, obs, np.empty(_B_ROWS * _B))
 
 
+@register_jitable(inline="always")
+def _advance_and_outcome(io, tab, cfg, result, chunk, context, constants, observed, out, obs):
+    """A scheme's ``chunk`` (the physics, :attr:`~roller_gym.physics.integrators.Scheme.chunk`)
+    and then the outcome (:func:`_outcome_range`) of each chunk of rollers in turn, chunks on
+    all cores: the outcome reads the chunk's results while they are still in cache, and a
+    step is one parallel pass instead of two."""
+    n = io.shape[1]
+    for c in numba.prange((n + CHUNK - 1) // CHUNK):
+        lo, hi = c * CHUNK, min(n, (c + 1) * CHUNK)
+        chunk(io, lo, hi, tab, cfg)
+        _outcome_range(lo, hi, result, context, constants, observed, out, obs,
+                       np.empty(_B_ROWS * _B))
+
+
+# One fused kernel per chunk function, each a function of its own so that numba caches it.
+_TAYLOR_CHUNK, _RK_CHUNK = SCHEMES["taylor"].chunk, SCHEMES["rk8"].chunk
+
+
+@numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")
+def _taylor_and_outcome(io, tab, cfg, result, context, constants, observed, out, obs):
+    _advance_and_outcome(io, tab, cfg, result, _TAYLOR_CHUNK, context, constants, observed,
+                         out, obs)
+
+
+@numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")
+def _rk_and_outcome(io, tab, cfg, result, context, constants, observed, out, obs):
+    _advance_and_outcome(io, tab, cfg, result, _RK_CHUNK, context, constants, observed, out,
+                         obs)
+
+
+#: The fused kernels by the chunk function they advance with (schemes without one: two calls).
+_FUSED = {_TAYLOR_CHUNK: _taylor_and_outcome, _RK_CHUNK: _rk_and_outcome}
+
+
 @dataclass
 class Outcome:
     """Reward, flags, info and observation of a step (arrays of rollers, or scalars where
@@ -483,7 +519,8 @@ class OutcomeKernel:
     ``table`` (``OUTCOME_ROWS`` × rollers, float64), ``observation`` (rollers × the task's
     observation size, float32) and ``context`` (``CONTEXT_FIELDS`` × rollers, for the caller
     to fill) are its buffers; :meth:`run` overwrites the first two. With ``fresh``, every run
-    writes a new ``table`` instead, which the caller may then hand out (see :func:`info_rows`).
+    writes a new ``table`` and ``observation`` instead, which the caller may then hand out
+    (see :func:`info_rows`).
     """
 
     def __init__(self, task: Any, num: int, fresh: bool = False) -> None:
@@ -500,11 +537,29 @@ class OutcomeKernel:
     def run(self, result: np.ndarray) -> np.ndarray:
         """The outcome of the rollers' ``result`` (STEP_FIELDS rows × rollers, float64) under
         the context in :attr:`context`; returns :attr:`table`."""
-        if self.fresh:
-            self.table = row_table(*self.table.shape, zeroed=False)
+        self._renew()
         self._kernel(result, self.context, self.constants, self.observed, self.table,
                      self.observation, self._scratch)
         return self.table
+
+    def step(self, stepper: BatchStepper, phi: np.ndarray, phi_dot: np.ndarray,
+             tau: np.ndarray) -> np.ndarray:
+        """A control step of the rollers (``stepper``'s, from φ [rad] and φ' [rad/s] under τ
+        [N·m]) and its outcome, as :meth:`run` on ``stepper.run``'s result; in one pass over
+        chunks of rollers where the stepper runs on all cores and its scheme has a fused
+        kernel. Returns :attr:`table`."""
+        fused = _FUSED.get(stepper.scheme.chunk) if stepper.parallel else None
+        if fused is None:
+            return self.run(stepper.run(phi, phi_dot, tau))
+        self._renew()
+        stepper.run(phi, phi_dot, tau, fused, self.context, self.constants, self.observed,
+                    self.table, self.observation)
+        return self.table
+
+    def _renew(self) -> None:
+        if self.fresh:
+            self.table = row_table(*self.table.shape, zeroed=False)
+            self.observation = np.empty_like(self.observation)
 
 
 def outcome(task: Any, result: Any, target: Any, q: Any, psi_rate: Any, tau: Any,

@@ -2,12 +2,13 @@
 
 ``gymnasium.make_vec(ID, num_envs=N)`` builds it (registered as the tasks'
 ``vector_entry_point``). A step costs a fixed number of Python operations whatever N is:
-the actions are checked as one array, the batch stepper advances every roller in one
-compiled call, reward, termination, info and observation come from one more
-(:class:`roller_gym.episode.OutcomeKernel`, the one the single environment runs on its one
-roller), and the episode starts of autoreset are array operations of the episode core
-(:mod:`roller_gym.episode`). Sub-environment i, seeded ``seed + i``, reproduces the single
-environment seeded ``seed + i`` exactly.
+the actions are checked as one array; the batch stepper advances every roller, and reward,
+termination, info and observation follow (:class:`roller_gym.episode.OutcomeKernel`, the
+one the single environment runs on its one roller): two compiled calls, or on all cores
+one pass over chunks of rollers, each chunk's physics and then its outcome. The episode
+starts of autoreset are drawn ahead, many at once, by the episode core
+(:mod:`roller_gym.episode`), and copied out when needed. Sub-environment i, seeded
+``seed + i``, reproduces the single environment seeded ``seed + i`` exactly.
 
 Autoreset (``autoreset_mode=``, Gymnasium's three modes):
 
@@ -44,10 +45,11 @@ _CONTEXT = {name: i for i, name in enumerate(episode.CONTEXT_FIELDS)}
 
 @dataclass
 class _Starts:
-    """Episode starts of some sub-environments, ready to apply, a column (or row) each: their
-    scene, their target's parameters (rows), the step context they start with (CONTEXT_FIELDS
-    × rollers), their outcome table at the start (OUTCOME_ROWS × rollers: the state and the
-    reset info) and their observation (rows)."""
+    """Episode starts of some sub-environments, ready to apply, a row each: their scene,
+    their target's parameters, the step context they start with (a row of CONTEXT_FIELDS),
+    their outcome at the start (a row of OUTCOME_ROWS: the state and the reset info) and
+    their observation. A row is a sub-environment's, so that taking a few of many (an
+    autoreset) reads a few cache lines each."""
 
     scene: Scene
     target_params: np.ndarray
@@ -58,14 +60,14 @@ class _Starts:
     def take(self, idx: np.ndarray, size: int) -> _Starts:
         """Those of sub-environments ``idx`` (self holds all ``size`` of them)."""
         return _Starts(episode.take(self.scene, idx, size), self.target_params[idx],
-                       self.context[:, idx], self.table[:, idx], self.observation[idx])
+                       self.context[idx], self.table[idx], self.observation[idx])
 
     def put(self, idx: np.ndarray, starts: _Starts, size: int) -> None:
         """Replace those of sub-environments ``idx`` by ``starts`` (self holds all ``size``)."""
         if starts.scene is not self.scene:
             self.scene = episode.put(self.scene, idx, starts.scene, size)
         self.target_params[idx] = starts.target_params
-        self.context[:, idx], self.table[:, idx] = starts.context, starts.table
+        self.context[idx], self.table[idx] = starts.context, starts.table
         self.observation[idx] = starts.observation
 
 
@@ -192,7 +194,8 @@ class RollerVectorEnv(VectorEnv):
         self._seeded = False
         self._ahead: _Starts | None = None  # the next start of each, drawn ahead (_restart)
         self._ahead_for = np.zeros(num_envs, np.uint64)  # the episode each was drawn for
-        self._obs = np.zeros((num_envs, size), dtype=np.float32)  # the last observation
+        # the last observation: the step's own (new every step) until a reset copies it
+        self._obs = np.zeros((num_envs, size), dtype=np.float32)
         self._renderers: list[Any] | None = None
 
     @staticmethod
@@ -224,19 +227,20 @@ class RollerVectorEnv(VectorEnv):
         base = self._base if self._base.batch_size is None else episode.take(
             self._base, idx, self.num_envs)
         start = episode.start_episodes(self.config, base, self._seeds[idx], episodes, options)
-        context = np.empty((len(episode.CONTEXT_FIELDS), idx.size))
+        context = np.empty((idx.size, len(episode.CONTEXT_FIELDS)))
         for name, row in (("torque", 0.0), ("target_phi", start.target),
                           ("target_phi_dot", start.target_rate),
                           ("target_torque", episode.target_torque(start.scene, start.target)),
                           ("wrap_rate", wrap_rate(start.scene)),
                           ("psi_rate", psi_rate(start.scene))):
-            context[_CONTEXT[name]] = row
-        c = {name: context[i] for i, name in enumerate(episode.CONTEXT_FIELDS)}
+            context[:, _CONTEXT[name]] = row
+        c = {name: context[:, i] for i, name in enumerate(episode.CONTEXT_FIELDS)}
         out = episode.outcome(
             self.task, episode.at_start(start.scene, start.phi, start.phi_dot),
             target=c["target_phi"], q=c["wrap_rate"], psi_rate=c["psi_rate"], tau=0.0,
             target_rate=c["target_phi_dot"], target_torque=c["target_torque"])
-        return _Starts(start.scene, start.target_params, context, out.table, out.observation)
+        return _Starts(start.scene, start.target_params, context,
+                       np.ascontiguousarray(out.table.T), out.observation)
 
     def _apply(self, idx: np.ndarray, starts: _Starts, new_scene: bool) -> None:
         """Start the episodes ``starts`` in sub-environments ``idx`` (``new_scene``: their
@@ -244,17 +248,17 @@ class RollerVectorEnv(VectorEnv):
         if new_scene:
             self._scene = episode.put(self._scene, idx, starts.scene, self.num_envs)
             self._stepper.set_scenes(starts.scene, idx)
-        self._outcome.context[:, idx] = starts.context
+        self._outcome.context[:, idx] = starts.context.T
         self._target_params[idx] = starts.target_params
-        self.phi[idx], self.phi_dot[idx] = starts.table[_ROW["phi"]], starts.table[
-            _ROW["phi_dot"]]
+        self.phi[idx] = starts.table[:, _ROW["phi"]]
+        self.phi_dot[idx] = starts.table[:, _ROW["phi_dot"]]
         self._stepper.forget(idx)  # a new episode does not continue the last one's substeps
         self.steps[idx] = 0
         self._obs[idx] = starts.observation
 
     def _start(self, idx: np.ndarray, options: Mapping[str, Any] | None) -> np.ndarray:
         """Start new episodes in sub-environments ``idx`` (a reset); returns their outcome
-        table at the start (OUTCOME_ROWS × idx)."""
+        at the start (a row of OUTCOME_ROWS each)."""
         starts = self._draw(idx, self._episodes[idx], options)
         self._apply(idx, starts, bool(self.config.randomize)
                     or (options or {}).get("scene") is not None)
@@ -293,6 +297,7 @@ class RollerVectorEnv(VectorEnv):
         else:
             self._episodes[mask] += np.uint64(1)
         idx = np.flatnonzero(mask)
+        self._obs = self._observation()  # the last step returned the one it holds
         rows = self._start(idx, options)
         self._done[idx] = False
         return self._observation(), self._masked_info(rows, idx)
@@ -306,14 +311,14 @@ class RollerVectorEnv(VectorEnv):
             raise RuntimeError("call reset() before step()")
         tau = self.torque  # the context's row, written in place
         np.multiply(a, self.task.max_torque, out=tau)
-        results = self._stepper.run(self.phi, self.phi_dot, tau)
         self.steps += 1
         if self.task.moving_target:
             self.target[:], self.target_rate[:] = self.task.target_at(
                 self._target_params, self.steps * self.config.dt)
             self.target_torque[:] = episode.target_torque(self._scene, self.target)
-        table = self._outcome.run(results)  # a new table: its rows are handed out as they are
-        self._obs[:] = self._outcome.observation
+        # the physics and the outcome; a new table: its rows are handed out as they are
+        table = self._outcome.step(self._stepper, self.phi, self.phi_dot, tau)
+        self._obs = self._outcome.observation  # a new array: returned as it is
         reward = table[_ROW["reward"]]
         terminated = table[_ROW["terminated"]] != 0.0
         truncated = self.steps >= self.max_episode_steps
@@ -336,7 +341,7 @@ class RollerVectorEnv(VectorEnv):
         everyone = np.ones(self.num_envs, dtype=bool)
         info.update({f"_{k}": everyone for k in list(info)})
         info.update(final)
-        return self._observation(), reward, terminated, truncated, info
+        return self._obs, reward, terminated, truncated, info
 
     def _final(self, ended: np.ndarray, table: np.ndarray) -> dict[str, Any]:
         """SAME_STEP's report of the episodes ``ended`` before they start over: their last
@@ -363,30 +368,30 @@ class RollerVectorEnv(VectorEnv):
         sub-environments' starts out (the same numbers as drawing them then). The starts
         ahead are drawn again, for every sub-environment whose one is used up, when an
         autoreset needs a used one."""
-        n = self.num_envs
-        following = self._episodes + np.uint64(1)
+        n, one = self.num_envs, np.uint64(1)
         if self._ahead is None:
-            every = np.arange(n)
-            self._ahead, self._ahead_for = self._draw(every, following, None), following
-        elif (self._ahead_for[idx] != following[idx]).any():
+            following = self._episodes + one
+            self._ahead, self._ahead_for = self._draw(np.arange(n), following, None), following
+        elif (self._ahead_for[idx] != self._episodes[idx] + one).any():
+            following = self._episodes + one
             stale = np.flatnonzero(self._ahead_for != following)
             self._ahead.put(stale, self._draw(stale, following[stale], None), n)
             self._ahead_for[stale] = following[stale]
         self._episodes[idx] += np.uint64(1)
         starts = self._ahead.take(idx, n)
         self._apply(idx, starts, bool(self.config.randomize))
-        table[_INFO_ROWS, idx] = starts.table[_INFO_ROWS]
+        table[_INFO_ROWS, idx] = starts.table[:, _INFO_ROWS].T
 
     # -- observation and info ------------------------------------------------------------
     def _observation(self) -> np.ndarray:
         """The observation of every sub-environment's current state (a new array)."""
         return self._obs.copy()
 
-    def _masked_info(self, table: np.ndarray, idx: np.ndarray) -> dict[str, Any]:
-        """A vector info whose rows ``idx`` hold the outcome ``table`` (OUTCOME_ROWS × idx)
+    def _masked_info(self, outcomes: np.ndarray, idx: np.ndarray) -> dict[str, Any]:
+        """A vector info whose rows ``idx`` hold ``outcomes`` (a row of OUTCOME_ROWS each)
         and whose masks mark only them."""
         full = np.zeros((len(episode.OUTCOME_ROWS), self.num_envs))
-        full[:, idx] = table
+        full[:, idx] = outcomes.T
         info = episode.info_rows(full, self.config.info_keys, views=True)
         mask = np.zeros(self.num_envs, dtype=bool)
         mask[idx] = True

@@ -312,3 +312,37 @@ def test_reseeding_mid_run_restarts_the_streams_of_later_autoresets():
                 np.testing.assert_array_equal(obs[i], o)
                 assert info["target_phi"][i] == env.unwrapped.target
             done = terminated | truncated
+
+
+@pytest.mark.parametrize("integrator", ["taylor", "rk8"])
+def test_a_batch_on_all_cores_matches_single_envs(integrator):
+    """Above the parallel threshold a step is one pass over chunks on all cores (each chunk's
+    physics, then its outcome): sub-environments at the start, the end and a chunk boundary
+    still reproduce the single environments with their seeds, across autoresets."""
+    from roller_gym.physics.integrators import CHUNK, PARALLEL_THRESHOLD
+
+    env_id, n, length = "roller_gym/RollerHold-v1", PARALLEL_THRESHOLD + 37, 4
+    vec = gym.make_vec(env_id, num_envs=n, max_episode_steps=length, integrator=integrator)
+    assert vec.unwrapped._stepper.parallel
+    watched = [0, CHUNK - 1, CHUNK, n - 1]
+    singles = {i: gym.make(env_id, max_episode_steps=length, integrator=integrator)
+               for i in watched}
+    obs, _ = vec.reset(seed=9)
+    for i, env in singles.items():
+        np.testing.assert_array_equal(obs[i], env.reset(seed=9 + i)[0])
+    rng = np.random.default_rng(3)
+    done = np.zeros(n, dtype=bool)
+    for _ in range(9):
+        a = rng.uniform(-1, 1, (n, 1)).astype(np.float32)
+        obs, reward, terminated, truncated, info = vec.step(a)
+        for i, env in singles.items():
+            if done[i]:
+                o, inf = env.reset()
+                r = 0.0
+            else:
+                o, r, _, _, inf = env.step(a[i])
+            np.testing.assert_array_equal(obs[i], o)
+            assert reward[i] == r
+            assert_info_row(info, i, inf)
+        done = terminated | truncated
+    assert done.any()

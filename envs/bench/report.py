@@ -751,8 +751,7 @@ def section_targets(results: Results) -> list[str]:
             f"{100 * v['ours'] / v['kernel']:.0f} % of this kernel's rate, but the kernel "
             "here steps states near rest (|φ| ≤ 0.5 rad, |φ'| ≤ 1 rad/s), which take fewer "
             "substeps than an episode under random torques; the share of a step spent "
-            "outside the kernel, timed inside the environment's own steps, is in "
-            "`docs/THROUGHPUT.md`. "
+            "outside the physics kernel along an episode is in `docs/THROUGHPUT.md`. "
         )
         if small and per_roller[n] > 0.8 * min(per_roller[m] for m in small):
             text += (
@@ -764,7 +763,8 @@ def section_targets(results: Results) -> list[str]:
             "The kernel already evaluates the equations in SIMD lanes and the autoreset is "
             "vectorized; what is left is the kernel's own arithmetic and, as the kernel "
             "gets cheaper, the environment's work around it (`docs/THROUGHPUT.md`: the "
-            "share of a step outside the kernel, and the kernel against its arithmetic)."
+            "share of a step outside the physics kernel, and the kernel against its "
+            "arithmetic)."
         )
         notes.append(text)
     c, mj_target = compare_mujoco(results, paper), TARGETS["mujoco_speedup"]

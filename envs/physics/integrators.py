@@ -109,6 +109,7 @@ import math
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, fields
+from typing import Any
 
 import numba
 import numpy as np
@@ -1035,6 +1036,9 @@ class Scheme:
             ``substep``, written as a function of its own (two lines) so that numba caches it;
             for ``"taylor"``, its serial kernel.
         parallel: the kernel for large batches, where it is not ``kernel``.
+        chunk: for a scheme whose batch kernels advance chunks of rollers in lanes, that
+            function, ``chunk(io, lo, hi, tableau, cfg)`` (rollers lo..hi−1): what a caller
+            fusing more work into the same pass over chunks calls (:meth:`BatchStepper.run`).
         tableau: for an explicit Runge–Kutta pair, its coefficients (see ``_tableau``).
         fixed_tableau: the coefficients its fixed substeps (``substeps=n``) take, where they
             differ from ``tableau`` (rk4: classical RK4; under error control, Dormand–Prince
@@ -1064,6 +1068,7 @@ class Scheme:
     fixed_tableau: np.ndarray | None = None
     kernel: Callable | None = None
     parallel: Callable | None = None
+    chunk: Callable | None = None
     constant: float = 0.0
     sweep_exponent: float = 0.5
     halvings: int = 0
@@ -1086,15 +1091,15 @@ class Scheme:
 
 
 _SCHEME_LIST = (
-    Scheme("rk8", 8, 1.0, True, _rk_chunk, _DOP853, constant=1e-6, sweep_exponent=0.75,
-           halvings=3, tol_share=0.1),
-    Scheme("rk4", 4, 1.0, True, _rk_chunk, _DP5, fixed_tableau=_RK4,
+    Scheme("rk8", 8, 1.0, True, _rk_chunk, _DOP853, chunk=_rk_chunk, constant=1e-6,
+           sweep_exponent=0.75, halvings=3, tol_share=0.1),
+    Scheme("rk4", 4, 1.0, True, _rk_chunk, _DP5, fixed_tableau=_RK4, chunk=_rk_chunk,
            constant=0.02, halvings=2, tol_share=0.05),
     Scheme("euler", 1, 0.5, False, _euler_substep, kernel=_euler_kernel, constant=2.0),
     Scheme("midpoint", 2, math.inf, False, _midpoint_substep, kernel=_midpoint_kernel,
            constant=0.3),
     Scheme("taylor", series.ORDER, 1.0, True, _taylor_substep, kernel=_taylor_serial,
-           parallel=_taylor_parallel, constant=1e-6, tol_share=0.01),
+           parallel=_taylor_parallel, chunk=_taylor_chunk, constant=1e-6, tol_share=0.01),
     Scheme("dop853", 8, math.inf, True, None),
 )
 #: The schemes by name.
@@ -1306,19 +1311,39 @@ class BatchStepper(_Base):
         """The rollers' scene numbers, shape ``(len(SCENE_FIELDS), num)`` (a view)."""
         return self._io[: len(SCENE_FIELDS)]
 
-    def run(self, phi: np.ndarray, phi_dot: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    @property
+    def parallel(self) -> bool:
+        """True if the rollers are advanced in chunks on all cores (``num`` at least
+        PARALLEL_THRESHOLD)."""
+        return self._kernel is self._parallel
+
+    def run(self, phi: np.ndarray, phi_dot: np.ndarray, tau: np.ndarray,
+            fused: Callable | None = None, *extra: Any) -> np.ndarray:
         """One control step of every roller (arrays of ``num``); returns the result as a
         table (:data:`STEP_FIELDS` rows × ``num``, float64), a view of the stepper's buffer,
-        valid until the next call."""
-        return self._run(phi, phi_dot, tau, 4)
+        valid until the next call.
+
+        ``fused``: a compiled kernel ``fused(io, tableau, cfg, result, *extra)`` to run in
+        place of the stepper's own, for a caller that does more work on each chunk of rollers
+        right after advancing it (while its numbers are in cache): it must advance chunk by
+        chunk with this scheme's :attr:`Scheme.chunk`, on all cores (``parallel``); ``result``
+        is the returned table.
+        """
+        return self._run(phi, phi_dot, tau, 4, fused, extra)
 
     def _run(self, phi: np.ndarray, phi_dot: np.ndarray, tau: np.ndarray,
-             stacklevel: int) -> np.ndarray:
+             stacklevel: int, fused: Callable | None = None, extra: tuple = ()) -> np.ndarray:
         io = self._io
         io[_PHI_IN], io[_W_IN], io[_TAU] = phi, phi_dot, tau
         if np.isnan(io[_M]).any():
             raise ValueError("some rollers have no scene: call set_scenes first")
-        self._kernel(io, self._tab, self._cfg)
+        if fused is None:
+            self._kernel(io, self._tab, self._cfg)
+        else:
+            if not self.parallel or self.scheme.chunk is None:
+                raise ValueError(f"a fused kernel needs a batch of at least {PARALLEL_THRESHOLD}"
+                                 f" rollers and a chunked scheme (not {self.method!r})")
+            fused(io, self._tab, self._cfg, self._results, *extra)
         if not ((io[_TOL_MET] != 0.0) | (io[_FINITE] == 0.0)).all():
             self._warn(stacklevel)  # pointing at the caller of run() or advance()
         return self._results
