@@ -246,8 +246,9 @@ def start_episodes(
     if options.get("target") is not None:
         if task.moving_target:
             raise ValueError(f"{task.name}'s target moves; options['target'] is not allowed")
-        params[:, 0] = [task.target_from_option(options["target"], scene.item(i))
-                        for i in range(n)]
+        params[:, 0] = [task.target_from_option(
+            options["target"], scene if scene.batch_size is None else scene.item(i))
+            for i in range(n)]
     target, target_rate = task.target_at(params, np.zeros(n))
     if options.get("state") is not None:
         phi, phi_dot = state_option(options["state"], scene, n)

@@ -93,7 +93,7 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
                                 tol=cfg.tolerance, substeps=cfg.substeps or None)
         self._set_scene(cfg.scene)
         self._set_target(self.task.default_target(self.scene), 0.0)
-        self._time = 0.0
+        self._steps = 0  # of this episode: its time is _steps · dt, as in the vector env
         self._target_params = np.full(self.task.target_size, self.target)
         self.phi, self.phi_dot, self.torque = self.target, 0.0, 0.0
         self._stream_seed: int | None = None  # set by the first reset
@@ -137,7 +137,7 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
             self._set_scene(scene)
         self._target_params = start.target_params[0]
         self._set_target(float(start.target[0]), float(start.target_rate[0]))
-        self._time = 0.0
+        self._steps = 0  # of this episode: its time is _steps · dt, as in the vector env
         self.phi, self.phi_dot, self.torque = float(start.phi[0]), float(start.phi_dot[0]), 0.0
         self._stepper.forget()  # a new episode does not continue the last one's substeps
         at_start = episode.at_start(start.scene, start.phi, start.phi_dot)
@@ -160,9 +160,10 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         tau = a * self.task.max_torque
         results = self._stepper.run(self.phi, self.phi_dot, tau)
         self._outcome.context[_CONTEXT["torque"], 0] = tau
+        self._steps += 1
         if self.task.moving_target:
-            self._time += self.config.dt
-            target, rate = self.task.target_at(self._target_params, self._time)
+            target, rate = self.task.target_at(self._target_params,
+                                               self._steps * self.config.dt)
             self._set_target(float(target), float(rate))
         outcome = self._outcome
         outcome.run(results)

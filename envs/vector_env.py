@@ -177,6 +177,7 @@ class RollerVectorEnv(VectorEnv):
         self._stepper = BatchStepper(num_envs, method=cfg.integrator, dt=cfg.dt,
                                      tol=cfg.tolerance, substeps=cfg.substeps or None)
         self._scene = self._base  # a scalar Scene while every sub-environment shares it
+        self._option_scene = np.zeros(num_envs, dtype=bool)  # in an episode of a scene option
         self._stepper.set_scenes(self._scene)
         # every step writes a new outcome table: its rows are handed out (reward, info)
         self._outcome = episode.OutcomeKernel(task, num_envs, fresh=True)
@@ -242,12 +243,13 @@ class RollerVectorEnv(VectorEnv):
         return _Starts(start.scene, start.target_params, context,
                        np.ascontiguousarray(out.table.T), out.observation)
 
-    def _apply(self, idx: np.ndarray, starts: _Starts, new_scene: bool) -> None:
-        """Start the episodes ``starts`` in sub-environments ``idx`` (``new_scene``: their
-        scene is not the base's)."""
-        if new_scene:
+    def _apply(self, idx: np.ndarray, starts: _Starts, scene_option: bool) -> None:
+        """Start the episodes ``starts`` in sub-environments ``idx`` (``scene_option``: with
+        the scene of a reset option, for these episodes only)."""
+        if self.config.randomize or scene_option or self._option_scene[idx].any():
             self._scene = episode.put(self._scene, idx, starts.scene, self.num_envs)
             self._stepper.set_scenes(starts.scene, idx)
+        self._option_scene[idx] = scene_option
         self._outcome.context[:, idx] = starts.context.T
         self._target_params[idx] = starts.target_params
         self.phi[idx] = starts.table[:, _ROW["phi"]]
@@ -260,8 +262,7 @@ class RollerVectorEnv(VectorEnv):
         """Start new episodes in sub-environments ``idx`` (a reset); returns their outcome
         at the start (a row of OUTCOME_ROWS each)."""
         starts = self._draw(idx, self._episodes[idx], options)
-        self._apply(idx, starts, bool(self.config.randomize)
-                    or (options or {}).get("scene") is not None)
+        self._apply(idx, starts, (options or {}).get("scene") is not None)
         return starts.table
 
     def reset(
@@ -379,7 +380,7 @@ class RollerVectorEnv(VectorEnv):
             self._ahead_for[stale] = following[stale]
         self._episodes[idx] += np.uint64(1)
         starts = self._ahead.take(idx, n)
-        self._apply(idx, starts, bool(self.config.randomize))
+        self._apply(idx, starts, False)
         table[_INFO_ROWS, idx] = starts.table[:, _INFO_ROWS].T
 
     # -- observation and info ------------------------------------------------------------

@@ -1078,6 +1078,11 @@ class Scheme:
         """(serial, parallel) kernels ``f(io, tableau, cfg)`` of this scheme."""
         return _kernels(self)
 
+    def __reduce__(self) -> tuple[Callable, tuple[str]]:
+        """Pickled by name: unpickled, it is the row of :data:`SCHEMES` (its compiled
+        functions those of this process)."""
+        return scheme, (self.name,)
+
     def pair(self, fixed: bool) -> np.ndarray | None:
         """The coefficients its kernel takes: under error control, or with ``fixed`` substeps."""
         return self.fixed_tableau if fixed and self.fixed_tableau is not None else self.tableau

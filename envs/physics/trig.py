@@ -32,24 +32,24 @@ tanh are calls: 3 and 10 ns an element in a loop, against under 1 and 1.5 ns).
 :func:`sin`, :func:`cos`, :func:`sincos`, :func:`exp` and :func:`tanh` have two faces.
 Compiled by numba (the simulation's kernels), they are this branch-free form, inlined where
 they are called. Called
-from Python with a float64 array (from :data:`ARRAY_LOOP_SIZE` elements), they run this form
-in a compiled loop: 1.4 ns per element with AVX-512 and 4.7 with AVX2 (measured), where
-NumPy's ``sin``, which calls libm for float64, takes 14 to 16.
-Called from Python with anything else (scalars, small arrays, complex numbers for
-complex-step derivatives) they are NumPy's ``sin``, ``cos``, ``exp`` and ``tanh``. Both faces
-are within an ulp or two of the exact value, so scalars can differ from arrays in the last
-bit; arrays and the kernels agree bit for bit, and so do the kernels among themselves (a
-roller's step is the same alone or in a batch).
+from Python with float64 numbers or arrays, they run this form compiled (arrays in a compiled
+loop: 1.4 ns per element with AVX-512 and 4.7 with AVX2, measured, where NumPy's ``sin``,
+which calls libm for float64, takes 14 to 16), so that a number gives the same bits alone,
+in an array of any size and in the kernels: a single environment and a batch compute their
+episode starts alike. Called from Python with anything else (complex numbers for
+complex-step derivatives, intervals, float32) they are NumPy's ``sin``, ``cos``, ``exp`` and
+``tanh``, within an ulp or two of the branch-free form.
 """
 
 from __future__ import annotations
+
+from typing import Any
 
 import numpy as np
 from numba import njit, types
 from numba.extending import intrinsic, overload, register_jitable
 
-__all__ = ["ARRAY_LOOP_SIZE", "DOMAIN", "EXACT_RANGE", "cos", "exp", "select", "sin", "sincos",
-           "tanh"]
+__all__ = ["DOMAIN", "EXACT_RANGE", "cos", "exp", "select", "sin", "sincos", "tanh"]
 
 _TOINT = 6755399441055744.0  # 1.5·2⁵²: (v + _TOINT) − _TOINT rounds v to an integer, |v| < 2⁵¹
 _INVPIO2 = 6.36619772367581382433e-01  # 2/π
@@ -179,40 +179,40 @@ def _sincos(x):
 
 
 def sin(x):
-    """sin x [x in rad]. From Python: for float64 arrays the branch-free form in a compiled
-    loop; for scalars and other types (complex: complex-step derivatives) ``np.sin``. Compiled
-    by numba: the branch-free form, inlined. Within 1 ulp for |x| ≤ EXACT_RANGE, NaN beyond
-    DOMAIN (the branch-free form)."""
-    return _each(_sin_loop, x, 1)[0] if _looped(x) else np.sin(x)
+    """sin x [x in rad]. From Python: for float64 numbers and arrays the branch-free form,
+    compiled (arrays in a loop), as NumPy scalars and arrays; for other types (complex:
+    complex-step derivatives) ``np.sin``. Compiled by numba: the branch-free form, inlined.
+    Within 1 ulp for |x| ≤ EXACT_RANGE, NaN beyond DOMAIN (the branch-free form)."""
+    return _each(_sin_loop, _sin_one, x, 1)[0] if _looped(x) else np.sin(x)
 
 
 def cos(x):
     """cos x [x in rad], with the faces of :func:`sin`."""
-    return _each(_cos_loop, x, 1)[0] if _looped(x) else np.cos(x)
+    return _each(_cos_loop, _cos_one, x, 1)[0] if _looped(x) else np.cos(x)
 
 
 def sincos(x):
     """(sin x, cos x) [x in rad], bit for bit :func:`sin` and :func:`cos`, from one reduction
     and one pair of polynomials: the pair costs what one of them does (the branch-free sin
-    evaluates both polynomials anyway). The faces of :func:`sin`: from Python, float64 arrays
-    go through one compiled loop; anything else gets NumPy's sin and cos."""
-    return _each(_sincos_loop, x, 2) if _looped(x) else (np.sin(x), np.cos(x))
-
-
-#: Arrays from this many elements on go through the compiled loops (below, one NumPy call
-#: costs less than the loop's dispatch).
-ARRAY_LOOP_SIZE = 64
+    evaluates both polynomials anyway). The faces of :func:`sin`: from Python, float64 numbers
+    and arrays get the compiled form; anything else gets NumPy's sin and cos."""
+    return _each(_sincos_loop, _sincos_one, x, 2) if _looped(x) else (np.sin(x), np.cos(x))
 
 
 def _looped(x) -> bool:
-    """Whether a Python caller's x goes through the compiled loops: a float64 array of at
-    least :data:`ARRAY_LOOP_SIZE` elements."""
-    return type(x) is np.ndarray and x.dtype == np.float64 and x.size >= ARRAY_LOOP_SIZE
+    """Whether a Python caller's x gets the branch-free form, compiled: a float64 number or
+    array."""
+    t = type(x)
+    return (t is np.ndarray and x.dtype == np.float64) or t is float or t is np.float64
 
 
-def _each(loop, x: np.ndarray, outputs: int) -> tuple[np.ndarray, ...]:
-    """``loop(flat x, *outs)`` over the elements of x (any shape and strides), into
-    ``outputs`` new arrays of x's shape."""
+def _each(loop, one, x, outputs: int) -> Any:
+    """``loop(flat x, *outs)`` over the elements of an array x (any shape and strides), into
+    ``outputs`` new arrays of x's shape; ``one(x)`` of a number (a 0-d array is one), as
+    NumPy scalars."""
+    if type(x) is not np.ndarray or x.ndim == 0:
+        got = one(float(x))
+        return tuple(np.float64(v) for v in got) if outputs > 1 else (np.float64(got),)
     flat = np.ascontiguousarray(x).reshape(-1)
     outs = tuple(np.empty_like(flat) for _ in range(outputs))
     loop(flat, *outs)
@@ -335,14 +335,13 @@ def _tanh(x):
 
 
 def exp(x):
-    """e^x, with the faces of :func:`sin` (NumPy's exp from Python but for float64 arrays)."""
-    return _each(_exp_loop, x, 1)[0] if _looped(x) else np.exp(x)
+    """e^x, with the faces of :func:`sin` (from Python NumPy's exp but for float64)."""
+    return _each(_exp_loop, _exp_one, x, 1)[0] if _looped(x) else np.exp(x)
 
 
 def tanh(x):
-    """tanh x, with the faces of :func:`sin` (NumPy's tanh from Python but for float64
-    arrays)."""
-    return _each(_tanh_loop, x, 1)[0] if _looped(x) else np.tanh(x)
+    """tanh x, with the faces of :func:`sin` (from Python NumPy's tanh but for float64)."""
+    return _each(_tanh_loop, _tanh_one, x, 1)[0] if _looped(x) else np.tanh(x)
 
 
 # Compiled, each function is its branch-free form, inlined where it is called so that the loop
@@ -372,3 +371,29 @@ def _tanh_loop(x, out):
     """out[i] = tanh(x[i]), the branch-free form."""
     for i in range(x.size):
         out[i] = tanh(x[i])
+
+
+# The same for one number from Python.
+@njit(cache=True, nogil=True, error_model="numpy")
+def _sin_one(x):
+    return sin(x)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _cos_one(x):
+    return cos(x)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _sincos_one(x):
+    return sincos(x)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _exp_one(x):
+    return exp(x)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _tanh_one(x):
+    return tanh(x)
