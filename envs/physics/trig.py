@@ -183,12 +183,12 @@ def sin(x):
     compiled (arrays in a loop), as NumPy scalars and arrays; for other types (complex:
     complex-step derivatives) ``np.sin``. Compiled by numba: the branch-free form, inlined.
     Within 1 ulp for |x| ≤ EXACT_RANGE, NaN beyond DOMAIN (the branch-free form)."""
-    return _each(_sin_loop, _sin_one, x, 1)[0] if _looped(x) else np.sin(x)
+    return _each(_sin_loop, x, 1)[0] if _looped(x) else np.sin(x)
 
 
 def cos(x):
     """cos x [x in rad], with the faces of :func:`sin`."""
-    return _each(_cos_loop, _cos_one, x, 1)[0] if _looped(x) else np.cos(x)
+    return _each(_cos_loop, x, 1)[0] if _looped(x) else np.cos(x)
 
 
 def sincos(x):
@@ -196,7 +196,7 @@ def sincos(x):
     and one pair of polynomials: the pair costs what one of them does (the branch-free sin
     evaluates both polynomials anyway). The faces of :func:`sin`: from Python, float64 numbers
     and arrays get the compiled form; anything else gets NumPy's sin and cos."""
-    return _each(_sincos_loop, _sincos_one, x, 2) if _looped(x) else (np.sin(x), np.cos(x))
+    return _each(_sincos_loop, x, 2) if _looped(x) else (np.sin(x), np.cos(x))
 
 
 def _looped(x) -> bool:
@@ -206,16 +206,14 @@ def _looped(x) -> bool:
     return (t is np.ndarray and x.dtype == np.float64) or t is float or t is np.float64
 
 
-def _each(loop, one, x, outputs: int) -> Any:
-    """``loop(flat x, *outs)`` over the elements of an array x (any shape and strides), into
-    ``outputs`` new arrays of x's shape; ``one(x)`` of a number (a 0-d array is one), as
-    NumPy scalars."""
-    if type(x) is not np.ndarray or x.ndim == 0:
-        got = one(float(x))
-        return tuple(np.float64(v) for v in got) if outputs > 1 else (np.float64(got),)
-    flat = np.ascontiguousarray(x).reshape(-1)
+def _each(loop, x, outputs: int) -> Any:
+    """``loop(flat x, *outs)`` over the elements of x (any shape and strides), into
+    ``outputs`` new arrays of x's shape; for a number (or a 0-d array), NumPy scalars."""
+    flat = np.ascontiguousarray(x, dtype=np.float64).reshape(-1)
     outs = tuple(np.empty_like(flat) for _ in range(outputs))
     loop(flat, *outs)
+    if type(x) is not np.ndarray or x.ndim == 0:
+        return tuple(out[0] for out in outs)
     return tuple(out.reshape(x.shape) for out in outs)
 
 
@@ -336,12 +334,12 @@ def _tanh(x):
 
 def exp(x):
     """e^x, with the faces of :func:`sin` (from Python NumPy's exp but for float64)."""
-    return _each(_exp_loop, _exp_one, x, 1)[0] if _looped(x) else np.exp(x)
+    return _each(_exp_loop, x, 1)[0] if _looped(x) else np.exp(x)
 
 
 def tanh(x):
     """tanh x, with the faces of :func:`sin` (from Python NumPy's tanh but for float64)."""
-    return _each(_tanh_loop, _tanh_one, x, 1)[0] if _looped(x) else np.tanh(x)
+    return _each(_tanh_loop, x, 1)[0] if _looped(x) else np.tanh(x)
 
 
 # Compiled, each function is its branch-free form, inlined where it is called so that the loop
@@ -371,29 +369,3 @@ def _tanh_loop(x, out):
     """out[i] = tanh(x[i]), the branch-free form."""
     for i in range(x.size):
         out[i] = tanh(x[i])
-
-
-# The same for one number from Python.
-@njit(cache=True, nogil=True, error_model="numpy")
-def _sin_one(x):
-    return sin(x)
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _cos_one(x):
-    return cos(x)
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _sincos_one(x):
-    return sincos(x)
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _exp_one(x):
-    return exp(x)
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _tanh_one(x):
-    return tanh(x)
