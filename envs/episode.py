@@ -55,10 +55,12 @@ from roller_gym.task import (
 
 __all__ = [
     "CONTEXT_FIELDS",
+    "FLAG_ROWS",
     "INFO_KEYS",
     "OUTCOME_ROWS",
     "Outcome",
     "OutcomeKernel",
+    "flag_table",
     "info_rows",
     "random_seed",
     "scene_rows",
@@ -326,20 +328,27 @@ INFO_KEYS: dict[str, tuple[type, str]] = {
 #: holding torque τ* [N·m], the wrap rate q and dψ/dφ (``roller_gym.task``).
 CONTEXT_FIELDS = ("torque", "target_phi", "target_phi_dot", "target_torque", "wrap_rate",
                   "psi_rate")
-#: The rows of the outcome's table: reward, terminated, then the info in INFO_KEYS order.
-OUTCOME_ROWS = ("reward", "terminated", *INFO_KEYS)
+#: The rows of the outcome's table (float64): the reward, then the info's float and integer
+#: keys in INFO_KEYS order (integers as whole floats).
+OUTCOME_ROWS = ("reward", *(key for key, (kind, _) in INFO_KEYS.items() if kind is not bool))
+#: The rows of the outcome's flags (bool): terminated, then the info's boolean keys in
+#: INFO_KEYS order. Written as booleans by the kernel: no conversion after it.
+FLAG_ROWS = ("terminated", *(key for key, (kind, _) in INFO_KEYS.items() if kind is bool))
 _O = {name: i for i, name in enumerate(OUTCOME_ROWS)}
+_F = {name: i for i, name in enumerate(FLAG_ROWS)}
 (_S_PHI, _S_PHI_DOT, _S_PHI_DDOT, _S_SUBSTEPS, _S_FINITE, _S_NORMAL, _S_FRICTION, _S_ENERGY,
  _S_LIFT, _S_SLIP, _S_ERR, _S_TOL_MET) = range(len(STEP_FIELDS))
 (_C_TORQUE, _C_TARGET, _C_TARGET_RATE, _C_TARGET_TORQUE, _C_Q,
  _C_PSI_RATE) = range(len(CONTEXT_FIELDS))
 assert STEP_FIELDS[_S_TOL_MET] == "tol_met" and CONTEXT_FIELDS[_C_PSI_RATE] == "psi_rate"
 # Row numbers as compile-time constants of the kernel.
-(_O_REWARD, _O_TERMINATED, _O_PHI, _O_PHI_DOT, _O_PSI, _O_TORQUE, _O_NORMAL, _O_FRICTION,
- _O_ENERGY, _O_SUBSTEPS, _O_LIFTING, _O_SLIPPING, _O_NONFINITE, _O_LIFT, _O_SLIP, _O_ERR,
- _O_TOL_MET, _O_TARGET_PHI, _O_TARGET_PSI, _O_TARGET_RATE, _O_TARGET_TORQUE, _O_ERROR,
- _O_SUCCESS) = range(len(OUTCOME_ROWS))
-assert OUTCOME_ROWS[_O_SUCCESS] == "is_success" and OUTCOME_ROWS[_O_TARGET_PSI] == "target_psi"
+(_O_REWARD, _O_PHI, _O_PHI_DOT, _O_PSI, _O_TORQUE, _O_NORMAL, _O_FRICTION, _O_ENERGY,
+ _O_SUBSTEPS, _O_LIFT, _O_SLIP, _O_ERR, _O_TARGET_PHI, _O_TARGET_PSI, _O_TARGET_RATE,
+ _O_TARGET_TORQUE, _O_ERROR) = range(len(OUTCOME_ROWS))
+(_F_TERMINATED, _F_LIFTING, _F_SLIPPING, _F_NONFINITE, _F_TOL_MET,
+ _F_SUCCESS) = range(len(FLAG_ROWS))
+assert OUTCOME_ROWS[_O_ERROR] == "position_error" and OUTCOME_ROWS[_O_TARGET_PSI] == "target_psi"
+assert FLAG_ROWS[_F_SUCCESS] == "is_success" and FLAG_ROWS[_F_TOL_MET] == "tol_met"
 
 
 # The kernel works on blocks of rollers in a scratch vector of rows a compile-time number of
@@ -358,15 +367,18 @@ _B_STEP_ROWS = (_S_PHI, _S_PHI_DOT, _S_FINITE, _S_LIFT, _S_SLIP, _S_ERR)
 _B_CONTEXT_ROWS = (_C_TORQUE, _C_TARGET, _C_TARGET_RATE, _C_TARGET_TORQUE, _C_Q, _C_PSI_RATE)
 _B_OUT = len(_B_STEP_ROWS) + len(_B_CONTEXT_ROWS)  # the first computed row
 assert _B_OUT == _B_RATE + 1
-_B_COMPUTED = (_O_REWARD, _O_TERMINATED, _O_PSI, _O_LIFTING, _O_SLIPPING, _O_NONFINITE,
-               _O_ERR, _O_TARGET_PSI, _O_ERROR, _O_SUCCESS)
-_B_OBS = _B_OUT + len(_B_COMPUTED)
+# the computed rows in scratch order: (scratch row after _B_OUT, the table's or flags' row)
+_B_COMPUTED = ((0, _O_REWARD), (2, _O_PSI), (6, _O_ERR), (7, _O_TARGET_PSI), (8, _O_ERROR))
+_B_COMPUTED_FLAGS = ((1, _F_TERMINATED), (3, _F_LIFTING), (4, _F_SLIPPING), (5, _F_NONFINITE),
+                     (9, _F_SUCCESS))
+_B_N_COMPUTED = len(_B_COMPUTED) + len(_B_COMPUTED_FLAGS)
+_B_OBS = _B_OUT + _B_N_COMPUTED
 _B_ROWS = _B_OBS + _N_OBS
 _B_TARGET_OBS = _B_OBS + list(OBSERVATION_FIELDS).index("cos_psi_target")  # 5 fields on
 # the outcome's rows that are the step's or the context's own numbers
 _PASSED = ((_O_PHI, _S_PHI), (_O_PHI_DOT, _S_PHI_DOT), (_O_NORMAL, _S_NORMAL),
            (_O_FRICTION, _S_FRICTION), (_O_ENERGY, _S_ENERGY), (_O_SUBSTEPS, _S_SUBSTEPS),
-           (_O_LIFT, _S_LIFT), (_O_SLIP, _S_SLIP), (_O_TOL_MET, _S_TOL_MET))
+           (_O_LIFT, _S_LIFT), (_O_SLIP, _S_SLIP))
 _PASSED_CONTEXT = ((_O_TORQUE, _C_TORQUE), (_O_TARGET_PHI, _C_TARGET),
                    (_O_TARGET_RATE, _C_TARGET_RATE), (_O_TARGET_TORQUE, _C_TARGET_TORQUE))
 
@@ -419,55 +431,69 @@ def _outcome_block(b, m, constants):
                                                  b[_B_TARGET_RATE * _B + i])
 
 
+@register_jitable(inline="always")
+def _copy(dst, dst_start, src, src_start, m):
+    """dst[dst_start + i] = src[src_start + i] for i < m, on rows (1-d arrays); the indices
+    unsigned, so that no wraparound check keeps the loop out of SIMD lanes."""
+    d, s = np.uint64(dst_start), np.uint64(src_start)
+    for i in range(np.uint64(m)):
+        dst[d + i] = src[s + i]
+
+
+@register_jitable(inline="always")
+def _copy_flag(dst, dst_start, src, src_start, m):
+    """dst[dst_start + i] = src[src_start + i] != 0 for i < m: a row of 1.0/0.0 into a
+    boolean row (as :func:`_copy`)."""
+    d, s = np.uint64(dst_start), np.uint64(src_start)
+    for i in range(np.uint64(m)):
+        dst[d + i] = src[s + i] != 0.0
+
+
 @register_jitable
-def _outcome_range(lo, hi, result, context, constants, observed, out, obs, b):
+def _outcome_range(lo, hi, result, context, constants, observed, out, flags, obs, b):
     """The outcome of rollers lo..hi−1 (see :class:`OutcomeKernel`), block by block in the
     scratch ``b`` (_B_ROWS · _B elements)."""
     for start in range(lo, hi, _BLOCK):
         m = min(_BLOCK, hi - start)
         for k in range(len(_B_STEP_ROWS)):
-            row = _B_STEP_ROWS[k]
-            for i in range(m):
-                b[k * _B + i] = result[row, start + i]
+            _copy(b, k * _B, result[_B_STEP_ROWS[k]], start, m)
         for k in range(len(_B_CONTEXT_ROWS)):
-            row, first = _B_CONTEXT_ROWS[k], len(_B_STEP_ROWS) + k
-            for i in range(m):
-                b[first * _B + i] = context[row, start + i]
+            _copy(b, (len(_B_STEP_ROWS) + k) * _B, context[_B_CONTEXT_ROWS[k]], start, m)
         _outcome_block(b, m, constants)
-        for k in range(len(_B_COMPUTED)):
-            row = _B_COMPUTED[k]
-            for i in range(m):
-                out[row, start + i] = b[(_B_OUT + k) * _B + i]
+        for pair in _B_COMPUTED:
+            _copy(out[pair[1]], start, b, (_B_OUT + pair[0]) * _B, m)
+        for pair in _B_COMPUTED_FLAGS:
+            _copy_flag(flags[pair[1]], start, b, (_B_OUT + pair[0]) * _B, m)
         for pair in _PASSED:
-            for i in range(m):
-                out[pair[0], start + i] = result[pair[1], start + i]
+            _copy(out[pair[0]], start, result[pair[1]], start, m)
+        _copy_flag(flags[_F_TOL_MET], start, result[_S_TOL_MET], start, m)
         for pair in _PASSED_CONTEXT:
-            for i in range(m):
-                out[pair[0], start + i] = context[pair[1], start + i]
+            _copy(out[pair[0]], start, context[pair[1]], start, m)
         for i in range(m):
             for j in range(observed.size):
                 obs[start + i, j] = b[(_B_OBS + observed[j]) * _B + i]
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _outcome_loop(result, context, constants, observed, out, obs, scratch):
+def _outcome_loop(result, context, constants, observed, out, flags, obs, scratch):
     """Every roller's outcome (:func:`_outcome_range`), on one core, in ``scratch``."""
-    _outcome_range(0, result.shape[1], result, context, constants, observed, out, obs,
+    _outcome_range(0, result.shape[1], result, context, constants, observed, out, flags, obs,
                    scratch)
 
 
 @numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")
-def _outcome_parallel(result, context, constants, observed, out, obs, scratch):
+def _outcome_parallel(result, context, constants, observed, out, flags, obs, scratch):
     """Every roller's outcome (:func:`_outcome_range`), in chunks on all cores (each chunk
     in a scratch of its own; ``scratch`` is unused)."""
     n = result.shape[1]
     for chunk in numba.prange((n + CHUNK - 1) // CHUNK):
         _outcome_range(chunk * CHUNK, min(n, (chunk + 1) * CHUNK), result, context, constants,
-                       observed, out, obs, np.empty(_B_ROWS * _B))
+                       observed, out, flags, obs, np.empty(_B_ROWS * _B))
 
 
 @register_jitable(inline="always")
-def _advance_and_outcome(io, tab, cfg, result, chunk, context, constants, observed, out, obs):
+def _advance_and_outcome(io, tab, cfg, result, chunk, context, constants, observed, out,
+                         flags, obs):
     """A scheme's ``chunk`` (the physics, :attr:`~roller_gym.physics.integrators.Scheme.chunk`)
     and then the outcome (:func:`_outcome_range`) of each chunk of rollers in turn, chunks on
     all cores: the outcome reads the chunk's results while they are still in cache, and a
@@ -476,7 +502,7 @@ def _advance_and_outcome(io, tab, cfg, result, chunk, context, constants, observ
     for c in numba.prange((n + CHUNK - 1) // CHUNK):
         lo, hi = c * CHUNK, min(n, (c + 1) * CHUNK)
         chunk(io, lo, hi, tab, cfg)
-        _outcome_range(lo, hi, result, context, constants, observed, out, obs,
+        _outcome_range(lo, hi, result, context, constants, observed, out, flags, obs,
                        np.empty(_B_ROWS * _B))
 
 
@@ -485,15 +511,15 @@ _TAYLOR_CHUNK, _RK_CHUNK = SCHEMES["taylor"].chunk, SCHEMES["rk8"].chunk
 
 
 @numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")
-def _taylor_and_outcome(io, tab, cfg, result, context, constants, observed, out, obs):
+def _taylor_and_outcome(io, tab, cfg, result, context, constants, observed, out, flags, obs):
     _advance_and_outcome(io, tab, cfg, result, _TAYLOR_CHUNK, context, constants, observed,
-                         out, obs)
+                         out, flags, obs)
 
 
 @numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")
-def _rk_and_outcome(io, tab, cfg, result, context, constants, observed, out, obs):
+def _rk_and_outcome(io, tab, cfg, result, context, constants, observed, out, flags, obs):
     _advance_and_outcome(io, tab, cfg, result, _RK_CHUNK, context, constants, observed, out,
-                         obs)
+                         flags, obs)
 
 
 #: The fused kernels by the chunk function they advance with (schemes without one: two calls).
@@ -511,17 +537,19 @@ class Outcome:
     observation: np.ndarray
     #: all of it as the kernel's table (OUTCOME_ROWS × rollers, float64; rollers flattened)
     table: np.ndarray
+    #: and its flags (FLAG_ROWS × rollers, bool; rollers flattened)
+    flags: np.ndarray
 
 
 class OutcomeKernel:
     """The step's outcome for a fixed set of rollers, into buffers of its own: what both
     environments call once per step (and per reset).
 
-    ``table`` (``OUTCOME_ROWS`` × rollers, float64), ``observation`` (rollers × the task's
-    observation size, float32) and ``context`` (``CONTEXT_FIELDS`` × rollers, for the caller
-    to fill) are its buffers; :meth:`run` overwrites the first two. With ``fresh``, every run
-    writes a new ``table`` and ``observation`` instead, which the caller may then hand out
-    (see :func:`info_rows`).
+    ``table`` (``OUTCOME_ROWS`` × rollers, float64), ``flags`` (``FLAG_ROWS`` × rollers,
+    bool), ``observation`` (rollers × the task's observation size, float32) and ``context``
+    (``CONTEXT_FIELDS`` × rollers, for the caller to fill) are its buffers; :meth:`run`
+    overwrites the first three. With ``fresh``, every run writes a new ``table``, ``flags``
+    and ``observation`` instead, which the caller may then hand out (see :func:`info_rows`).
     """
 
     def __init__(self, task: Any, num: int, fresh: bool = False) -> None:
@@ -530,6 +558,7 @@ class OutcomeKernel:
                                  dtype=np.int64)
         self.context = row_table(len(CONTEXT_FIELDS), num)
         self.table = row_table(len(OUTCOME_ROWS), num)
+        self.flags = flag_table(num)
         self.observation = np.empty((num, self.observed.size), dtype=np.float32)
         self.fresh = fresh
         self._kernel = _outcome_parallel if num >= PARALLEL_THRESHOLD else _outcome_loop
@@ -540,7 +569,7 @@ class OutcomeKernel:
         the context in :attr:`context`; returns :attr:`table`."""
         self._renew()
         self._kernel(result, self.context, self.constants, self.observed, self.table,
-                     self.observation, self._scratch)
+                     self.flags, self.observation, self._scratch)
         return self.table
 
     def step(self, stepper: BatchStepper, phi: np.ndarray, phi_dot: np.ndarray,
@@ -554,12 +583,13 @@ class OutcomeKernel:
             return self.run(stepper.run(phi, phi_dot, tau))
         self._renew()
         stepper.run(phi, phi_dot, tau, fused, self.context, self.constants, self.observed,
-                    self.table, self.observation)
+                    self.table, self.flags, self.observation)
         return self.table
 
     def _renew(self) -> None:
         if self.fresh:
             self.table = row_table(*self.table.shape, zeroed=False)
+            self.flags = flag_table(self.flags.shape[1])
             self.observation = np.empty_like(self.observation)
 
 
@@ -584,23 +614,35 @@ def outcome(task: Any, result: Any, target: Any, q: Any, psi_rate: Any, tau: Any
         for row, value in enumerate(numbers):  # broadcast as they are written
             rows[row] = value
     kernel.run(table.reshape(len(STEP_FIELDS), n))
-    rows = info_rows(kernel.table, tuple(INFO_KEYS), views=True)  # the kernel is this call's
+    rows = info_rows(kernel.table, kernel.flags, tuple(INFO_KEYS), views=True)  # this call's
     scalar = shape == ()
     info = {k: v[0] if scalar else v if v.shape == shape else v.reshape(shape)
             for k, v in rows.items()}
-    reward, terminated = kernel.table[_O_REWARD], kernel.table[_O_TERMINATED] != 0.0
+    reward, terminated = kernel.table[_O_REWARD], kernel.flags[_F_TERMINATED]
     if scalar:
-        return Outcome(reward[0], terminated[0], info, kernel.observation[0], kernel.table)
+        return Outcome(reward[0], terminated[0], info, kernel.observation[0], kernel.table,
+                       kernel.flags)
     return Outcome(reward.reshape(shape), terminated.reshape(shape), info,
-                   kernel.observation.reshape(*shape, -1), kernel.table)
+                   kernel.observation.reshape(*shape, -1), kernel.table, kernel.flags)
 
 
-def info_rows(table: np.ndarray, keys: tuple[str, ...],
+def flag_table(n: int) -> np.ndarray:
+    """A boolean table of FLAG_ROWS rows of ``n`` rollers (zeroed), rows a cache line more
+    than ``n`` apart (as :func:`~roller_gym.physics.integrators.row_table`)."""
+    return np.zeros((len(FLAG_ROWS), n + 64), dtype=bool)[:, :n]
+
+
+def info_rows(table: np.ndarray, flags: np.ndarray, keys: tuple[str, ...],
               views: bool = False) -> dict[str, np.ndarray]:
-    """The info arrays of ``keys`` from an outcome ``table``, each of its INFO_KEYS type: new
-    arrays, or with ``views`` the float rows themselves (for a table never written again)."""
-    return {key: table[_O[key]] if views and INFO_KEYS[key][0] is float
-            else table[_O[key]].astype(INFO_KEYS[key][0]) for key in keys}
+    """The info arrays of ``keys`` from an outcome's ``table`` and ``flags``, each of its
+    INFO_KEYS type: new arrays, or with ``views`` the float and boolean rows themselves (for
+    tables never written again)."""
+    info = {}
+    for key in keys:
+        kind = INFO_KEYS[key][0]
+        row = flags[_F[key]] if kind is bool else table[_O[key]]
+        info[key] = row if views and kind is not int else row.astype(kind)
+    return info
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,7 @@ import numpy as np
 from gymnasium import spaces
 from roller_gym import episode, validation
 from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig
-from roller_gym.episode import CONTEXT_FIELDS, OUTCOME_ROWS, OutcomeKernel
+from roller_gym.episode import CONTEXT_FIELDS, FLAG_ROWS, OUTCOME_ROWS, OutcomeKernel
 from roller_gym.physics import Scene
 from roller_gym.physics.integrators import DEFAULT_METHOD, Stepper
 from roller_gym.task import Task, get_task, psi_rate, wrap_rate
@@ -25,8 +25,9 @@ __all__ = ["RollerEnv"]
 
 _CONTEXT = {name: i for i, name in enumerate(CONTEXT_FIELDS)}
 _ROW = {name: i for i, name in enumerate(OUTCOME_ROWS)}
-_PHI, _PHI_DOT, _REWARD, _TERMINATED = (_ROW[k] for k in ("phi", "phi_dot", "reward",
-                                                          "terminated"))
+_FLAG = {name: i for i, name in enumerate(FLAG_ROWS)}
+_PHI, _PHI_DOT, _REWARD = (_ROW[k] for k in ("phi", "phi_dot", "reward"))
+_TERMINATED = _FLAG["terminated"]
 
 
 class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
@@ -84,6 +85,7 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         self.task = self.config.task
         self._info = _ScalarInfo(self.config.info_keys)
         self._outcome = OutcomeKernel(self.task, 1)
+        self._link()
         self.render_mode = render_mode
         self.action_space = spaces.Box(-1.0, 1.0, (1,), np.float32)
         size = self.task.observation_size
@@ -159,20 +161,19 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
             a = float(validation.actions(action, (1,))[0])
         tau = a * self.task.max_torque
         results = self._stepper.run(self.phi, self.phi_dot, tau)
-        self._outcome.context[_CONTEXT["torque"], 0] = tau
+        self._torque_cell[0] = tau
         self._steps += 1
         if self.task.moving_target:
             target, rate = self.task.target_at(self._target_params,
                                                self._steps * self.config.dt)
             self._set_target(float(target), float(rate))
-        outcome = self._outcome
-        outcome.run(results)
-        row = outcome.table[:, 0].tolist()
+        self._outcome.run(results)
+        row, flags = self._column.tolist(), self._flag_column.tolist()
         self.phi, self.phi_dot, self.torque = row[_PHI], row[_PHI_DOT], tau
         if self.render_mode == "human":
             self.render()
-        return (outcome.observation[0].copy(), row[_REWARD], row[_TERMINATED] != 0.0, False,
-                self._info(row))
+        return (self._observation.copy(), row[_REWARD], flags[_TERMINATED], False,
+                self._info(row, flags))
 
     # -- rendering ---------------------------------------------------------------------
     def render(self) -> np.ndarray | None:
@@ -189,10 +190,23 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         return self._renderer.draw(self.scene, self.phi, self.target, self.torque,
                                    self.task.max_torque, self.task.observes_target)
 
+    def _link(self) -> None:
+        """Views of the outcome's buffers that every step reads and writes (made again after
+        unpickling, which would copy them)."""
+        self._torque_cell = self._outcome.context[_CONTEXT["torque"]]
+        self._column, self._flag_column = self._outcome.table[:, 0], self._outcome.flags[:, 0]
+        self._observation = self._outcome.observation[0]
+
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         state["_renderer"] = None  # pygame surfaces do not pickle: draw again afterwards
+        for view in ("_torque_cell", "_column", "_flag_column", "_observation"):
+            del state[view]
         return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._link()
 
     def close(self) -> None:
         if self._renderer is not None:
@@ -201,16 +215,18 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
 
 
 class _ScalarInfo:
-    """One roller's info from its row of the outcome's table (a list of floats), the values
-    as NumPy scalars (``np.float64``, ``np.bool_``, ``np.int64``): every value has a
-    ``dtype``, as array-based clients (TorchRL) expect."""
+    """One roller's info from its column of the outcome's table and flags (lists of floats
+    and bools), the values as NumPy scalars (``np.float64``, ``np.bool_``, ``np.int64``):
+    every value has a ``dtype``, as array-based clients (TorchRL) expect."""
 
     def __init__(self, keys: Sequence[str]) -> None:
         kinds = {float: np.float64, int: np.int64, bool: None}  # None: a NumPy bool, looked up
-        self.plan = tuple((key, kinds[episode.INFO_KEYS[key][0]], _ROW[key]) for key in keys)
+        self.plan = tuple(
+            (key, kinds[kind], _FLAG[key] if kind is bool else _ROW[key])
+            for key in keys for kind in (episode.INFO_KEYS[key][0],))
 
-    def __call__(self, row: list[float]) -> dict[str, Any]:
-        return {key: kind(row[i]) if kind is not None else _TRUTH[row[i] != 0.0]
+    def __call__(self, row: list[float], flags: list[bool]) -> dict[str, Any]:
+        return {key: kind(row[i]) if kind is not None else _TRUTH[flags[i]]
                 for key, kind, i in self.plan}
 
 

@@ -40,6 +40,7 @@ from roller_gym.task import Task, get_task, psi_rate, wrap_rate
 __all__ = ["RollerVectorEnv"]
 
 _ROW = {name: i for i, name in enumerate(episode.OUTCOME_ROWS)}
+_FLAG = {name: i for i, name in enumerate(episode.FLAG_ROWS)}
 _CONTEXT = {name: i for i, name in enumerate(episode.CONTEXT_FIELDS)}
 
 
@@ -47,20 +48,22 @@ _CONTEXT = {name: i for i, name in enumerate(episode.CONTEXT_FIELDS)}
 class _Starts:
     """Episode starts of some sub-environments, ready to apply, a row each: their scene,
     their target's parameters, the step context they start with (a row of CONTEXT_FIELDS),
-    their outcome at the start (a row of OUTCOME_ROWS: the state and the reset info) and
-    their observation. A row is a sub-environment's, so that taking a few of many (an
-    autoreset) reads a few cache lines each."""
+    their outcome at the start (a row of OUTCOME_ROWS and one of FLAG_ROWS: the state and the
+    reset info) and their observation. A row is a sub-environment's, so that taking a few of
+    many (an autoreset) reads a few cache lines each."""
 
     scene: Scene
     target_params: np.ndarray
     context: np.ndarray
     table: np.ndarray
+    flags: np.ndarray
     observation: np.ndarray
 
     def take(self, idx: np.ndarray, size: int) -> _Starts:
         """Those of sub-environments ``idx`` (self holds all ``size`` of them)."""
         return _Starts(episode.take(self.scene, idx, size), self.target_params[idx],
-                       self.context[idx], self.table[idx], self.observation[idx])
+                       self.context[idx], self.table[idx], self.flags[idx],
+                       self.observation[idx])
 
     def put(self, idx: np.ndarray, starts: _Starts, size: int) -> None:
         """Replace those of sub-environments ``idx`` by ``starts`` (self holds all ``size``)."""
@@ -68,13 +71,15 @@ class _Starts:
             self.scene = episode.put(self.scene, idx, starts.scene, size)
         self.target_params[idx] = starts.target_params
         self.context[idx], self.table[idx] = starts.context, starts.table
+        self.flags[idx] = starts.flags
         self.observation[idx] = starts.observation
 
 
 _NONE = np.uint64(2**64 - 1)  # an episode number no start is drawn for
-# The rows of the outcome table that are the info (after reward and terminated).
-_INFO_ROWS = slice(2, None)
-assert episode.OUTCOME_ROWS[_INFO_ROWS] == tuple(episode.INFO_KEYS)
+# The rows of the outcome's table and flags that are the info (after reward, terminated).
+_INFO_ROWS = _INFO_FLAGS = slice(1, None)
+assert set(episode.OUTCOME_ROWS[_INFO_ROWS] + episode.FLAG_ROWS[_INFO_FLAGS]) == set(
+    episode.INFO_KEYS)
 
 
 def _context_row(name: str, doc: str) -> property:
@@ -241,7 +246,8 @@ class RollerVectorEnv(VectorEnv):
             target=c["target_phi"], q=c["wrap_rate"], psi_rate=c["psi_rate"], tau=0.0,
             target_rate=c["target_phi_dot"], target_torque=c["target_torque"])
         return _Starts(start.scene, start.target_params, context,
-                       np.ascontiguousarray(out.table.T), out.observation)
+                       np.ascontiguousarray(out.table.T), np.ascontiguousarray(out.flags.T),
+                       out.observation)
 
     def _apply(self, idx: np.ndarray, starts: _Starts, scene_option: bool) -> None:
         """Start the episodes ``starts`` in sub-environments ``idx`` (``scene_option``: with
@@ -258,12 +264,12 @@ class RollerVectorEnv(VectorEnv):
         self.steps[idx] = 0
         self._obs[idx] = starts.observation
 
-    def _start(self, idx: np.ndarray, options: Mapping[str, Any] | None) -> np.ndarray:
-        """Start new episodes in sub-environments ``idx`` (a reset); returns their outcome
-        at the start (a row of OUTCOME_ROWS each)."""
+    def _start(self, idx: np.ndarray, options: Mapping[str, Any] | None) -> _Starts:
+        """Start new episodes in sub-environments ``idx`` (a reset); returns their starts
+        (their outcome at the start is the reset's info)."""
         starts = self._draw(idx, self._episodes[idx], options)
         self._apply(idx, starts, (options or {}).get("scene") is not None)
-        return starts.table
+        return starts
 
     def reset(
         self,
@@ -299,9 +305,9 @@ class RollerVectorEnv(VectorEnv):
             self._episodes[mask] += np.uint64(1)
         idx = np.flatnonzero(mask)
         self._obs = self._observation()  # the last step returned the one it holds
-        rows = self._start(idx, options)
+        starts = self._start(idx, options)
         self._done[idx] = False
-        return self._observation(), self._masked_info(rows, idx)
+        return self._observation(), self._masked_info(starts, idx)
 
     # -- a step --------------------------------------------------------------------------
     def step(
@@ -319,32 +325,33 @@ class RollerVectorEnv(VectorEnv):
             self.target_torque[:] = episode.target_torque(self._scene, self.target)
         # the physics and the outcome; a new table: its rows are handed out as they are
         table = self._outcome.step(self._stepper, self.phi, self.phi_dot, tau)
-        self._obs = self._outcome.observation  # a new array: returned as it is
+        flags, self._obs = self._outcome.flags, self._outcome.observation  # new: returned
         reward = table[_ROW["reward"]]
-        terminated = table[_ROW["terminated"]] != 0.0
+        terminated = flags[_FLAG["terminated"]]
         truncated = self.steps >= self.max_episode_steps
         final: dict[str, Any] = {}
         if self.autoreset_mode == AutoresetMode.NEXT_STEP:
             # The sub-environments that ended last step start over now.
             restarted = np.flatnonzero(self._done)
             if restarted.size:
-                self._restart(restarted, table)
+                self._restart(restarted, table, flags)
                 reward[restarted] = 0.0
                 terminated[restarted] = truncated[restarted] = False
             self._done = terminated | truncated
         elif self.autoreset_mode == AutoresetMode.SAME_STEP:
             ended = np.flatnonzero(terminated | truncated)
             if ended.size:
-                final = self._final(ended, table)
-                self._restart(ended, table)
+                final = self._final(ended, table, flags)
+                self._restart(ended, table, flags)
         self.phi, self.phi_dot = table[_ROW["phi"]].copy(), table[_ROW["phi_dot"]].copy()
-        info = episode.info_rows(table, self.config.info_keys, views=True)
+        info = episode.info_rows(table, flags, self.config.info_keys, views=True)
         everyone = np.ones(self.num_envs, dtype=bool)
         info.update({f"_{k}": everyone for k in list(info)})
         info.update(final)
         return self._obs, reward, terminated, truncated, info
 
-    def _final(self, ended: np.ndarray, table: np.ndarray) -> dict[str, Any]:
+    def _final(self, ended: np.ndarray, table: np.ndarray,
+               flags: np.ndarray) -> dict[str, Any]:
         """SAME_STEP's report of the episodes ``ended`` before they start over: their last
         observation and info (Gymnasium's layout: an object array, None where none ended;
         each with its ``_`` mask)."""
@@ -354,14 +361,14 @@ class RollerVectorEnv(VectorEnv):
         last = self._observation()
         for i in ended:  # per ended episode
             final_obs[i] = last[i]
-        final_info = episode.info_rows(table, self.config.info_keys)  # copies: rows change
+        final_info = episode.info_rows(table, flags, self.config.info_keys)  # copies
         final_info.update({f"_{k}": ended_mask for k in self.config.info_keys})
         return {"final_obs": final_obs, "_final_obs": ended_mask, "final_info": final_info,
                 "_final_info": ended_mask}
 
-    def _restart(self, idx: np.ndarray, table: np.ndarray) -> None:
+    def _restart(self, idx: np.ndarray, table: np.ndarray, flags: np.ndarray) -> None:
         """Autoreset: new episodes in ``idx``, their reset info written into the info rows of
-        the step's outcome ``table``.
+        the step's outcome ``table`` and ``flags``.
 
         A start is a pure function of the sub-environment's seed and episode number (the
         counter-based streams of :mod:`roller_gym.episode`), so the next start of every
@@ -382,18 +389,21 @@ class RollerVectorEnv(VectorEnv):
         starts = self._ahead.take(idx, n)
         self._apply(idx, starts, False)
         table[_INFO_ROWS, idx] = starts.table[:, _INFO_ROWS].T
+        flags[_INFO_FLAGS, idx] = starts.flags[:, _INFO_FLAGS].T
 
     # -- observation and info ------------------------------------------------------------
     def _observation(self) -> np.ndarray:
         """The observation of every sub-environment's current state (a new array)."""
         return self._obs.copy()
 
-    def _masked_info(self, outcomes: np.ndarray, idx: np.ndarray) -> dict[str, Any]:
-        """A vector info whose rows ``idx`` hold ``outcomes`` (a row of OUTCOME_ROWS each)
-        and whose masks mark only them."""
+    def _masked_info(self, starts: _Starts, idx: np.ndarray) -> dict[str, Any]:
+        """A vector info whose rows ``idx`` hold the outcomes of ``starts`` and whose masks
+        mark only them."""
         full = np.zeros((len(episode.OUTCOME_ROWS), self.num_envs))
-        full[:, idx] = outcomes.T
-        info = episode.info_rows(full, self.config.info_keys, views=True)
+        full[:, idx] = starts.table.T
+        flags = episode.flag_table(self.num_envs)
+        flags[:, idx] = starts.flags.T
+        info = episode.info_rows(full, flags, self.config.info_keys, views=True)
         mask = np.zeros(self.num_envs, dtype=bool)
         mask[idx] = True
         info.update({f"_{key}": mask for key in self.config.info_keys})

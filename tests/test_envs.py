@@ -549,6 +549,29 @@ def test_integrator_argument_and_tolerance(integrator, tolerances):
     assert substeps[1] > substeps[0]
 
 
+@pytest.mark.parametrize("tol", [1e-8, 1e-15])
+def test_info_tol_met_is_the_integrators_flag(tol):
+    """info["tol_met"] of a step, in the single and the vector env, is what the integrator
+    says of the same step taken alone (Stepper): True at a reachable tolerance, False (with
+    a warning) at one below float64's reach."""
+    from roller_gym.physics import Stepper
+
+    scene = preset("paper")
+    env = gym.make("roller_gym/RollerStabilize-v1", tolerance=tol)
+    vec = gym.make_vec("roller_gym/RollerStabilize-v1", num_envs=3, tolerance=tol)
+    env.reset(options={"state": (0.5, 2.0)})
+    vec.reset(options={"state": (0.5, 2.0)})
+    stepper = Stepper(scene, dt=0.05, tol=tol)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        info = env.step(act(0.6))[4]
+        vinfo = vec.step(np.full((3, 1), 0.6, np.float32))[4]
+        expected = stepper.advance(0.5, 2.0, info["torque"])[-1]
+    assert expected == (tol > 1e-12)
+    assert info["tol_met"] == expected and info["tol_met"].dtype == np.bool_
+    np.testing.assert_array_equal(vinfo["tol_met"], [expected] * 3)
+
+
 def _accel(scene, phi, phi_dot, tau):
     return model(scene, phi, phi_dot, tau)["phi_ddot"]
 

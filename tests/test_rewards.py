@@ -176,4 +176,5 @@ def test_the_outcome_of_a_roller_is_the_same_alone_and_in_a_large_batch():
         one.context[:] = big.context[:, i:i + 1]
         one.run(np.ascontiguousarray(result[:, i:i + 1]))
         np.testing.assert_array_equal(one.table[:, 0], big.table[:, i])
+        np.testing.assert_array_equal(one.flags[:, 0], big.flags[:, i])
         np.testing.assert_array_equal(one.observation[0], big.observation[i])

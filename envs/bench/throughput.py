@@ -509,9 +509,9 @@ def render(results: dict[str, Any]) -> str:
         lines += ["", "The info's cost: the same steps with `info_keys=[]` run " + " and ".join(
             f"{v['ours_no_info'] / v['ours'] - 1:+.0%} faster at {int(n):,}"
             for n, v in results["vector"].items())
-            + f". Its {len(INFO_KEYS)} arrays are the rows of the step's own outcome table "
-            "(a new table every step, so that they can be handed out as they are), the "
-            "boolean and integer ones converted."]
+            + f". Its {len(INFO_KEYS)} arrays are the rows of the step's own outcome tables, "
+            "one of floats and one of booleans (new tables every step, so that they can be "
+            "handed out as they are); the integer one is converted."]
     peers = [p for p in PEERS if any(p in v for v in results["vector"].values())]
     if peers:
         lines += ["", "Optional peers, in the same run:", "",
