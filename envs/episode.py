@@ -367,12 +367,15 @@ _B_STEP_ROWS = (_S_PHI, _S_PHI_DOT, _S_FINITE, _S_LIFT, _S_SLIP, _S_ERR)
 _B_CONTEXT_ROWS = (_C_TORQUE, _C_TARGET, _C_TARGET_RATE, _C_TARGET_TORQUE, _C_Q, _C_PSI_RATE)
 _B_OUT = len(_B_STEP_ROWS) + len(_B_CONTEXT_ROWS)  # the first computed row
 assert _B_OUT == _B_RATE + 1
-# the computed rows in scratch order: (scratch row after _B_OUT, the table's or flags' row)
-_B_COMPUTED = ((0, _O_REWARD), (2, _O_PSI), (6, _O_ERR), (7, _O_TARGET_PSI), (8, _O_ERROR))
-_B_COMPUTED_FLAGS = ((1, _F_TERMINATED), (3, _F_LIFTING), (4, _F_SLIPPING), (5, _F_NONFINITE),
-                     (9, _F_SUCCESS))
-_B_N_COMPUTED = len(_B_COMPUTED) + len(_B_COMPUTED_FLAGS)
-_B_OBS = _B_OUT + _B_N_COMPUTED
+# the rows _outcome_block computes, in the order it writes them from _B_OUT on; each goes to
+# the table's row or the flags' row of its name: (its scratch row after _B_OUT, that row)
+_B_COMPUTED_NAMES = ("reward", "terminated", "psi", "lifting", "slipping", "nonfinite",
+                     "error_estimate", "target_psi", "position_error", "is_success")
+_B_COMPUTED = tuple((k, _O[name]) for k, name in enumerate(_B_COMPUTED_NAMES) if name in _O)
+_B_COMPUTED_FLAGS = tuple((k, _F[name]) for k, name in enumerate(_B_COMPUTED_NAMES)
+                          if name in _F)
+assert len(_B_COMPUTED) + len(_B_COMPUTED_FLAGS) == len(_B_COMPUTED_NAMES)
+_B_OBS = _B_OUT + len(_B_COMPUTED_NAMES)
 _B_ROWS = _B_OBS + _N_OBS
 _B_TARGET_OBS = _B_OBS + list(OBSERVATION_FIELDS).index("cos_psi_target")  # 5 fields on
 # the outcome's rows that are the step's or the context's own numbers
