@@ -57,6 +57,7 @@ __all__ = [
     "CONTEXT_FIELDS",
     "FLAG_ROWS",
     "INFO_KEYS",
+    "INFO_ROW",
     "OUTCOME_ROWS",
     "Outcome",
     "OutcomeKernel",
@@ -336,6 +337,8 @@ OUTCOME_ROWS = ("reward", *(key for key, (kind, _) in INFO_KEYS.items() if kind 
 FLAG_ROWS = ("terminated", *(key for key, (kind, _) in INFO_KEYS.items() if kind is bool))
 _O = {name: i for i, name in enumerate(OUTCOME_ROWS)}
 _F = {name: i for i, name in enumerate(FLAG_ROWS)}
+#: Each info key's row: in the outcome's flags for a boolean key, else in its table.
+INFO_ROW = {key: _F[key] if kind is bool else _O[key] for key, (kind, _) in INFO_KEYS.items()}
 (_S_PHI, _S_PHI_DOT, _S_PHI_DDOT, _S_SUBSTEPS, _S_FINITE, _S_NORMAL, _S_FRICTION, _S_ENERGY,
  _S_LIFT, _S_SLIP, _S_ERR, _S_TOL_MET) = range(len(STEP_FIELDS))
 (_C_TORQUE, _C_TARGET, _C_TARGET_RATE, _C_TARGET_TORQUE, _C_Q,
@@ -643,7 +646,7 @@ def info_rows(table: np.ndarray, flags: np.ndarray, keys: tuple[str, ...],
     info = {}
     for key in keys:
         kind = INFO_KEYS[key][0]
-        row = flags[_F[key]] if kind is bool else table[_O[key]]
+        row = (flags if kind is bool else table)[INFO_ROW[key]]
         info[key] = row if views and kind is not int else row.astype(kind)
     return info
 

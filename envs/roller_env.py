@@ -221,9 +221,8 @@ class _ScalarInfo:
 
     def __init__(self, keys: Sequence[str]) -> None:
         kinds = {float: np.float64, int: np.int64, bool: None}  # None: a NumPy bool, looked up
-        self.plan = tuple(
-            (key, kinds[kind], _FLAG[key] if kind is bool else _ROW[key])
-            for key in keys for kind in (episode.INFO_KEYS[key][0],))
+        self.plan = tuple((key, kinds[episode.INFO_KEYS[key][0]], episode.INFO_ROW[key])
+                          for key in keys)
 
     def __call__(self, row: list[float], flags: list[bool]) -> dict[str, Any]:
         return {key: kind(row[i]) if kind is not None else _TRUTH[flags[i]]
