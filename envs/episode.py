@@ -25,7 +25,7 @@ three numbers (as in counter-based generators such as Philox or Squares): each
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, fields
 from typing import Any
 
@@ -41,11 +41,13 @@ from roller_gym.physics.integrators import (
     SCHEMES,
     STEP_FIELDS,
     BatchStepper,
+    Stepper,
     contact_state,
     row_table,
 )
 from roller_gym.task import (
     OBSERVATION_FIELDS,
+    observation_values,
     position_error,
     state_observation,
     step_reward,
@@ -389,41 +391,48 @@ _PASSED_CONTEXT = ((_O_TORQUE, _C_TORQUE), (_O_TARGET_PHI, _C_TARGET),
                    (_O_TARGET_RATE, _C_TARGET_RATE), (_O_TARGET_TORQUE, _C_TARGET_TORQUE))
 
 
-@register_jitable
-def _outcome_block(b, m, constants):
-    """The outcome of the block's m rollers in the scratch ``b`` (rows _B apart): from the
-    input rows into the computed rows and the observation's rows (the formulas are
-    :mod:`roller_gym.task`'s)."""
+@register_jitable(inline="always")
+def _outcome_of(phi, phi_dot, failed, lift, slip, estimate, tau, target, target_rate,
+                target_torque, q, rate, constants):
+    """One roller's computed outcome, the values of _B_COMPUTED_NAMES in order (a flag as
+    1.0 or 0.0), from its step (φ [rad], φ' [rad/s], failed, the margins, the error
+    estimate) and its context (the formulas are :mod:`roller_gym.task`'s)."""
     band, margin, w_p, speed_margin, w_v, w_u = (constants[0], constants[1], constants[2],
                                                  constants[3], constants[4], constants[5])
     success_speed, max_torque, symmetric = constants[6], constants[7], constants[8]
+    error = position_error(phi, target, q, symmetric)
+    speed_error = phi_dot - target_rate
+    reward = step_reward(error, speed_error, (tau - target_torque) / max_torque, band, margin,
+                         w_p, speed_margin, w_v, w_u)
+    lifting, slipping = lift <= 0.0, slip < 0.0
+    return (trig.select(failed, 0.0, reward),  # a failed step earns nothing
+            trig.select(lifting | slipping | failed, 1.0, 0.0),  # terminated
+            rate * phi,  # ψ
+            trig.select(lifting, 1.0, 0.0),
+            trig.select(slipping, 1.0, 0.0),
+            trig.select(failed, 1.0, 0.0),
+            # inf where a finished step has no estimate (NaN from the integrator): info
+            # values then compare equal across identical runs (Gymnasium's checker)
+            trig.select((estimate != estimate) & (not failed), math.inf, estimate),
+            rate * target,  # ψ*
+            error,
+            trig.select(step_success(error, speed_error, band, success_speed), 1.0, 0.0))
+
+
+@register_jitable
+def _outcome_block(b, m, constants):
+    """The outcome of the block's m rollers in the scratch ``b`` (rows _B apart): from the
+    input rows into the computed rows and the observation's rows."""
     with_target = constants[9] != 0.0
     for i in range(m):
-        phi, phi_dot = b[_B_PHI * _B + i], b[_B_PHI_DOT * _B + i]
-        failed = b[_B_FINITE * _B + i] == 0.0
-        lift, slip, estimate = b[_B_LIFT * _B + i], b[_B_SLIP * _B + i], b[_B_ERR_IN * _B + i]
-        tau, target = b[_B_TORQUE * _B + i], b[_B_TARGET * _B + i]
-        target_rate, target_torque = b[_B_TARGET_RATE * _B + i], b[_B_TARGET_TORQUE * _B + i]
-        q, rate = b[_B_Q * _B + i], b[_B_RATE * _B + i]
-        error = position_error(phi, target, q, symmetric)
-        speed_error = phi_dot - target_rate
-        reward = step_reward(error, speed_error, (tau - target_torque) / max_torque, band,
-                             margin, w_p, speed_margin, w_v, w_u)
-        lifting, slipping = lift <= 0.0, slip < 0.0
+        phi, phi_dot, rate = b[_B_PHI * _B + i], b[_B_PHI_DOT * _B + i], b[_B_RATE * _B + i]
         o = _B_OUT * _B + i
-        b[o] = trig.select(failed, 0.0, reward)  # a failed step earns nothing
-        b[o + _B] = trig.select(lifting | slipping | failed, 1.0, 0.0)  # terminated
-        b[o + 2 * _B] = rate * phi  # ψ
-        b[o + 3 * _B] = trig.select(lifting, 1.0, 0.0)
-        b[o + 4 * _B] = trig.select(slipping, 1.0, 0.0)
-        b[o + 5 * _B] = trig.select(failed, 1.0, 0.0)
-        # inf where a finished step has no estimate (NaN from the integrator): info values
-        # then compare equal across identical runs (Gymnasium's checker)
-        b[o + 6 * _B] = trig.select((estimate != estimate) & (not failed), math.inf, estimate)
-        b[o + 7 * _B] = rate * target  # ψ*
-        b[o + 8 * _B] = error
-        b[o + 9 * _B] = trig.select(step_success(error, speed_error, band, success_speed),
-                                    1.0, 0.0)
+        (b[o], b[o + _B], b[o + 2 * _B], b[o + 3 * _B], b[o + 4 * _B], b[o + 5 * _B],
+         b[o + 6 * _B], b[o + 7 * _B], b[o + 8 * _B], b[o + 9 * _B]) = _outcome_of(
+            phi, phi_dot, b[_B_FINITE * _B + i] == 0.0, b[_B_LIFT * _B + i],
+            b[_B_SLIP * _B + i], b[_B_ERR_IN * _B + i], b[_B_TORQUE * _B + i],
+            b[_B_TARGET * _B + i], b[_B_TARGET_RATE * _B + i], b[_B_TARGET_TORQUE * _B + i],
+            b[_B_Q * _B + i], rate, constants)
         v = _B_OBS * _B + i
         (b[v], b[v + _B], b[v + 2 * _B], b[v + 3 * _B],
          b[v + 4 * _B]) = state_observation(phi, phi_dot, rate)
@@ -435,6 +444,30 @@ def _outcome_block(b, m, constants):
             (b[v], b[v + _B], b[v + 2 * _B], b[v + 3 * _B],
              b[v + 4 * _B]) = target_observation(b[_B_TARGET * _B + i], b[_B_RATE * _B + i],
                                                  b[_B_TARGET_RATE * _B + i])
+
+
+@register_jitable
+def _outcome_one(result, context, constants, observed, out, flags, obs):
+    """The outcome of a batch of one roller: :func:`_outcome_range`'s arithmetic without the
+    blocks (the same bits, for a fraction of the cost of copying rows of one)."""
+    phi, phi_dot, rate = result[_S_PHI, 0], result[_S_PHI_DOT, 0], context[_C_PSI_RATE, 0]
+    target, target_rate = context[_C_TARGET, 0], context[_C_TARGET_RATE, 0]
+    computed = _outcome_of(
+        phi, phi_dot, result[_S_FINITE, 0] == 0.0, result[_S_LIFT, 0], result[_S_SLIP, 0],
+        result[_S_ERR, 0], context[_C_TORQUE, 0], target, target_rate,
+        context[_C_TARGET_TORQUE, 0], context[_C_Q, 0], rate, constants)
+    for pair in _B_COMPUTED:
+        out[pair[1], 0] = computed[pair[0]]
+    for pair in _B_COMPUTED_FLAGS:
+        flags[pair[1], 0] = computed[pair[0]] != 0.0
+    for pair in _PASSED:
+        out[pair[0], 0] = result[pair[1], 0]
+    flags[_F_TOL_MET, 0] = result[_S_TOL_MET, 0] != 0.0
+    for pair in _PASSED_CONTEXT:
+        out[pair[0], 0] = context[pair[1], 0]
+    seen = observation_values(phi, phi_dot, target, rate, target_rate)
+    for j in range(observed.size):
+        obs[0, j] = seen[observed[j]]
 
 
 @register_jitable(inline="always")
@@ -482,9 +515,13 @@ def _outcome_range(lo, hi, result, context, constants, observed, out, flags, obs
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _outcome_loop(result, context, constants, observed, out, flags, obs, scratch):
-    """Every roller's outcome (:func:`_outcome_range`), on one core, in ``scratch``."""
-    _outcome_range(0, result.shape[1], result, context, constants, observed, out, flags, obs,
-                   scratch)
+    """Every roller's outcome (:func:`_outcome_range`), on one core, in ``scratch``; a batch
+    of one by :func:`_outcome_one`."""
+    if result.shape[1] == 1:
+        _outcome_one(result, context, constants, observed, out, flags, obs)
+    else:
+        _outcome_range(0, result.shape[1], result, context, constants, observed, out, flags,
+                       obs, scratch)
 
 
 @numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")
@@ -512,24 +549,54 @@ def _advance_and_outcome(io, tab, cfg, result, chunk, context, constants, observ
                        np.empty(_B_ROWS * _B))
 
 
-# One fused kernel per chunk function, each a function of its own so that numba caches it.
-_TAYLOR_CHUNK, _RK_CHUNK = SCHEMES["taylor"].chunk, SCHEMES["rk8"].chunk
+@register_jitable(inline="always")
+def _then_outcome(io, tab, cfg, result, kernel, context, constants, observed, out, flags, obs,
+                  scratch):
+    """A scheme's serial ``kernel`` (the physics on one core) and then the outcome
+    (:func:`_outcome_loop`'s), in one call: for a batch below PARALLEL_THRESHOLD and the
+    single environment's roller, whose step is then one compiled call instead of two."""
+    kernel(io, tab, cfg)
+    _outcome_loop(result, context, constants, observed, out, flags, obs, scratch)
+
+
+# One fused kernel per scheme's kernel, each a function of its own so that numba caches it.
+_TAYLOR, _RK = SCHEMES["taylor"], SCHEMES["rk8"]
+_TAYLOR_CHUNK, _RK_CHUNK = _TAYLOR.chunk, _RK.chunk
+_TAYLOR_SERIAL, _RK_SERIAL = _TAYLOR.kernels()[0], _RK.kernels()[0]
 
 
 @numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")
-def _taylor_and_outcome(io, tab, cfg, result, context, constants, observed, out, flags, obs):
+def _taylor_and_outcome(io, tab, cfg, result, context, constants, observed, out, flags, obs,
+                        scratch):
     _advance_and_outcome(io, tab, cfg, result, _TAYLOR_CHUNK, context, constants, observed,
                          out, flags, obs)
 
 
 @numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")
-def _rk_and_outcome(io, tab, cfg, result, context, constants, observed, out, flags, obs):
+def _rk_and_outcome(io, tab, cfg, result, context, constants, observed, out, flags, obs,
+                    scratch):
     _advance_and_outcome(io, tab, cfg, result, _RK_CHUNK, context, constants, observed, out,
                          flags, obs)
 
 
-#: The fused kernels by the chunk function they advance with (schemes without one: two calls).
-_FUSED = {_TAYLOR_CHUNK: _taylor_and_outcome, _RK_CHUNK: _rk_and_outcome}
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _taylor_then_outcome(io, tab, cfg, result, context, constants, observed, out, flags, obs,
+                         scratch):
+    _then_outcome(io, tab, cfg, result, _TAYLOR_SERIAL, context, constants, observed, out,
+                  flags, obs, scratch)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _rk_then_outcome(io, tab, cfg, result, context, constants, observed, out, flags, obs,
+                     scratch):
+    _then_outcome(io, tab, cfg, result, _RK_SERIAL, context, constants, observed, out, flags,
+                  obs, scratch)
+
+
+#: The fused kernels by the stepper's kernel they run in place of (others: two calls). The
+#: parallel ones leave ``scratch`` unused (a chunk's is its own), as _outcome_parallel does.
+_FUSED = {_TAYLOR.kernels()[1]: _taylor_and_outcome, _RK.kernels()[1]: _rk_and_outcome,
+          _TAYLOR_SERIAL: _taylor_then_outcome, _RK_SERIAL: _rk_then_outcome}
 
 
 @dataclass
@@ -578,19 +645,32 @@ class OutcomeKernel:
                      self.flags, self.observation, self._scratch)
         return self.table
 
-    def step(self, stepper: BatchStepper, phi: np.ndarray, phi_dot: np.ndarray,
-             tau: np.ndarray) -> np.ndarray:
-        """A control step of the rollers (``stepper``'s, from φ [rad] and φ' [rad/s] under τ
-        [N·m]) and its outcome, as :meth:`run` on ``stepper.run``'s result; in one pass over
-        chunks of rollers where the stepper runs on all cores and its scheme has a fused
-        kernel. Returns :attr:`table`."""
-        fused = _FUSED.get(stepper.scheme.chunk) if stepper.parallel else None
+    def step(self, stepper: Stepper | BatchStepper, phi: Any, phi_dot: Any,
+             tau: Any) -> np.ndarray:
+        """A control step of the rollers (``stepper``'s, a Stepper or a BatchStepper, from φ
+        [rad] and φ' [rad/s] under τ [N·m]) and its outcome, as :meth:`run` on
+        ``stepper.run``'s result; in one compiled call where the stepper's kernel has a fused
+        kernel (on all cores: one pass over chunks of rollers). Returns :attr:`table`."""
+        fused = _FUSED.get(stepper.kernel)
         if fused is None:
             return self.run(stepper.run(phi, phi_dot, tau))
         self._renew()
         stepper.run(phi, phi_dot, tau, fused, self.context, self.constants, self.observed,
-                    self.table, self.flags, self.observation)
+                    self.table, self.flags, self.observation, self._scratch)
         return self.table
+
+    def bind(self, stepper: Stepper) -> Callable[[float, float, float], Any]:
+        """:meth:`step` for one Stepper, with the kernels and buffers looked up once: a
+        function ``step(φ [rad], φ' [rad/s], τ [N·m])`` (see :meth:`Stepper.bind`), for the
+        single environment. Not for ``fresh`` buffers, which every step renews."""
+        if self.fresh:
+            raise ValueError("a fresh OutcomeKernel renews its buffers every step: use step()")
+        fused = _FUSED.get(stepper.kernel)
+        if fused is None:
+            advance = stepper.bind()
+            return lambda phi, phi_dot, tau: self.run(advance(phi, phi_dot, tau))
+        return stepper.bind(fused, self.context, self.constants, self.observed, self.table,
+                            self.flags, self.observation, self._scratch)
 
     def _renew(self) -> None:
         if self.fresh:

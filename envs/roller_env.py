@@ -85,7 +85,6 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         self.task = self.config.task
         self._info = _ScalarInfo(self.config.info_keys)
         self._outcome = OutcomeKernel(self.task, 1)
-        self._link()
         self.render_mode = render_mode
         self.action_space = spaces.Box(-1.0, 1.0, (1,), np.float32)
         size = self.task.observation_size
@@ -93,6 +92,7 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         cfg = self.config
         self._stepper = Stepper(cfg.scene, method=cfg.integrator, dt=cfg.dt,
                                 tol=cfg.tolerance, substeps=cfg.substeps or None)
+        self._link()
         self._set_scene(cfg.scene)
         self._set_target(self.task.default_target(self.scene), 0.0)
         self._steps = 0  # of this episode: its time is _steps · dt, as in the vector env
@@ -160,14 +160,13 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         else:
             a = float(validation.actions(action, (1,))[0])
         tau = a * self.task.max_torque
-        results = self._stepper.run(self.phi, self.phi_dot, tau)
         self._torque_cell[0] = tau
         self._steps += 1
-        if self.task.moving_target:
+        if self.task.moving_target:  # the target at the step's end
             target, rate = self.task.target_at(self._target_params,
                                                self._steps * self.config.dt)
             self._set_target(float(target), float(rate))
-        self._outcome.run(results)
+        self._advance(self.phi, self.phi_dot, tau)  # its outcome into the views of _link
         row, flags = self._column.tolist(), self._flag_column.tolist()
         self.phi, self.phi_dot, self.torque = row[_PHI], row[_PHI_DOT], tau
         if self.render_mode == "human":
@@ -191,16 +190,17 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
                                    self.task.max_torque, self.task.observes_target)
 
     def _link(self) -> None:
-        """Views of the outcome's buffers that every step reads and writes (made again after
-        unpickling, which would copy them)."""
+        """Views of the outcome's buffers that every step reads and writes, and the step bound
+        to them (made again after unpickling, which copies the buffers)."""
         self._torque_cell = self._outcome.context[_CONTEXT["torque"]]
         self._column, self._flag_column = self._outcome.table[:, 0], self._outcome.flags[:, 0]
         self._observation = self._outcome.observation[0]
+        self._advance = self._outcome.bind(self._stepper)
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         state["_renderer"] = None  # pygame surfaces do not pickle: draw again afterwards
-        for view in ("_torque_cell", "_column", "_flag_column", "_observation"):
+        for view in ("_torque_cell", "_column", "_flag_column", "_observation", "_advance"):
             del state[view]
         return state
 

@@ -562,12 +562,16 @@ def test_info_tol_met_is_the_integrators_flag(tol):
     env.reset(options={"state": (0.5, 2.0)})
     vec.reset(options={"state": (0.5, 2.0)})
     stepper = Stepper(scene, dt=0.05, tol=tol)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", RuntimeWarning)
+        info = env.step(act(0.6))[4]
+    warned = any("out of reach of float64" in str(w.message) for w in caught)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        info = env.step(act(0.6))[4]
         vinfo = vec.step(np.full((3, 1), 0.6, np.float32))[4]
         expected = stepper.advance(0.5, 2.0, info["torque"])[-1]
     assert expected == (tol > 1e-12)
+    assert warned == (not expected)
     assert info["tol_met"] == expected and info["tol_met"].dtype == np.bool_
     np.testing.assert_array_equal(vinfo["tol_met"], [expected] * 3)
 

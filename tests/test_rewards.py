@@ -155,14 +155,18 @@ def test_a_task_may_not_override_what_the_kernel_computes():
     assert "RollerGreedyTest" not in TASKS
 
 
-def test_the_outcome_of_a_roller_is_the_same_alone_and_in_a_large_batch():
-    """A batch large enough to run on all cores (``PARALLEL_THRESHOLD`` rollers) gives each
-    roller bit for bit the outcome (every info row and the observation) it gets alone."""
+@pytest.mark.parametrize("size", ["serial", "parallel"])
+@pytest.mark.parametrize("task_id", IDS)
+def test_the_outcome_of_a_roller_is_the_same_alone_and_in_a_batch(task_id, size):
+    """A roller alone (the single environment's path, without the batch's blocks) gets bit
+    for bit the outcome (every info row, flag and the observation) it gets in a batch on one
+    core and in one large enough to run on all cores (``PARALLEL_THRESHOLD`` rollers), for
+    steps that failed, lifted, slipped or have no error estimate too."""
     from roller_gym import episode
-    from roller_gym.hold import HoldTask
     from roller_gym.physics.integrators import PARALLEL_THRESHOLD, STEP_FIELDS
 
-    n, task = PARALLEL_THRESHOLD + 5, HoldTask()
+    task = gym.spec(task_id).make().unwrapped.task
+    n = 300 if size == "serial" else PARALLEL_THRESHOLD + 5
     rng = np.random.default_rng(3)
     result = rng.normal(size=(len(STEP_FIELDS), n))
     finite = STEP_FIELDS.index("finite")
@@ -178,3 +182,42 @@ def test_the_outcome_of_a_roller_is_the_same_alone_and_in_a_large_batch():
         np.testing.assert_array_equal(one.table[:, 0], big.table[:, i])
         np.testing.assert_array_equal(one.flags[:, 0], big.flags[:, i])
         np.testing.assert_array_equal(one.observation[0], big.observation[i])
+
+
+@pytest.mark.parametrize("method", ["taylor", "rk8", "rk4", "euler"])
+def test_a_step_and_its_outcome_in_one_call_are_the_two_calls(method):
+    """Where a scheme has a fused kernel (the physics, then the outcome, in one compiled
+    call), a step gives bit for bit what the stepper's own kernel and then the outcome's
+    give: for one roller (also through the single environment's bound step) and for a batch
+    on one core."""
+    from roller_gym import episode
+    from roller_gym.hold import HoldTask
+    from roller_gym.physics import integrators as integ
+
+    task, scene, rng = HoldTask(), roller_gym.preset("paper"), np.random.default_rng(4)
+    for n in (1, 300):
+        phi, phi_dot, tau = rng.uniform(-1, 1, (3, n))
+        runs = []
+        for way in ("fused", "two calls", "bound"):
+            kernel = episode.OutcomeKernel(task, n)
+            if n == 1:
+                stepper = integ.Stepper(scene, method=method, dt=0.05, tol=1e-8)
+            else:
+                stepper = integ.BatchStepper(n, method=method, dt=0.05, tol=1e-8)
+                stepper.set_scenes(scene)
+            kernel.context[:] = np.linspace(0.1, 0.6, 6)[:, None]
+            args = (phi[0], phi_dot[0], tau[0]) if n == 1 else (phi, phi_dot, tau)
+            if way == "fused":
+                kernel.step(stepper, *args)
+            elif way == "two calls":
+                kernel.run(stepper.run(*args))
+            elif n == 1:
+                kernel.bind(stepper)(*args)
+            else:
+                continue
+            runs.append((kernel.table.copy(), kernel.flags.copy(), kernel.observation.copy()))
+        fused = episode._FUSED.get(stepper.kernel)
+        assert (fused is not None) == (method in ("taylor", "rk8", "rk4"))
+        for other in runs[1:]:
+            for a, b in zip(runs[0], other, strict=True):
+                np.testing.assert_array_equal(a, b)

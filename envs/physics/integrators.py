@@ -1190,6 +1190,14 @@ class _Base:
     def _link(self) -> None:
         """Views and kernel choices that refer to the buffers (again after unpickling)."""
         self._results = self._io[_OUT:]  # the STEP_FIELDS rows
+        self._kernel = self._serial
+
+    @property
+    def kernel(self) -> Callable:
+        """The compiled kernel ``kernel(io, tableau, cfg)`` a step runs: the scheme's serial
+        kernel, or its parallel one for a batch of at least PARALLEL_THRESHOLD rollers (a
+        caller fusing more work into the step looks its fused kernel up by it: :meth:`run`)."""
+        return self._kernel
 
     def _warn(self, stacklevel: int) -> None:
         if self.substeps is not None:  # fixed substeps: tol_met informs, no warning
@@ -1237,16 +1245,44 @@ class Stepper(_Base):
         that an episode's steps do not depend on the episodes before it."""
         self._flat[_H_NEXT] = 0.0
 
-    def run(self, phi: float, phi_dot: float, tau: float) -> np.ndarray:
+    def run(self, phi: float, phi_dot: float, tau: float, fused: Callable | None = None,
+            *extra: Any) -> np.ndarray:
         """One control step from (φ [rad], φ' [rad/s]) at torque τ [N·m]; returns the
         result as a table (:data:`STEP_FIELDS` rows × 1 roller, float64), a view of the
-        stepper's buffer, valid until the next call (what the environment reads)."""
-        return self._run(phi, phi_dot, tau, 4)
+        stepper's buffer, valid until the next call (what the environment reads).
 
-    def _run(self, phi: float, phi_dot: float, tau: float, stacklevel: int) -> np.ndarray:
+        ``fused``: a compiled kernel run in place of :attr:`kernel`, as for
+        :meth:`BatchStepper.run`.
+        """
+        return self._run(phi, phi_dot, tau, 4, fused, extra)
+
+    def bind(self, fused: Callable | None = None,
+             *extra: Any) -> Callable[[float, float, float], np.ndarray]:
+        """:meth:`run` with its kernel and buffers looked up once: a function
+        ``step(φ [rad], φ' [rad/s], τ [N·m])`` that returns what :meth:`run` does, for a caller
+        that steps its roller many times (an environment: a step then costs one compiled call
+        and little else). ``fused`` and ``extra`` as for :meth:`run`, bound as well."""
+        flat, results = self._flat, self._results
+        kernel = self._kernel if fused is None else fused
+        args = (self._io, self._tab, self._cfg, *(() if fused is None else (results, *extra)))
+
+        def step(phi: float, phi_dot: float, tau: float) -> np.ndarray:
+            flat[_PHI_IN], flat[_W_IN], flat[_TAU] = phi, phi_dot, tau
+            kernel(*args)
+            if flat[_TOL_MET] == 0.0 and flat[_FINITE] != 0.0:
+                self._warn(3)  # pointing at the caller of step()
+            return results
+
+        return step
+
+    def _run(self, phi: float, phi_dot: float, tau: float, stacklevel: int,
+             fused: Callable | None = None, extra: tuple = ()) -> np.ndarray:
         flat = self._flat
         flat[_PHI_IN], flat[_W_IN], flat[_TAU] = phi, phi_dot, tau
-        self._serial(self._io, self._tab, self._cfg)
+        if fused is None:
+            self._kernel(self._io, self._tab, self._cfg)
+        else:
+            fused(self._io, self._tab, self._cfg, self._results, *extra)
         if flat[_TOL_MET] == 0.0 and flat[_FINITE] != 0.0:
             self._warn(stacklevel)  # pointing at the caller of run() or advance()
         return self._results
@@ -1329,10 +1365,10 @@ class BatchStepper(_Base):
         valid until the next call.
 
         ``fused``: a compiled kernel ``fused(io, tableau, cfg, result, *extra)`` to run in
-        place of the stepper's own, for a caller that does more work on each chunk of rollers
-        right after advancing it (while its numbers are in cache): it must advance chunk by
-        chunk with this scheme's :attr:`Scheme.chunk`, on all cores (``parallel``); ``result``
-        is the returned table.
+        place of :attr:`kernel`, for a caller that does more work on the rollers right after
+        advancing them (while their numbers are in cache): it must advance them as
+        :attr:`kernel` does (the same chunks, on the same cores); ``result`` is the returned
+        table.
         """
         return self._run(phi, phi_dot, tau, 4, fused, extra)
 
@@ -1345,9 +1381,6 @@ class BatchStepper(_Base):
         if fused is None:
             self._kernel(io, self._tab, self._cfg)
         else:
-            if not self.parallel or self.scheme.chunk is None:
-                raise ValueError(f"a fused kernel needs a batch of at least {PARALLEL_THRESHOLD}"
-                                 f" rollers and a chunked scheme (not {self.method!r})")
             fused(io, self._tab, self._cfg, self._results, *extra)
         if not ((io[_TOL_MET] != 0.0) | (io[_FINITE] == 0.0)).all():
             self._warn(stacklevel)  # pointing at the caller of run() or advance()
