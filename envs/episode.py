@@ -641,8 +641,7 @@ class OutcomeKernel:
         """The outcome of the rollers' ``result`` (STEP_FIELDS rows × rollers, float64) under
         the context in :attr:`context`; returns :attr:`table`."""
         self._renew()
-        self._kernel(result, self.context, self.constants, self.observed, self.table,
-                     self.flags, self.observation, self._scratch)
+        self._kernel(result, *self._buffers())
         return self.table
 
     def step(self, stepper: Stepper | BatchStepper, phi: Any, phi_dot: Any,
@@ -655,8 +654,7 @@ class OutcomeKernel:
         if fused is None:
             return self.run(stepper.run(phi, phi_dot, tau))
         self._renew()
-        stepper.run(phi, phi_dot, tau, fused, self.context, self.constants, self.observed,
-                    self.table, self.flags, self.observation, self._scratch)
+        stepper.run(phi, phi_dot, tau, fused, *self._buffers())
         return self.table
 
     def bind(self, stepper: Stepper) -> Callable[[float, float, float], Any]:
@@ -669,8 +667,13 @@ class OutcomeKernel:
         if fused is None:
             advance = stepper.bind()
             return lambda phi, phi_dot, tau: self.run(advance(phi, phi_dot, tau))
-        return stepper.bind(fused, self.context, self.constants, self.observed, self.table,
-                            self.flags, self.observation, self._scratch)
+        return stepper.bind(fused, *self._buffers())
+
+    def _buffers(self) -> tuple[np.ndarray, ...]:
+        """What the kernels take after the step's result: the context, the task's numbers, the
+        outcome's buffers and the scratch."""
+        return (self.context, self.constants, self.observed, self.table, self.flags,
+                self.observation, self._scratch)
 
     def _renew(self) -> None:
         if self.fresh:

@@ -4,10 +4,10 @@
 ``vector_entry_point``). A step costs a fixed number of Python operations whatever N is:
 the actions are checked as one array; the batch stepper advances every roller, and reward,
 termination, info and observation follow (:class:`roller_gym.episode.OutcomeKernel`, the
-one the single environment runs on its one roller): two compiled calls, or on all cores
-one pass over chunks of rollers, each chunk's physics and then its outcome. The episode
-starts of autoreset are drawn ahead, many at once, by the episode core
-(:mod:`roller_gym.episode`), and copied out when needed. Sub-environment i, seeded
+one the single environment runs on its one roller): one compiled call for taylor, rk8 and
+rk4 (on all cores a pass over chunks of rollers, each chunk's physics and then its outcome),
+two for the others. The episode starts of autoreset are drawn ahead, many at once, by the
+episode core (:mod:`roller_gym.episode`), and copied out when needed. Sub-environment i, seeded
 ``seed + i``, reproduces the single environment seeded ``seed + i`` exactly.
 
 Autoreset (``autoreset_mode=``, Gymnasium's three modes):

@@ -1210,6 +1210,11 @@ class _Base:
                 "tol avoids this", RuntimeWarning, stacklevel=stacklevel)
 
 
+def _missed(flat: np.ndarray) -> bool:
+    """Whether a Stepper's finished step (its ``io`` as one row) missed the tolerance."""
+    return flat[_TOL_MET] == 0.0 and flat[_FINITE] != 0.0
+
+
 class Stepper(_Base):
     """Advances one roller by one control step per call, at the lowest latency.
 
@@ -1269,7 +1274,7 @@ class Stepper(_Base):
         def step(phi: float, phi_dot: float, tau: float) -> np.ndarray:
             flat[_PHI_IN], flat[_W_IN], flat[_TAU] = phi, phi_dot, tau
             kernel(*args)
-            if flat[_TOL_MET] == 0.0 and flat[_FINITE] != 0.0:
+            if _missed(flat):
                 self._warn(3)  # pointing at the caller of step()
             return results
 
@@ -1283,7 +1288,7 @@ class Stepper(_Base):
             self._kernel(self._io, self._tab, self._cfg)
         else:
             fused(self._io, self._tab, self._cfg, self._results, *extra)
-        if flat[_TOL_MET] == 0.0 and flat[_FINITE] != 0.0:
+        if _missed(flat):
             self._warn(stacklevel)  # pointing at the caller of run() or advance()
         return self._results
 
