@@ -53,6 +53,18 @@ def test_render_has_every_section_and_no_gap():
     assert "{" not in page and "None" not in page
 
 
+def test_a_miss_just_below_its_target_does_not_read_as_the_target():
+    """A ratio that rounds to its target at three digits is shown with the digits that tell
+    it from the target, in the page's table: a miss never reads as the target itself."""
+    near = copy.deepcopy(RESULTS)
+    near["vector"]["65536"]["ours"] = 0.24996 * 10e6
+    row = next(line for line in throughput.render(near).splitlines()
+               if "CartPoleVectorEnv at 65,536" in line)
+    assert row.split("|")[2].strip() == "0.24996" and "**no**" in row
+    assert throughput._shown(0.294, 0.25) == "0.294"
+    assert throughput._shown(0.25, 0.25) == "0.25"
+
+
 def test_envpool_and_the_arithmetic_are_reported_where_measured():
     res = copy.deepcopy(RESULTS)
     res["vector"]["4096"].update({"EnvPool Pendulum-v1": 2e6, "rhs_ns": 10.0, "substeps": 1.0,

@@ -460,6 +460,23 @@ VERDICTS = (verdict_vector, verdict_envpool, verdict_outside_kernel, verdict_sta
             verdict_error)
 
 
+
+def _shown(value: float, target: float) -> str:
+    """``value`` to 3 significant digits, or to as many more as it takes not to read as the
+    target itself (0.24996 against 0.25)."""
+    for digits in range(3, 8):
+        text = f"{value:.{digits}g}"
+        if float(text) != target or value == target:
+            return text
+    return text
+
+
+def _faster(ratio: float) -> str:
+    """A speed ratio in words: "4% faster", "2% slower" or "as fast" (within 0.5%)."""
+    if abs(ratio - 1) < 0.005:
+        return "as fast"
+    return f"{abs(ratio - 1):.0%} {'faster' if ratio > 1 else 'slower'}"
+
 def render(results: dict[str, Any]) -> str:
     """The Markdown page of a results file (no measuring)."""
     m = results["machine"]
@@ -475,8 +492,8 @@ def render(results: dict[str, Any]) -> str:
         "## Targets", "", "| target | measured | met |", "|---|---:|:---:|",
     ]
     for verdict in VERDICTS:
-        for what, value, _target, met in verdict(results):
-            lines.append(f"| {what} | {value:.3g} | {'yes' if met else '**no**'} |")
+        for what, value, target, met in verdict(results):
+            lines.append(f"| {what} | {_shown(value, target)} | {'yes' if met else '**no**'} |")
     lines += ["", "## The vector environment", "",
               "| sub-environments | ours, steps/s | CartPoleVectorEnv, steps/s | ratio | "
               "physics kernel alone, steps/s | share of a step outside the physics kernel | "
@@ -507,7 +524,7 @@ def render(results: dict[str, Any]) -> str:
               "and NumPy), timed inside its own steps."]
     if all("ours_no_info" in v for v in results["vector"].values()):
         lines += ["", "The info's cost: the same steps with `info_keys=[]` run " + " and ".join(
-            f"{v['ours_no_info'] / v['ours'] - 1:+.0%} faster at {int(n):,}"
+            f"{_faster(v['ours_no_info'] / v['ours'])} at {int(n):,}"
             for n, v in results["vector"].items())
             + f". Its {len(INFO_KEYS)} arrays are the rows of the step's own outcome tables, "
             "one of floats and one of booleans (new tables every step, so that they can be "
@@ -581,8 +598,8 @@ def main(argv: Sequence[str] | None = None) -> None:
     page.write_text(render(results))
     print(f"wrote {page}")
     for verdict in VERDICTS:
-        for what, value, _target, met in verdict(results):
-            print(f"{'met ' if met else 'MISS'} {what}: {value:.3g}")
+        for what, value, target, met in verdict(results):
+            print(f"{'met ' if met else 'MISS'} {what}: {_shown(value, target)}")
 
 
 if __name__ == "__main__":
