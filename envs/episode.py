@@ -25,13 +25,16 @@ three numbers (as in counter-based generators such as Philox or Squares): each
 from __future__ import annotations
 
 import math
+import platform
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, fields
 from typing import Any
 
 import numba
 import numpy as np
-from numba.extending import register_jitable
+from llvmlite import ir as llvm_ir
+from numba.core import cgutils
+from numba.extending import intrinsic, register_jitable
 from roller_gym import validation
 from roller_gym.physics import Scene, trig
 from roller_gym.physics import equations as eq
@@ -488,10 +491,57 @@ def _copy_flag(dst, dst_start, src, src_start, m):
         dst[d + i] = src[s + i] != 0.0
 
 
+@intrinsic
+def _store_streaming(typingctx, row, index, value):
+    """row[index] = value (a 1-d array, an unsigned index) as a non-temporal store: a hint to
+    the CPU that the line need not be read first nor kept in cache (the outcome's new tables,
+    written whole and read, if at all, after the step)."""
+    def codegen(context, builder, signature, args):
+        rowty, _, valty = signature.args
+        array = context.make_array(rowty)(context, builder, args[0])
+        ptr = cgutils.get_item_pointer(context, builder, rowty, array, [args[1]],
+                                       wraparound=False)
+        store = builder.store(context.cast(builder, args[2], valty, rowty.dtype), ptr)
+        store.set_metadata("nontemporal", builder.module.add_metadata(
+            [llvm_ir.Constant(llvm_ir.IntType(32), 1)]))
+        return context.get_dummy_value()
+
+    return numba.types.void(row, index, value), codegen
+
+
+@intrinsic
+def _fence(typingctx):
+    """A store fence: the streaming stores before it are seen by every core after it (they
+    are weakly ordered otherwise), whatever the threading layer's own ordering. On x86 an
+    ``sfence`` (a seq_cst fence compiles to a locked instruction there, which need not wait
+    for them); elsewhere a full fence."""
+    def codegen(context, builder, signature, args):
+        if platform.machine().lower() in ("x86_64", "amd64"):  # numba compiles for its host
+            builder.call(cgutils.get_or_insert_function(
+                builder.module, llvm_ir.FunctionType(llvm_ir.VoidType(), []),
+                "llvm.x86.sse.sfence"), [])
+        else:
+            builder.fence("seq_cst")
+        return context.get_dummy_value()
+
+    return numba.types.void(), codegen
+
+
+@register_jitable(inline="always")
+def _stream(dst, dst_start, src, src_start, m):
+    """:func:`_copy` into a new table's row, by non-temporal stores (followed, once the
+    rows are written, by :func:`_fence`)."""
+    d, s = np.uint64(dst_start), np.uint64(src_start)
+    for i in range(np.uint64(m)):
+        _store_streaming(dst, d + i, src[s + i])
+
+
 @register_jitable
 def _outcome_range(lo, hi, result, context, constants, observed, out, flags, obs, b):
     """The outcome of rollers lo..hi−1 (see :class:`OutcomeKernel`), block by block in the
-    scratch ``b`` (_B_ROWS · _B elements)."""
+    scratch ``b`` (_B_ROWS · _B elements). The float rows go out by streaming stores: the
+    tables are new (or written whole) every step, and a store that need not first read its
+    cache line from memory costs about a third less here (the pass is bound by memory)."""
     for start in range(lo, hi, _BLOCK):
         m = min(_BLOCK, hi - start)
         for k in range(len(_B_STEP_ROWS)):
@@ -500,17 +550,18 @@ def _outcome_range(lo, hi, result, context, constants, observed, out, flags, obs
             _copy(b, (len(_B_STEP_ROWS) + k) * _B, context[_B_CONTEXT_ROWS[k]], start, m)
         _outcome_block(b, m, constants)
         for pair in _B_COMPUTED:
-            _copy(out[pair[1]], start, b, (_B_OUT + pair[0]) * _B, m)
+            _stream(out[pair[1]], start, b, (_B_OUT + pair[0]) * _B, m)
         for pair in _B_COMPUTED_FLAGS:
             _copy_flag(flags[pair[1]], start, b, (_B_OUT + pair[0]) * _B, m)
         for pair in _PASSED:
-            _copy(out[pair[0]], start, result[pair[1]], start, m)
+            _stream(out[pair[0]], start, result[pair[1]], start, m)
         _copy_flag(flags[_F_TOL_MET], start, result[_S_TOL_MET], start, m)
         for pair in _PASSED_CONTEXT:
-            _copy(out[pair[0]], start, context[pair[1]], start, m)
+            _stream(out[pair[0]], start, context[pair[1]], start, m)
         for i in range(m):
             for j in range(observed.size):
                 obs[start + i, j] = b[(_B_OBS + observed[j]) * _B + i]
+    _fence()
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")

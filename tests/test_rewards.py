@@ -221,3 +221,28 @@ def test_a_step_and_its_outcome_in_one_call_are_the_two_calls(method):
         for other in runs[1:]:
             for a, b in zip(runs[0], other, strict=True):
                 np.testing.assert_array_equal(a, b)
+
+
+def test_streaming_stores_write_the_values_and_are_fenced():
+    """The outcome writes its new tables by non-temporal stores (``_stream``), then fences
+    them: compiled afresh here, a stream of rows writes exactly the values NumPy copies,
+    into rows at any offset, and its code carries the non-temporal hint and the fence."""
+    import numba
+    from roller_gym import episode
+
+    @numba.njit(nogil=True)
+    def stream(dst, src, start, m):
+        for r in range(src.shape[0]):
+            episode._stream(dst[r], start, src[r], start, m)
+        episode._fence()
+
+    rng = np.random.default_rng(5)
+    src = rng.normal(size=(3, 300))
+    src[0, 7], src[1, 8], src[2, 9] = np.nan, np.inf, -0.0
+    dst = np.zeros((3, 310))[:, 3:303]  # rows not aligned to a cache line
+    stream(dst, src, 5, 290)
+    np.testing.assert_array_equal(dst[:, 5:295], src[:, 5:295])
+    assert np.signbit(dst[2, 9]) and not dst[:, :5].any() and not dst[:, 295:].any()
+    llvm = next(iter(stream.inspect_llvm().values()))
+    assert "!nontemporal" in llvm
+    assert "llvm.x86.sse.sfence" in llvm or "fence seq_cst" in llvm
