@@ -541,7 +541,7 @@ def _outcome_range(lo, hi, result, context, constants, observed, out, flags, obs
     """The outcome of rollers lo..hi−1 (see :class:`OutcomeKernel`), block by block in the
     scratch ``b`` (_B_ROWS · _B elements). The float rows go out by streaming stores: the
     tables are new (or written whole) every step, and a store that need not first read its
-    cache line from memory costs about a third less here (the pass is bound by memory)."""
+    cache line from memory costs less where the pass is bound by memory (large batches)."""
     for start in range(lo, hi, _BLOCK):
         m = min(_BLOCK, hi - start)
         for k in range(len(_B_STEP_ROWS)):

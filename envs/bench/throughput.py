@@ -460,7 +460,6 @@ VERDICTS = (verdict_vector, verdict_envpool, verdict_outside_kernel, verdict_sta
             verdict_error)
 
 
-
 def _shown(value: float, target: float) -> str:
     """``value`` to 3 significant digits, or to as many more as it takes not to read as the
     target itself (0.24996 against 0.25)."""
@@ -476,6 +475,7 @@ def _faster(ratio: float) -> str:
     if abs(ratio - 1) < 0.005:
         return "as fast"
     return f"{abs(ratio - 1):.0%} {'faster' if ratio > 1 else 'slower'}"
+
 
 def render(results: dict[str, Any]) -> str:
     """The Markdown page of a results file (no measuring)."""
