@@ -41,11 +41,14 @@ from roller_gym.physics import equations as eq
 from roller_gym.physics.integrators import (
     CHUNK,
     PARALLEL_THRESHOLD,
+    ROWS,
     SCHEMES,
     STEP_FIELDS,
     BatchStepper,
     Stepper,
     contact_state,
+    missed,
+    put_inputs,
     row_table,
 )
 from roller_gym.task import (
@@ -302,7 +305,9 @@ def _draw_states(task: Any, scene: Scene, target: np.ndarray, seed: np.ndarray,
 
 
 # -- the step's outcome ----------------------------------------------------------------
-#: The info keys of every step and reset, with their types and units.
+#: The info keys of every step and reset, with their types and units; grouped by type (the
+#: floats, the integer, the flags), so that each type's keys are consecutive rows of the
+#: outcome's table or flags, which the single environment reads in one pass.
 INFO_KEYS: dict[str, tuple[type, str]] = {
     "phi": (float, "φ [rad]"),
     "phi_dot": (float, "φ' [rad/s]"),
@@ -311,20 +316,20 @@ INFO_KEYS: dict[str, tuple[type, str]] = {
     "normal_force": (float, "N [N] at the end of the step (NaN where the step failed)"),
     "friction_force": (float, "F [N] at the end of the step (NaN where the step failed)"),
     "energy": (float, "E [J] at the end of the step (NaN where the step failed)"),
-    "substeps": (int, "integrator substeps taken (0 at reset)"),
-    "lifting": (bool, "the roller left the surface (N <= 0) during the step"),
-    "slipping": (bool, "the friction needed exceeded μN during the step"),
-    "nonfinite": (bool, "the step could not stay finite: the state is the one before it"),
     "liftoff_margin": (float, "smallest N/(m g) during the step [-] (NaN: failed step)"),
     "slip_margin": (float, "smallest (μN − |F|)/(m g) during the step [-] (NaN: failed)"),
     "error_estimate": (float, "the integrator's estimate of the step's state error (inf: not "
                               "estimated, fixed-substep schemes and DOP853; 0 at reset)"),
-    "tol_met": (bool, "the step met the integrator's tolerance (False: out of float64's reach)"),
     "target_phi": (float, "the target φ* [rad]"),
     "target_psi": (float, "the target ψ* [rad]"),
     "target_phi_dot": (float, "how fast the target moves, φ*' [rad/s] (0: a rest position)"),
     "target_torque": (float, "τ* [N·m], the torque that holds the roller at rest at φ*"),
     "position_error": (float, "the task's position error [rad of φ]"),
+    "substeps": (int, "integrator substeps taken (0 at reset)"),
+    "lifting": (bool, "the roller left the surface (N <= 0) during the step"),
+    "slipping": (bool, "the friction needed exceeded μN during the step"),
+    "nonfinite": (bool, "the step could not stay finite: the state is the one before it"),
+    "tol_met": (bool, "the step met the integrator's tolerance (False: out of float64's reach)"),
     "is_success": (bool, "inside the task's success band at rest"),
 }
 
@@ -352,11 +357,13 @@ assert STEP_FIELDS[_S_TOL_MET] == "tol_met" and CONTEXT_FIELDS[_C_PSI_RATE] == "
 # Row numbers as compile-time constants of the kernel.
 (_O_REWARD, _O_PHI, _O_PHI_DOT, _O_PSI, _O_TORQUE, _O_NORMAL, _O_FRICTION, _O_ENERGY,
  _O_SUBSTEPS, _O_LIFT, _O_SLIP, _O_ERR, _O_TARGET_PHI, _O_TARGET_PSI, _O_TARGET_RATE,
- _O_TARGET_TORQUE, _O_ERROR) = range(len(OUTCOME_ROWS))
-(_F_TERMINATED, _F_LIFTING, _F_SLIPPING, _F_NONFINITE, _F_TOL_MET,
- _F_SUCCESS) = range(len(FLAG_ROWS))
-assert OUTCOME_ROWS[_O_ERROR] == "position_error" and OUTCOME_ROWS[_O_TARGET_PSI] == "target_psi"
-assert FLAG_ROWS[_F_SUCCESS] == "is_success" and FLAG_ROWS[_F_TOL_MET] == "tol_met"
+ _O_TARGET_TORQUE, _O_ERROR) = (_O[name] for name in (
+    "reward", "phi", "phi_dot", "psi", "torque", "normal_force", "friction_force", "energy",
+    "substeps", "liftoff_margin", "slip_margin", "error_estimate", "target_phi", "target_psi",
+    "target_phi_dot", "target_torque", "position_error"))
+(_F_TERMINATED, _F_LIFTING, _F_SLIPPING, _F_NONFINITE, _F_TOL_MET, _F_SUCCESS) = (
+    _F[name] for name in ("terminated", "lifting", "slipping", "nonfinite", "tol_met",
+                          "is_success"))
 
 
 # The kernel works on blocks of rollers in a scratch vector of rows a compile-time number of
@@ -650,6 +657,43 @@ _FUSED = {_TAYLOR.kernels()[1]: _taylor_and_outcome, _RK.kernels()[1]: _rk_and_o
           _TAYLOR_SERIAL: _taylor_then_outcome, _RK_SERIAL: _rk_then_outcome}
 
 
+_STEP_ROWS = ROWS.index(STEP_FIELDS[0])  # a stepper's io: its result is the last rows
+
+
+@register_jitable(inline="always")
+def _one_roller(phi, phi_dot, tau, io, tab, cfg, kernel, context, constants, observed, out,
+                flags, obs, scratch):
+    """The single environment's step: its roller's inputs and torque written, the physics
+    and the outcome (:func:`_then_outcome`), and what the environment reads back, as
+    :meth:`~roller_gym.physics.integrators.Stepper.bind` takes it: (missed, φ [rad],
+    φ' [rad/s], reward, terminated)."""
+    flat = io[:, 0]
+    put_inputs(flat, phi, phi_dot, tau)
+    context[_C_TORQUE, 0] = tau
+    _then_outcome(io, tab, cfg, io[_STEP_ROWS:], kernel, context, constants, observed, out,
+                  flags, obs, scratch)
+    return (missed(flat), out[_O_PHI, 0], out[_O_PHI_DOT, 0], out[_O_REWARD, 0],
+            flags[_F_TERMINATED, 0])
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _taylor_one(phi, phi_dot, tau, io, tab, cfg, context, constants, observed, out, flags, obs,
+                scratch):
+    return _one_roller(phi, phi_dot, tau, io, tab, cfg, _TAYLOR_SERIAL, context, constants,
+                       observed, out, flags, obs, scratch)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _rk_one(phi, phi_dot, tau, io, tab, cfg, context, constants, observed, out, flags, obs,
+            scratch):
+    return _one_roller(phi, phi_dot, tau, io, tab, cfg, _RK_SERIAL, context, constants,
+                       observed, out, flags, obs, scratch)
+
+
+#: The single environment's compiled steps (:func:`_one_roller`) by the stepper's kernel.
+_ONE = {_TAYLOR_SERIAL: _taylor_one, _RK_SERIAL: _rk_one}
+
+
 @dataclass
 class Outcome:
     """Reward, flags, info and observation of a step (arrays of rollers, or scalars where
@@ -708,17 +752,28 @@ class OutcomeKernel:
         stepper.run(phi, phi_dot, tau, fused, *self._buffers())
         return self.table
 
-    def bind(self, stepper: Stepper) -> Callable[[float, float, float], Any]:
+    def bind(self, stepper: Stepper) -> Callable[[float, float, float], tuple]:
         """:meth:`step` for one Stepper, with the kernels and buffers looked up once: a
-        function ``step(φ [rad], φ' [rad/s], τ [N·m])`` (see :meth:`Stepper.bind`), for the
-        single environment. Not for ``fresh`` buffers, which every step renews."""
+        function ``step(φ [rad], φ' [rad/s], τ [N·m])`` for the single environment, which
+        also writes τ into :attr:`context` and returns what the environment reads back:
+        (φ [rad], φ' [rad/s], reward, terminated) as Python float and bool. One compiled call
+        where the stepper's kernel has one (:data:`_ONE`). Not for ``fresh`` buffers, which
+        every step renews."""
         if self.fresh:
             raise ValueError("a fresh OutcomeKernel renews its buffers every step: use step()")
-        fused = _FUSED.get(stepper.kernel)
-        if fused is None:
-            advance = stepper.bind()
-            return lambda phi, phi_dot, tau: self.run(advance(phi, phi_dot, tau))
-        return stepper.bind(fused, *self._buffers())
+        one = _ONE.get(stepper.kernel)
+        if one is not None:
+            return stepper.bind(one, *self._buffers())
+        advance, torque = stepper.bind(), self.context[_C_TORQUE]
+        table, flags = self.table[:, 0], self.flags[:, 0]
+
+        def step(phi: float, phi_dot: float, tau: float) -> tuple:
+            torque[0] = tau
+            self.run(advance(phi, phi_dot, tau))
+            row = table.tolist()
+            return row[_O_PHI], row[_O_PHI_DOT], row[_O_REWARD], bool(flags[_F_TERMINATED])
+
+        return step
 
     def _buffers(self) -> tuple[np.ndarray, ...]:
         """What the kernels take after the step's result: the context, the task's numbers, the

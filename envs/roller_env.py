@@ -8,7 +8,8 @@ reset, step, info and rendering.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from itertools import compress
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -16,7 +17,7 @@ import numpy as np
 from gymnasium import spaces
 from roller_gym import episode, validation
 from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig
-from roller_gym.episode import CONTEXT_FIELDS, FLAG_ROWS, OUTCOME_ROWS, OutcomeKernel
+from roller_gym.episode import CONTEXT_FIELDS, INFO_KEYS, INFO_ROW, OutcomeKernel
 from roller_gym.physics import Scene
 from roller_gym.physics.integrators import DEFAULT_METHOD, Stepper
 from roller_gym.task import Task, get_task, psi_rate, wrap_rate
@@ -24,10 +25,6 @@ from roller_gym.task import Task, get_task, psi_rate, wrap_rate
 __all__ = ["RollerEnv"]
 
 _CONTEXT = {name: i for i, name in enumerate(CONTEXT_FIELDS)}
-_ROW = {name: i for i, name in enumerate(OUTCOME_ROWS)}
-_FLAG = {name: i for i, name in enumerate(FLAG_ROWS)}
-_PHI, _PHI_DOT, _REWARD = (_ROW[k] for k in ("phi", "phi_dot", "reward"))
-_TERMINATED = _FLAG["terminated"]
 
 
 class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
@@ -83,7 +80,6 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
             info_keys=info_keys,
         )
         self.task = self.config.task
-        self._info = _ScalarInfo(self.config.info_keys)
         self._outcome = OutcomeKernel(self.task, 1)
         self.render_mode = render_mode
         self.action_space = spaces.Box(-1.0, 1.0, (1,), np.float32)
@@ -160,19 +156,16 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         else:
             a = float(validation.actions(action, (1,))[0])
         tau = a * self.task.max_torque
-        self._torque_cell[0] = tau
         self._steps += 1
         if self.task.moving_target:  # the target at the step's end
             target, rate = self.task.target_at(self._target_params,
                                                self._steps * self.config.dt)
             self._set_target(float(target), float(rate))
-        self._advance(self.phi, self.phi_dot, tau)  # its outcome into the views of _link
-        row, flags = self._column.tolist(), self._flag_column.tolist()
-        self.phi, self.phi_dot, self.torque = row[_PHI], row[_PHI_DOT], tau
+        self.phi, self.phi_dot, reward, terminated = self._advance(self.phi, self.phi_dot, tau)
+        self.torque = tau
         if self.render_mode == "human":
             self.render()
-        return (self._observation.copy(), row[_REWARD], flags[_TERMINATED], False,
-                self._info(row, flags))
+        return self._observation.copy(), reward, terminated, False, self._info()
 
     # -- rendering ---------------------------------------------------------------------
     def render(self) -> np.ndarray | None:
@@ -192,15 +185,16 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
     def _link(self) -> None:
         """Views of the outcome's buffers that every step reads and writes, and the step bound
         to them (made again after unpickling, which copies the buffers)."""
-        self._torque_cell = self._outcome.context[_CONTEXT["torque"]]
-        self._column, self._flag_column = self._outcome.table[:, 0], self._outcome.flags[:, 0]
-        self._observation = self._outcome.observation[0]
-        self._advance = self._outcome.bind(self._stepper)
+        outcome = self._outcome
+        self._observation = outcome.observation[0]
+        self._info = _scalar_info(self.config.info_keys, outcome.table[:, 0],
+                                  outcome.flags[:, 0])
+        self._advance = outcome.bind(self._stepper)  # a step: its outcome into these views
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         state["_renderer"] = None  # pygame surfaces do not pickle: draw again afterwards
-        for view in ("_torque_cell", "_column", "_flag_column", "_observation", "_advance"):
+        for view in ("_observation", "_info", "_advance"):
             del state[view]
         return state
 
@@ -214,19 +208,43 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
             self._renderer = None
 
 
-class _ScalarInfo:
-    """One roller's info from its column of the outcome's table and flags (lists of floats
-    and bools), the values as NumPy scalars (``np.float64``, ``np.bool_``, ``np.int64``):
-    every value has a ``dtype``, as array-based clients (TorchRL) expect."""
+def _scalar_info(keys: tuple[str, ...], table: np.ndarray,
+                 flags: np.ndarray) -> Callable[[], dict[str, Any]]:
+    """A function of no arguments that returns one roller's info of ``keys`` as it stands in
+    its column of the outcome's ``table`` and ``flags`` (views), the values as NumPy scalars
+    (``np.float64``, ``np.int64``, ``np.bool_``): every value has a ``dtype``, as
+    array-based clients (TorchRL) expect. INFO_KEYS is grouped by type, so that the float
+    keys and the flags are consecutive rows, each read in one pass."""
+    floats, (count,), truths = ([key for key in INFO_KEYS if INFO_KEYS[key][0] is kind]
+                                for kind in (float, int, bool))
+    float_rows, truth_rows = (column[INFO_ROW[group[0]]:INFO_ROW[group[-1]] + 1]
+                              for group, column in ((floats, table), (truths, flags)))
+    for group in (floats, truths):
+        first = INFO_ROW[group[0]]
+        assert [INFO_ROW[key] for key in group] == list(range(first, first + len(group)))
+    count_row = table[INFO_ROW[count]:INFO_ROW[count] + 1]
+    if keys == tuple(INFO_KEYS):  # the default
 
-    def __init__(self, keys: Sequence[str]) -> None:
-        kinds = {float: np.float64, int: np.int64, bool: None}  # None: a NumPy bool, looked up
-        self.plan = tuple((key, kinds[episode.INFO_KEYS[key][0]], episode.INFO_ROW[key])
-                          for key in keys)
+        def every() -> dict[str, Any]:
+            info = dict(zip(floats, float_rows))
+            info[count] = np.int64(count_row.item())
+            info.update(zip(truths, truth_rows))
+            return info
 
-    def __call__(self, row: list[float], flags: list[bool]) -> dict[str, Any]:
-        return {key: kind(row[i]) if kind is not None else _TRUTH[flags[i]]
-                for key, kind, i in self.plan}
+        return every
+    chosen_floats, chosen_truths = (tuple(key in keys for key in group)
+                                    for group in (floats, truths))
+    float_keys, truth_keys = ([key for key in group if key in keys]
+                              for group in (floats, truths))
+
+    def some() -> dict[str, Any]:
+        info = dict(zip(float_keys, compress(float_rows, chosen_floats))) if float_keys else {}
+        if count in keys:
+            info[count] = np.int64(count_row.item())
+        if truth_keys:
+            info.update(zip(truth_keys, compress(truth_rows, chosen_truths)))
+        return info
+
+    return some
 
 
-_TRUTH = (np.False_, np.True_)

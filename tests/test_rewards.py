@@ -188,8 +188,9 @@ def test_the_outcome_of_a_roller_is_the_same_alone_and_in_a_batch(task_id, size)
 def test_a_step_and_its_outcome_in_one_call_are_the_two_calls(method):
     """Where a scheme has a fused kernel (the physics, then the outcome, in one compiled
     call), a step gives bit for bit what the stepper's own kernel and then the outcome's
-    give: for one roller (also through the single environment's bound step) and for a batch
-    on one core."""
+    give: for one roller (also through the single environment's bound step, which writes τ
+    into the context itself and returns φ, φ', reward and terminated as Python numbers) and
+    for a batch on one core."""
     from roller_gym import episode
     from roller_gym.hold import HoldTask
     from roller_gym.physics import integrators as integ
@@ -206,13 +207,20 @@ def test_a_step_and_its_outcome_in_one_call_are_the_two_calls(method):
                 stepper = integ.BatchStepper(n, method=method, dt=0.05, tol=1e-8)
                 stepper.set_scenes(scene)
             kernel.context[:] = np.linspace(0.1, 0.6, 6)[:, None]
+            kernel.context[episode.CONTEXT_FIELDS.index("torque")] = tau  # as the bound writes
             args = (phi[0], phi_dot[0], tau[0]) if n == 1 else (phi, phi_dot, tau)
             if way == "fused":
                 kernel.step(stepper, *args)
             elif way == "two calls":
                 kernel.run(stepper.run(*args))
             elif n == 1:
-                kernel.bind(stepper)(*args)
+                kernel.context[:] = np.linspace(0.1, 0.6, 6)[:, None]  # τ not yet in it
+                read = kernel.bind(stepper)(*args)  # writes τ into the context itself
+                rows = {name: kernel.table[episode.OUTCOME_ROWS.index(name), 0]
+                        for name in ("phi", "phi_dot", "reward")}
+                terminated = kernel.flags[episode.FLAG_ROWS.index("terminated"), 0]
+                assert read == (rows["phi"], rows["phi_dot"], rows["reward"], terminated)
+                assert [type(x) for x in read] == [float, float, float, bool]
             else:
                 continue
             runs.append((kernel.table.copy(), kernel.flags.copy(), kernel.observation.copy()))

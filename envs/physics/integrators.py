@@ -135,7 +135,9 @@ __all__ = [
     "StepResult",
     "Stepper",
     "contact_state",
+    "missed",
     "predicted_substeps",
+    "put_inputs",
     "row_table",
     "scene_arrays",
     "step",
@@ -1210,9 +1212,19 @@ class _Base:
                 "tol avoids this", RuntimeWarning, stacklevel=stacklevel)
 
 
-def _missed(flat: np.ndarray) -> bool:
-    """Whether a Stepper's finished step (its ``io`` as one row) missed the tolerance."""
+@numba.extending.register_jitable
+def missed(flat: np.ndarray) -> bool:
+    """Whether a Stepper's finished step missed the tolerance, from its ``io`` as one row (a
+    view of its one column): a finite step whose tolerance was out of reach. In Python and in
+    compiled code (a step that does more than the physics: :meth:`Stepper.bind`)."""
     return flat[_TOL_MET] == 0.0 and flat[_FINITE] != 0.0
+
+
+@numba.extending.register_jitable
+def put_inputs(flat: np.ndarray, phi: float, phi_dot: float, tau: float) -> None:
+    """Write a Stepper's inputs (φ [rad], φ' [rad/s], τ [N·m]) into its ``io`` as one row, in
+    Python and in compiled code."""
+    flat[_PHI_IN], flat[_W_IN], flat[_TAU] = phi, phi_dot, tau
 
 
 class Stepper(_Base):
@@ -1261,34 +1273,45 @@ class Stepper(_Base):
         """
         return self._run(phi, phi_dot, tau, 4, fused, extra)
 
-    def bind(self, fused: Callable | None = None,
-             *extra: Any) -> Callable[[float, float, float], np.ndarray]:
+    def bind(self, one: Callable | None = None, *extra: Any) -> Callable[[float, float, float],
+                                                                         Any]:
         """:meth:`run` with its kernel and buffers looked up once: a function
         ``step(φ [rad], φ' [rad/s], τ [N·m])`` that returns what :meth:`run` does, for a caller
-        that steps its roller many times (an environment: a step then costs one compiled call
-        and little else). ``fused`` and ``extra`` as for :meth:`run`, bound as well."""
-        flat, results = self._flat, self._results
-        kernel = self._kernel if fused is None else fused
-        args = (self._io, self._tab, self._cfg, *(() if fused is None else (results, *extra)))
+        that steps its roller many times.
+
+        ``one``: a compiled step of this roller that does more than the physics (the single
+        environment's: the step, its outcome and what the environment reads back, in one
+        call), run as ``one(φ, φ', τ, io, tableau, cfg, *extra)`` on this stepper's buffers.
+        It writes the inputs (:func:`put_inputs`), runs :attr:`kernel` and returns a tuple
+        whose first element is :func:`missed`; ``step`` then returns the rest of the tuple.
+        """
+        flat, results, kernel = self._flat, self._results, self._kernel
+        args = (self._io, self._tab, self._cfg)
 
         def step(phi: float, phi_dot: float, tau: float) -> np.ndarray:
-            flat[_PHI_IN], flat[_W_IN], flat[_TAU] = phi, phi_dot, tau
+            put_inputs(flat, phi, phi_dot, tau)
             kernel(*args)
-            if _missed(flat):
+            if missed(flat):
                 self._warn(3)  # pointing at the caller of step()
             return results
 
-        return step
+        def step_one(phi: float, phi_dot: float, tau: float) -> tuple:
+            out = one(phi, phi_dot, tau, *args, *extra)
+            if out[0]:
+                self._warn(3)
+            return out[1:]
+
+        return step if one is None else step_one
 
     def _run(self, phi: float, phi_dot: float, tau: float, stacklevel: int,
              fused: Callable | None = None, extra: tuple = ()) -> np.ndarray:
         flat = self._flat
-        flat[_PHI_IN], flat[_W_IN], flat[_TAU] = phi, phi_dot, tau
+        put_inputs(flat, phi, phi_dot, tau)
         if fused is None:
             self._kernel(self._io, self._tab, self._cfg)
         else:
             fused(self._io, self._tab, self._cfg, self._results, *extra)
-        if _missed(flat):
+        if missed(flat):
             self._warn(stacklevel)  # pointing at the caller of run() or advance()
         return self._results
 
