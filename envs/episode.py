@@ -51,6 +51,7 @@ from roller_gym.physics.integrators import (
     put_inputs,
     row_table,
 )
+from roller_gym.physics.packed import unpack
 from roller_gym.task import (
     OBSERVATION_FIELDS,
     observation_values,
@@ -658,15 +659,21 @@ _FUSED = {_TAYLOR.kernels()[1]: _taylor_and_outcome, _RK.kernels()[1]: _rk_and_o
 
 
 _STEP_ROWS = ROWS.index(STEP_FIELDS[0])  # a stepper's io: its result is the last rows
+_F64 = numba.float64
 
 
 @register_jitable(inline="always")
-def _one_roller(phi, phi_dot, tau, io, tab, cfg, kernel, context, constants, observed, out,
-                flags, obs, scratch):
+def _one_roller(phi, phi_dot, tau, packed, kernel):
     """The single environment's step: its roller's inputs and torque written, the physics
     and the outcome (:func:`_then_outcome`), and what the environment reads back, as
     :meth:`~roller_gym.physics.integrators.Stepper.bind` takes it: (missed, φ [rad],
-    φ' [rad/s], reward, terminated)."""
+    φ' [rad/s], reward, terminated). ``packed``: the stepper's buffers, then
+    :meth:`OutcomeKernel._buffers`."""
+    io, tab, cfg = unpack(packed, 0, _F64), unpack(packed, 1, _F64), unpack(packed, 2, _F64)[0]
+    context, constants = unpack(packed, 3, _F64), unpack(packed, 4, _F64)[0]
+    observed, out = unpack(packed, 5, numba.int64)[0], unpack(packed, 6, _F64)
+    flags, obs = unpack(packed, 7, numba.boolean), unpack(packed, 8, numba.float32)
+    scratch = unpack(packed, 9, _F64)[0]
     flat = io[:, 0]
     put_inputs(flat, phi, phi_dot, tau)
     context[_C_TORQUE, 0] = tau
@@ -677,17 +684,13 @@ def _one_roller(phi, phi_dot, tau, io, tab, cfg, kernel, context, constants, obs
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _taylor_one(phi, phi_dot, tau, io, tab, cfg, context, constants, observed, out, flags, obs,
-                scratch):
-    return _one_roller(phi, phi_dot, tau, io, tab, cfg, _TAYLOR_SERIAL, context, constants,
-                       observed, out, flags, obs, scratch)
+def _taylor_one(phi, phi_dot, tau, packed):
+    return _one_roller(phi, phi_dot, tau, packed, _TAYLOR_SERIAL)
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _rk_one(phi, phi_dot, tau, io, tab, cfg, context, constants, observed, out, flags, obs,
-            scratch):
-    return _one_roller(phi, phi_dot, tau, io, tab, cfg, _RK_SERIAL, context, constants,
-                       observed, out, flags, obs, scratch)
+def _rk_one(phi, phi_dot, tau, packed):
+    return _one_roller(phi, phi_dot, tau, packed, _RK_SERIAL)
 
 
 #: The single environment's compiled steps (:func:`_one_roller`) by the stepper's kernel.

@@ -116,6 +116,7 @@ import numpy as np
 from roller_gym.physics import _taylor_series as series
 from roller_gym.physics import equations as eq
 from roller_gym.physics import trig
+from roller_gym.physics.packed import pack
 from roller_gym.physics.scene import Scene
 from scipy.integrate import solve_ivp
 from scipy.integrate._ivp import dop853_coefficients
@@ -1281,9 +1282,11 @@ class Stepper(_Base):
 
         ``one``: a compiled step of this roller that does more than the physics (the single
         environment's: the step, its outcome and what the environment reads back, in one
-        call), run as ``one(φ, φ', τ, io, tableau, cfg, *extra)`` on this stepper's buffers.
-        It writes the inputs (:func:`put_inputs`), runs :attr:`kernel` and returns a tuple
-        whose first element is :func:`missed`; ``step`` then returns the rest of the tuple.
+        call), run as ``one(φ, φ', τ, packed)``, where ``packed`` is the
+        :func:`~roller_gym.physics.packed.pack` table of (io, tableau, cfg, *extra): this
+        stepper's buffers, then the caller's. It writes the inputs (:func:`put_inputs`), runs
+        :attr:`kernel` and returns a tuple whose first element is :func:`missed`; ``step``
+        then returns the rest of the tuple.
         """
         flat, results, kernel = self._flat, self._results, self._kernel
         args = (self._io, self._tab, self._cfg)
@@ -1295,13 +1298,18 @@ class Stepper(_Base):
                 self._warn(3)  # pointing at the caller of step()
             return results
 
+        if one is None:
+            return step
+        packed = pack(*args, *extra)
+
         def step_one(phi: float, phi_dot: float, tau: float) -> tuple:
-            out = one(phi, phi_dot, tau, *args, *extra)
+            out = one(phi, phi_dot, tau, packed)
             if out[0]:
                 self._warn(3)
             return out[1:]
 
-        return step if one is None else step_one
+        step_one.arrays = (*args, *extra)  # alive as long as the step that has their table
+        return step_one
 
     def _run(self, phi: float, phi_dot: float, tau: float, stacklevel: int,
              fused: Callable | None = None, extra: tuple = ()) -> np.ndarray:

@@ -1,0 +1,54 @@
+"""Many arrays handed to a compiled function as one argument.
+
+Calling a numba function from Python costs about 45 ns for each array argument, which it
+checks and wraps; a step of the single environment passes ten, more than its physics costs.
+:func:`pack` writes the arrays' addresses and shapes into one int64 table, and
+:func:`unpack` makes each array again inside the compiled function, at no cost.
+
+The table is valid only while its arrays live: whoever packs them keeps a reference to them
+next to the table (as :meth:`~roller_gym.physics.integrators.Stepper.bind` does).
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+from numba import types
+from numba.extending import intrinsic, register_jitable
+
+__all__ = ["pack", "unpack"]
+
+_ADDRESS, _ROWS, _COLUMNS, _STRIDE = range(4)  # the columns of a table: one row per array
+
+
+def pack(*arrays: np.ndarray) -> np.ndarray:
+    """The table of ``arrays`` (each 1-D or 2-D, its last axis contiguous): per array its
+    address, rows (1 for a 1-D array), columns and the distance of its rows in elements."""
+    table = np.zeros((len(arrays), 4), dtype=np.int64)
+    for row, a in zip(table, arrays, strict=True):
+        if a.ndim not in (1, 2) or a.strides[-1] != a.itemsize or a.strides[0] % a.itemsize:
+            raise ValueError(f"arrays of shape {a.shape} and strides {a.strides} do not pack: "
+                             "1-D or 2-D arrays whose last axis is contiguous only")
+        rows, columns = (1, a.shape[0]) if a.ndim == 1 else a.shape
+        stride = columns if a.ndim == 1 else a.strides[0] // a.itemsize
+        row[:] = a.ctypes.data, rows, columns, stride
+    return table
+
+
+@intrinsic
+def _pointer(typingctx, address, dtype):
+    """An int64 address as a pointer to ``dtype`` (a numba type, e.g. ``numba.float64``)."""
+    signature = types.CPointer(dtype.dtype)(address, dtype)
+
+    def codegen(context, builder, sig, args):
+        return builder.inttoptr(args[0], context.get_value_type(sig.return_type))
+
+    return signature, codegen
+
+
+@register_jitable(inline="always")
+def unpack(table, k, dtype):
+    """Array ``k`` of a :func:`pack` table, of ``dtype`` (a numba type), as a 2-D view of its
+    memory (a 1-D array as its one row: ``unpack(table, k, dtype)[0]``)."""
+    rows = numba.carray(_pointer(table[k, _ADDRESS], dtype), (table[k, _ROWS], table[k, _STRIDE]))
+    return rows[:, :table[k, _COLUMNS]]

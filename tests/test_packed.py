@@ -1,0 +1,60 @@
+"""Arrays handed to a compiled function as one table (roller_gym.physics.packed)."""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+import pytest
+from roller_gym.physics.packed import pack, unpack
+
+
+@numba.njit
+def _double_in_place(table):
+    """Each packed array doubled through its unpacked view, returned as read there."""
+    a = unpack(table, 0, numba.float64)  # 2-D, rows apart by more than their length
+    b = unpack(table, 1, numba.float32)  # 2-D, contiguous
+    c = unpack(table, 2, numba.int64)[0]  # 1-D
+    d = unpack(table, 3, numba.boolean)  # 2-D, one column of a wider table
+    for i in range(a.shape[0]):
+        for j in range(a.shape[1]):
+            a[i, j] *= 2.0
+    for i in range(b.shape[0]):
+        for j in range(b.shape[1]):
+            b[i, j] *= 2.0
+    for i in range(c.shape[0]):
+        c[i] *= 2
+    for i in range(d.shape[0]):
+        d[i, 0] = not d[i, 0]
+    return a.shape, b.shape, c.shape, d.shape, a[1, 2], c[-1]
+
+
+def test_unpacked_arrays_are_the_packed_ones_in_place():
+    """A compiled function sees each packed array with its shape, dtype and values, and
+    writes through to it, and to nothing around it (padding and other columns stay)."""
+    rng = np.random.default_rng(0)
+    wide = rng.normal(size=(3, 9))
+    a = wide[:, :4]  # rows 9 elements apart
+    b = rng.normal(size=(2, 5)).astype(np.float32)
+    c = np.arange(1, 8, dtype=np.int64)
+    flags = rng.random((4, 6)) < 0.5
+    d = flags[:, 2:3]
+    before = [x.copy() for x in (wide, b, c, flags)]
+    shapes_and_values = _double_in_place(pack(a, b, c, d))
+    assert shapes_and_values == ((3, 4), (2, 5), (7,), (4, 1), 2 * before[0][1, 2],
+                                 2 * before[2][-1])
+    expected_wide = before[0].copy()
+    expected_wide[:, :4] *= 2
+    np.testing.assert_array_equal(wide, expected_wide)  # the pad columns untouched
+    np.testing.assert_array_equal(b, 2 * before[1])
+    np.testing.assert_array_equal(c, 2 * before[2])
+    expected_flags = before[3].copy()
+    expected_flags[:, 2] = ~expected_flags[:, 2]
+    np.testing.assert_array_equal(flags, expected_flags)  # only column 2 flipped
+
+
+@pytest.mark.parametrize("array", [np.zeros((4, 6))[:, ::2], np.zeros((2, 2, 2)),
+                                   np.zeros(8)[::2], np.zeros(())], ids=str)
+def test_arrays_that_do_not_pack_are_refused(array):
+    """Only 1-D and 2-D arrays whose last axis is contiguous have a table row."""
+    with pytest.raises(ValueError, match="do not pack"):
+        pack(np.zeros(3), array)
