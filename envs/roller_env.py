@@ -19,7 +19,7 @@ from roller_gym import episode, validation
 from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig
 from roller_gym.episode import CONTEXT_FIELDS, INFO_KEYS, INFO_ROW, OutcomeKernel
 from roller_gym.physics import Scene
-from roller_gym.physics.integrators import DEFAULT_METHOD, Stepper
+from roller_gym.physics.integrators import DEFAULT_METHOD, STEP_FIELDS, Stepper
 from roller_gym.task import Task, get_task, psi_rate, wrap_rate
 
 __all__ = ["RollerEnv"]
@@ -139,12 +139,14 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         self.phi, self.phi_dot, self.torque = float(start.phi[0]), float(start.phi_dot[0]), 0.0
         self._stepper.forget()  # a new episode does not continue the last one's substeps
         at_start = episode.at_start(start.scene, start.phi, start.phi_dot)
-        out = episode.outcome(self.task, at_start, start.target, self._q, self._psi_rate, 0.0,
-                              start.target_rate, self.target_torque)
+        self._outcome.context[_CONTEXT["torque"], 0] = 0.0  # none yet; the rest is set above
+        result = np.empty((len(STEP_FIELDS), 1))  # as a stepper's, of the start state
+        for row, field in enumerate(STEP_FIELDS):
+            result[row] = getattr(at_start, field)
+        self._outcome.run(result)
         if self.render_mode == "human":
             self.render()
-        return out.observation[0].copy(), {key: out.info[key][0]
-                                           for key in self.config.info_keys}
+        return self._observation.copy(), self._info()
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         if self._stream_seed is None:
@@ -226,9 +228,9 @@ def _scalar_info(keys: tuple[str, ...], table: np.ndarray,
     if keys == tuple(INFO_KEYS):  # the default
 
         def every() -> dict[str, Any]:
-            info = dict(zip(floats, float_rows))
+            info = dict(zip(floats, float_rows, strict=True))
             info[count] = np.int64(count_row.item())
-            info.update(zip(truths, truth_rows))
+            info.update(zip(truths, truth_rows, strict=True))
             return info
 
         return every
@@ -238,11 +240,13 @@ def _scalar_info(keys: tuple[str, ...], table: np.ndarray,
                               for group in (floats, truths))
 
     def some() -> dict[str, Any]:
-        info = dict(zip(float_keys, compress(float_rows, chosen_floats))) if float_keys else {}
+        info = {}
+        if float_keys:
+            info.update(zip(float_keys, compress(float_rows, chosen_floats), strict=True))
         if count in keys:
             info[count] = np.int64(count_row.item())
         if truth_keys:
-            info.update(zip(truth_keys, compress(truth_rows, chosen_truths)))
+            info.update(zip(truth_keys, compress(truth_rows, chosen_truths), strict=True))
         return info
 
     return some
