@@ -1274,8 +1274,8 @@ class Stepper(_Base):
         """
         return self._run(phi, phi_dot, tau, 4, fused, extra)
 
-    def bind(self, one: Callable | None = None, *extra: Any) -> Callable[[float, float, float],
-                                                                         Any]:
+    def bind(self, one: Callable | None = None,
+             *extra: Any) -> Callable[[float, float, float], Any]:
         """:meth:`run` with its kernel and buffers looked up once: a function
         ``step(φ [rad], φ' [rad/s], τ [N·m])`` that returns what :meth:`run` does, for a caller
         that steps its roller many times.
