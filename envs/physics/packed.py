@@ -49,6 +49,7 @@ def _pointer(typingctx, address, dtype):
 @register_jitable(inline="always")
 def unpack(table, k, dtype):
     """Array ``k`` of a :func:`pack` table, of ``dtype`` (a numba type), as a 2-D view of its
-    memory (a 1-D array as its one row: ``unpack(table, k, dtype)[0]``)."""
+    memory (a 1-D array as its one row: ``unpack(table, k, dtype)[0]``). Nothing is checked
+    here: ``dtype`` must be the array's own, and ``k`` a row of the table."""
     rows = numba.carray(_pointer(table[k, _ADDRESS], dtype), (table[k, _ROWS], table[k, _STRIDE]))
     return rows[:, :table[k, _COLUMNS]]
