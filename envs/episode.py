@@ -660,6 +660,11 @@ _FUSED = {_TAYLOR.kernels()[1]: _taylor_and_outcome, _RK.kernels()[1]: _rk_and_o
 
 _STEP_ROWS = ROWS.index(STEP_FIELDS[0])  # a stepper's io: its result is the last rows
 _F64 = numba.float64
+#: What _one_roller unpacks, in order (the stepper's io, tableau and cfg, then
+#: OutcomeKernel._buffers()): the dtype and dimensions of each, checked when a step is bound.
+_ONE_ARRAYS = ((np.float64, 2), (np.float64, 2), (np.float64, 1), (np.float64, 2),
+               (np.float64, 1), (np.int64, 1), (np.float64, 2), (np.bool_, 2), (np.float32, 2),
+               (np.float64, 1))
 
 
 @register_jitable(inline="always")
@@ -760,13 +765,17 @@ class OutcomeKernel:
         function ``step(φ [rad], φ' [rad/s], τ [N·m])`` for the single environment, which
         also writes τ into :attr:`context` and returns what the environment reads back:
         (φ [rad], φ' [rad/s], reward, terminated) as Python float and bool. One compiled call
-        where the stepper's kernel has one (:data:`_ONE`). Not for ``fresh`` buffers, which
+        where the stepper's kernel has one (:data:`_ONE`; not with ``NUMBA_DISABLE_JIT``,
+        where nothing is compiled to unpack its arrays). Not for ``fresh`` buffers, which
         every step renews."""
         if self.fresh:
             raise ValueError("a fresh OutcomeKernel renews its buffers every step: use step()")
         one = _ONE.get(stepper.kernel)
-        if one is not None:
-            return stepper.bind(one, *self._buffers())
+        if one is not None and not numba.config.DISABLE_JIT:  # (interpreted: two calls)
+            step = stepper.bind(one, *self._buffers())
+            kinds = tuple((a.dtype.type, a.ndim) for a in step.arrays)
+            assert kinds == _ONE_ARRAYS, f"_one_roller would misread {kinds}"
+            return step
         advance, torque = stepper.bind(), self.context[_C_TORQUE]
         table, flags = self.table[:, 0], self.flags[:, 0]
 

@@ -218,7 +218,7 @@ def _scalar_info(keys: tuple[str, ...], table: np.ndarray,
     array-based clients (TorchRL) expect. INFO_KEYS is grouped by type, so that the float
     keys and the flags are consecutive rows, each read in one pass."""
     floats, (count,), truths = ([key for key in INFO_KEYS if INFO_KEYS[key][0] is kind]
-                                for kind in (float, int, bool))
+                                for kind in (float, int, bool))  # count: the one integer
     float_rows, truth_rows = (column[INFO_ROW[group[0]]:INFO_ROW[group[-1]] + 1]
                               for group, column in ((floats, table), (truths, flags)))
     for group in (floats, truths):  # consecutive rows: a view of each group's, of its length

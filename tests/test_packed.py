@@ -52,9 +52,14 @@ def test_unpacked_arrays_are_the_packed_ones_in_place():
     np.testing.assert_array_equal(flags, expected_flags)  # only column 2 flipped
 
 
-@pytest.mark.parametrize("array", [np.zeros((4, 6))[:, ::2], np.zeros((2, 2, 2)),
-                                   np.zeros(8)[::2], np.zeros(())], ids=str)
+@pytest.mark.parametrize("array", [
+    np.zeros((4, 6))[:, ::2], np.zeros((2, 2, 2)), np.zeros(8)[::2], np.zeros(()),
+    np.zeros((4, 6))[::-1], np.broadcast_to(np.zeros(3), (4, 3)),
+    np.lib.stride_tricks.as_strided(np.zeros(12), (4, 6), (16, 8)),  # rows overlap
+], ids=["columns apart", "3-D", "1-D apart", "0-D", "rows reversed", "rows repeated",
+        "rows overlap"])
 def test_arrays_that_do_not_pack_are_refused(array):
-    """Only 1-D and 2-D arrays whose last axis is contiguous have a table row."""
+    """Only 1-D and 2-D arrays whose last axis is contiguous, and whose rows follow one
+    another, have a table row."""
     with pytest.raises(ValueError, match="do not pack"):
         pack(np.zeros(3), array)

@@ -1276,17 +1276,19 @@ class Stepper(_Base):
 
     def bind(self, one: Callable | None = None,
              *extra: Any) -> Callable[[float, float, float], Any]:
-        """:meth:`run` with its kernel and buffers looked up once: a function
-        ``step(φ [rad], φ' [rad/s], τ [N·m])`` that returns what :meth:`run` does, for a caller
-        that steps its roller many times.
+        """A function ``step(φ [rad], φ' [rad/s], τ [N·m])`` with the kernel and buffers
+        looked up once, for a caller that steps its roller many times: without ``one``, it
+        returns what :meth:`run` does.
 
         ``one``: a compiled step of this roller that does more than the physics (the single
         environment's: the step, its outcome and what the environment reads back, in one
         call), run as ``one(φ, φ', τ, packed)``, where ``packed`` is the
         :func:`~roller_gym.physics.packed.pack` table of (io, tableau, cfg, *extra): this
-        stepper's buffers, then the caller's. It writes the inputs (:func:`put_inputs`), runs
+        stepper's buffers, then the caller's (unlike :meth:`run`'s ``fused``, which takes
+        the arrays themselves). It writes the inputs (:func:`put_inputs`), runs
         :attr:`kernel` and returns a tuple whose first element is :func:`missed`; ``step``
-        then returns the rest of the tuple.
+        then returns the rest of the tuple. Its attribute ``arrays`` holds the packed arrays,
+        which live as long as it does.
         """
         flat, results, kernel = self._flat, self._results, self._kernel
         args = (self._io, self._tab, self._cfg)
@@ -1308,7 +1310,7 @@ class Stepper(_Base):
                 self._warn(3)
             return out[1:]
 
-        step_one.arrays = (*args, *extra)  # alive as long as the step that has their table
+        step_one.arrays = (*args, *extra)  # the packed table's memory: alive as long as step_one
         return step_one
 
     def _run(self, phi: float, phi_dot: float, tau: float, stacklevel: int,

@@ -22,15 +22,21 @@ _ADDRESS, _ROWS, _COLUMNS, _STRIDE = range(4)  # the columns of a table: one row
 
 
 def pack(*arrays: np.ndarray) -> np.ndarray:
-    """The table of ``arrays`` (each 1-D or 2-D, its last axis contiguous): per array its
-    address, rows (1 for a 1-D array), columns and the distance of its rows in elements."""
+    """The table of ``arrays`` (each 1-D or 2-D, its last axis contiguous, its rows one after
+    another): per array its address, rows (1 for a 1-D array), columns and the distance of
+    its rows in elements; ValueError for an array it cannot describe so."""
     table = np.zeros((len(arrays), 4), dtype=np.int64)
     for row, a in zip(table, arrays, strict=True):
-        if a.ndim not in (1, 2) or a.strides[-1] != a.itemsize or a.strides[0] % a.itemsize:
+        packs = a.ndim in (1, 2) and a.strides[-1] == a.itemsize
+        rows, columns = (1, a.shape[0]) if a.ndim == 1 else a.shape if packs else (0, 0)
+        stride = columns  # of a single row: never used
+        if packs and rows > 1:
+            stride, rest = divmod(a.strides[0], a.itemsize)
+            packs = rest == 0 and stride >= columns  # not reversed, repeated or overlapping
+        if not packs:
             raise ValueError(f"arrays of shape {a.shape} and strides {a.strides} do not pack: "
-                             "1-D or 2-D arrays whose last axis is contiguous only")
-        rows, columns = (1, a.shape[0]) if a.ndim == 1 else a.shape
-        stride = columns if a.ndim == 1 else a.strides[0] // a.itemsize
+                             "1-D or 2-D arrays whose last axis is contiguous and whose rows "
+                             "follow one another only")
         row[:] = a.ctypes.data, rows, columns, stride
     return table
 
