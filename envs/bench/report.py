@@ -708,9 +708,9 @@ def section_targets(results: Results) -> list[str]:
         f"physics alone runs {kernel_steps:,.0f} control steps/s (mean "
         f"{d['substeps']['mean']:.1f} {method} substeps per step); the environment reaches "
         f"{single['ours']:,.0f}, {100 * single['ours'] / kernel_steps:.0f} % of that: the rest "
-        "is the environment's own (the action check, the compiled call's arguments, and the "
-        "info's 21 NumPy scalars, about a third of a step) and Gymnasium's wrappers, which "
-        "Pendulum pays too. "
+        "is the environment's own (the action check, calling the compiled step from Python, "
+        "and the info's 21 NumPy scalars, about a third of a step) and Gymnasium's wrappers, "
+        "which Pendulum pays too. "
         + ("Met." if r1 >= speed else
            "To close it: an info of fewer keys (`info_keys`), fewer Python operations per "
            "step and less work of the error control for a single roller"
