@@ -73,6 +73,7 @@ __all__ = [
     "flag_table",
     "info_rows",
     "random_seed",
+    "result_table",
     "scene_rows",
     "start_episodes",
     "take",
@@ -659,12 +660,12 @@ _FUSED = {_TAYLOR.kernels()[1]: _taylor_and_outcome, _RK.kernels()[1]: _rk_and_o
 
 
 _STEP_ROWS = ROWS.index(STEP_FIELDS[0])  # a stepper's io: its result is the last rows
-_F64 = numba.float64
 #: What _one_roller unpacks, in order (the stepper's io, tableau and cfg, then
 #: OutcomeKernel._buffers()): the dtype and dimensions of each, checked when a step is bound.
 _ONE_ARRAYS = ((np.float64, 2), (np.float64, 2), (np.float64, 1), (np.float64, 2),
                (np.float64, 1), (np.int64, 1), (np.float64, 2), (np.bool_, 2), (np.float32, 2),
                (np.float64, 1))
+_ONE_DTYPES = tuple(dtype for dtype, _ in _ONE_ARRAYS)
 
 
 @register_jitable(inline="always")
@@ -674,11 +675,12 @@ def _one_roller(phi, phi_dot, tau, packed, kernel):
     :meth:`~roller_gym.physics.integrators.Stepper.bind` takes it: (missed, φ [rad],
     φ' [rad/s], reward, terminated). ``packed``: the stepper's buffers, then
     :meth:`OutcomeKernel._buffers`."""
-    io, tab, cfg = unpack(packed, 0, _F64), unpack(packed, 1, _F64), unpack(packed, 2, _F64)[0]
-    context, constants = unpack(packed, 3, _F64), unpack(packed, 4, _F64)[0]
-    observed, out = unpack(packed, 5, numba.int64)[0], unpack(packed, 6, _F64)
-    flags, obs = unpack(packed, 7, numba.boolean), unpack(packed, 8, numba.float32)
-    scratch = unpack(packed, 9, _F64)[0]
+    d = _ONE_DTYPES  # a 1-D array is its table's row 0
+    io, tab, cfg = unpack(packed, 0, d[0]), unpack(packed, 1, d[1]), unpack(packed, 2, d[2])[0]
+    context, constants = unpack(packed, 3, d[3]), unpack(packed, 4, d[4])[0]
+    observed, out = unpack(packed, 5, d[5])[0], unpack(packed, 6, d[6])
+    flags, obs = unpack(packed, 7, d[7]), unpack(packed, 8, d[8])
+    scratch = unpack(packed, 9, d[9])[0]
     flat = io[:, 0]
     put_inputs(flat, phi, phi_dot, tau)
     context[_C_TORQUE, 0] = tau
@@ -815,11 +817,10 @@ def outcome(task: Any, result: Any, target: Any, q: Any, psi_rate: Any, tau: Any
     shape = np.broadcast(*values, *context).shape
     n = math.prod(shape)
     kernel = OutcomeKernel(task, n)
-    table = np.empty((len(STEP_FIELDS), *shape))
-    for rows, numbers in ((table, values),
-                          (kernel.context.reshape(len(context), *shape), context)):
-        for row, value in enumerate(numbers):  # broadcast as they are written
-            rows[row] = value
+    table = result_table(result, shape)
+    context_rows = kernel.context.reshape(len(context), *shape)
+    for row, value in enumerate(context):  # broadcast as they are written
+        context_rows[row] = value
     kernel.run(table.reshape(len(STEP_FIELDS), n))
     rows = info_rows(kernel.table, kernel.flags, tuple(INFO_KEYS), views=True)  # this call's
     scalar = shape == ()
@@ -831,6 +832,15 @@ def outcome(task: Any, result: Any, target: Any, q: Any, psi_rate: Any, tau: Any
                        kernel.flags)
     return Outcome(reward.reshape(shape), terminated.reshape(shape), info,
                    kernel.observation.reshape(*shape, -1), kernel.table, kernel.flags)
+
+
+def result_table(result: Any, shape: tuple[int, ...] = ()) -> np.ndarray:
+    """``result`` (a StepResult or a :class:`RestState`, of floats or arrays broadcast to
+    ``shape``) as a stepper's result table: STEP_FIELDS rows of ``shape``, float64."""
+    table = np.empty((len(STEP_FIELDS), *shape))
+    for row, field in enumerate(STEP_FIELDS):
+        table[row] = getattr(result, field)  # broadcast as it is written
+    return table
 
 
 def flag_table(n: int) -> np.ndarray:

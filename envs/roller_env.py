@@ -19,7 +19,7 @@ from roller_gym import episode, validation
 from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig
 from roller_gym.episode import CONTEXT_FIELDS, INFO_KEYS, INFO_ROW, OutcomeKernel
 from roller_gym.physics import Scene
-from roller_gym.physics.integrators import DEFAULT_METHOD, STEP_FIELDS, Stepper
+from roller_gym.physics.integrators import DEFAULT_METHOD, Stepper
 from roller_gym.task import Task, get_task, psi_rate, wrap_rate
 
 __all__ = ["RollerEnv"]
@@ -140,10 +140,7 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         self._stepper.forget()  # a new episode does not continue the last one's substeps
         at_start = episode.at_start(start.scene, start.phi, start.phi_dot)
         self._outcome.context[_CONTEXT["torque"], 0] = 0.0  # none yet; the rest is set above
-        result = np.empty((len(STEP_FIELDS), 1))  # as a stepper's, of the start state
-        for row, field in enumerate(STEP_FIELDS):
-            result[row] = getattr(at_start, field)
-        self._outcome.run(result)
+        self._outcome.run(episode.result_table(at_start, (1,)))
         if self.render_mode == "human":
             self.render()
         return self._observation.copy(), self._info()

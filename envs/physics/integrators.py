@@ -1290,17 +1290,17 @@ class Stepper(_Base):
         then returns the rest of the tuple. Its attribute ``arrays`` holds the packed arrays,
         which live as long as it does.
         """
-        flat, results, kernel = self._flat, self._results, self._kernel
         args = (self._io, self._tab, self._cfg)
-
-        def step(phi: float, phi_dot: float, tau: float) -> np.ndarray:
-            put_inputs(flat, phi, phi_dot, tau)
-            kernel(*args)
-            if missed(flat):
-                self._warn(3)  # pointing at the caller of step()
-            return results
-
         if one is None:
+            flat, results, kernel = self._flat, self._results, self._kernel
+
+            def step(phi: float, phi_dot: float, tau: float) -> np.ndarray:
+                put_inputs(flat, phi, phi_dot, tau)
+                kernel(*args)
+                if missed(flat):
+                    self._warn(3)  # pointing at the caller of step()
+                return results
+
             return step
         packed = pack(*args, *extra)
 
