@@ -564,7 +564,7 @@ def test_cost_row_gives_the_least_fixed_count_of_a_linear_scan() -> None:
     """One easy step (paper, rk4, tol 1e-10): the row's smallest fixed count is the first
     count of a linear scan whose error (against DOP853 run here, one roller alone) is within
     tol, and its ratio is the automatic count over it in right-hand-side evaluations (rk4's
-    adaptive substep is a Dormand–Prince 5(4) step, its fixed substep a classical one)."""
+    adaptive substep is a Tsitouras 5(4) step, its fixed substep a classical one)."""
     scene, (phi, w, tau), tol, dt = preset("paper"), (0.7, 2.0, 0.3), 1e-10, 0.05
     ref = _solve(scene, phi, w, tau, dt)
 

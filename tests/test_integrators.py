@@ -11,6 +11,7 @@ to m g r, |τ| <= m g (r + e)/2.
 
 from __future__ import annotations
 
+import itertools
 import math
 import warnings
 
@@ -447,8 +448,8 @@ LONG_RUN_BOUND = {"rk4": 5e-9, "rk8": 6e-8, "taylor": 2e-10}
 def test_zero_torque_for_1e5_steps_keeps_the_energy(method):
     """1e5 control steps (5000 s) of "paper" at zero torque, no damping, tol = 1e-9, from
     rest at φ = 1 rad (E0 ≈ 0.302 J). Measured energy error under error control: rk4
-    3.9e-9 J, rk8 1.4e-9 J, taylor 5.7e-11 J (a slow linear drift, ~4e-14 J and ~1.4e-14 J
-    per step for rk4 and rk8: 1.3e-8 and 4.6e-9 of E0); asserted within LONG_RUN_BOUND: 5e-9 J
+    3.9e-11 J, rk8 1.4e-9 J, taylor 5.7e-11 J (rk8's a slow linear drift, ~1.4e-14 J per
+    step: 4.6e-9 of E0); asserted within LONG_RUN_BOUND: 5e-9 J
     (rk4), 6e-8 J (rk8), 2e-10 J (taylor). The motion stays
     the same swing: |φ| exceeds 1 rad by no more than that energy error allows."""
     scene = preset("paper")
@@ -487,10 +488,10 @@ def _turning_point(scene: Scene, torque: float) -> float:
 @pytest.mark.parametrize("method", ["rk4", "rk8", "taylor"])
 def test_maximum_torque_for_1e5_steps_keeps_e_minus_tau_phi(method):
     """Constant maximum torque, no damping: E − τφ is an exact invariant. 1e5 steps of 0.05 s
-    at tol 1e-9 from rest at φ = 0 on "paper": measured drift 3.01e-9 J (rk4), 1.5e-9 J
-    (rk8), 8e-12 J (taylor); asserted <= LONG_RUN_BOUND. The swing reaches the turning
-    point where V(φ) = τφ (solved here independently), and not beyond it by more than the
-    drift allows."""
+    at tol 1e-9 from rest at φ = 0 on "paper": measured drift 4.79e-9 J (rk4, whose
+    tol_share this bound sets), 1.5e-9 J (rk8), 8e-12 J (taylor); asserted <=
+    LONG_RUN_BOUND. The swing reaches the turning point where V(φ) = τφ (solved here
+    independently), and not beyond it by more than the drift allows."""
     scene = preset("paper")
     torque = _max_torque(scene)
     phi, w = _run(scene, 0.0, 0.0, torque, 100_000, method)
@@ -832,29 +833,87 @@ def test_scalar_and_batch_steppers_agree_bit_for_bit(method, substeps):
         phi, w = out.phi, out.phi_dot
 
 
-def test_rk4_error_control_is_scipys_rk45_step():
-    """rk4 under error control takes Dormand–Prince 5(4) substeps: one of its substeps is the
-    step scipy's RK45 takes (``scipy.integrate._ivp.rk.rk_step``, the 5th-order solution
-    carried on), and its error estimate is max |h E·K| over φ and φ', the difference to the
-    embedded 4th-order solution that scipy computes from the same stages."""
-    from scipy.integrate._ivp.rk import RK45, rk_step
+def _rooted_trees(order: int) -> list[tuple]:
+    """The rooted trees with ``order`` nodes, each as the sorted tuple of its root's subtrees
+    (Butcher's trees: one order condition each)."""
+    if order == 1:
+        return [()]
+
+    def partitions(n: int, largest: int):
+        if n == 0:
+            yield []
+        for part in range(min(n, largest), 0, -1):
+            for rest in partitions(n - part, part):
+                yield [part, *rest]
+
+    found = set()
+    for sizes in partitions(order - 1, order - 1):
+        for children in itertools.product(*(_rooted_trees(k) for k in sizes)):
+            found.add(tuple(sorted(children)))
+    return sorted(found)
+
+
+def _order_defect(a: np.ndarray, b: np.ndarray, order: int) -> float:
+    """The largest |b·Φ(t) − 1/γ(t)| over the trees t of up to ``order`` nodes: 0 (to
+    rounding) where the weights ``b`` over the stages of matrix ``a`` reach that order."""
+
+    def stage_weights(tree: tuple) -> np.ndarray:  # Φ(t) at every stage
+        out = np.ones(a.shape[0])
+        for child in tree:
+            out = out * (a @ stage_weights(child))
+        return out
+
+    def density(tree: tuple) -> int:  # γ(t)
+        return _tree_size(tree) * math.prod(density(child) for child in tree)
+
+    return max(abs(b @ stage_weights(t) - 1.0 / density(t))
+               for q in range(1, order + 1) for t in _rooted_trees(q))
+
+
+def _tree_size(tree: tuple) -> int:
+    return 1 + sum(_tree_size(child) for child in tree)
+
+
+def test_rooted_trees_are_counted_as_known():
+    """1, 1, 2, 4, 9, 20 trees of 1..6 nodes (OEIS A000081): 17 order conditions to order 5."""
+    assert [len(_rooted_trees(q)) for q in range(1, 7)] == [1, 1, 2, 4, 9, 20]
+    # the classical RK4 meets the 8 conditions of order 4 and not all 9 of order 5
+    tab = integrators.SCHEMES["rk4"].fixed_tableau
+    a, b = tab[:4, :4], tab[4, :4]
+    assert _order_defect(a, b, 4) < 1e-15 < 1e-3 < _order_defect(a, b, 5)
+
+
+def test_rk4_error_control_is_a_5_4_pair_step():
+    """rk4 under error control takes substeps of its pair (Tsitouras 5(4)): its weights meet
+    all 17 order conditions of order 5 (Butcher's rooted trees, written out here) and not
+    those of order 6; the embedded weights b − E meet those of order 4 and not of order 5.
+    One substep of the kernel is the explicit Runge–Kutta step of that tableau computed here
+    with NumPy, and its error estimate is max |h E·K| over φ and φ'."""
+    tab = integrators.SCHEMES["rk4"].tableau
+    s = tab.shape[0] - 3
+    a = np.zeros((s + 1, s + 1))
+    a[:, :s] = tab[: s + 1, :s]  # the last stage is at the new state: its row is b
+    b = np.append(tab[s, :s], 0.0)
+    embedded = b - tab[s + 2]
+    assert _order_defect(a, b, 5) < 1e-13 < 1e-5 < _order_defect(a, b, 6)
+    assert _order_defect(a, embedded, 4) < 1e-13 < 1e-5 < _order_defect(a, embedded, 5)
 
     scene, (phi, w, tau) = preset("paper"), (0.7, 2.0, 0.3)
     params = scene.params
 
-    def f(_t, y):
+    def f(y: np.ndarray) -> np.ndarray:
         return np.array([y[1], eq.accel(y[0], y[1], tau, *params)])
 
-    y0 = np.array([phi, w])
-    k = np.empty((RK45.n_stages + 1, 2))
-    y1, _ = rk_step(f, 0.0, y0, f(0.0, y0), DT, RK45.A, RK45.B, RK45.C, k)
-    scipy_error = DT * (k.T @ RK45.E)
+    y0, k = np.array([phi, w]), np.zeros((s + 1, 2))
+    for i in range(s + 1):
+        k[i] = f(y0 + DT * a[i] @ k)
+    y1 = y0 + DT * b @ k
     one = integrators.Stepper(scene, method="rk4", dt=DT, tol=1e-8, substeps=1)
-    one._tab = integrators.SCHEMES["rk4"].tableau  # one substep of the error-control pair
+    one._tab = tab  # one substep of the error-control pair
     out = integrators.StepResult(*one.advance(phi, w, tau))
     assert out.phi == pytest.approx(y1[0], rel=1e-14)
     assert out.phi_dot == pytest.approx(y1[1], rel=1e-14)
-    assert out.error_estimate == pytest.approx(np.max(np.abs(scipy_error)), rel=1e-9)
+    assert out.error_estimate == pytest.approx(np.max(np.abs(DT * tab[s + 2] @ k)), rel=1e-9)
     classical = step(scene, phi, w, tau, DT, method="rk4", substeps=1)  # fixed substeps
     assert abs(classical.phi - out.phi) > 1e3 * abs(out.phi) * 1e-16
 
