@@ -579,7 +579,7 @@ def test_cost_row_gives_the_least_fixed_count_of_a_linear_scan() -> None:
     auto = integ.step(batch, *a, dt, method="rk4", tol=tol)
     row = cost.compare(batch, *a, auto, ref.reshape(2, 1), np.zeros(1), "rk4", tol)
     assert row["measured"] == 1 and row["fixed_substeps"]["max"] == scan
-    per_auto, per_fixed = 6, 4  # DP5's 7 stages, the first the last substep's end; RK4's 4
+    per_auto, per_fixed = 6, 4  # the pair's 7 stages, the first the last substep's end; RK4's 4
     assert row["ratio"]["median"] == pytest.approx(auto.substeps[0] * per_auto
                                                    / (scan * per_fixed))
     assert row["within_tol"] == (err(auto) <= tol)
