@@ -234,8 +234,8 @@ def _scalar_info(keys: tuple[str, ...], table: np.ndarray,
         return every
     chosen_floats, chosen_truths = (tuple(key in keys for key in group)
                                     for group in (floats, truths))
-    float_keys, truth_keys = ([key for key in group if key in keys]
-                              for group in (floats, truths))
+    float_keys, truth_keys = (list(compress(floats, chosen_floats)),
+                              list(compress(truths, chosen_truths)))
 
     def some() -> dict[str, Any]:
         info = {}
