@@ -564,7 +564,7 @@ def test_cost_row_gives_the_least_fixed_count_of_a_linear_scan() -> None:
     """One easy step (paper, rk4, tol 1e-10): the row's smallest fixed count is the first
     count of a linear scan whose error (against DOP853 run here, one roller alone) is within
     tol, and its ratio is the automatic count over it in right-hand-side evaluations (rk4's
-    adaptive substep is a Tsitouras 5(4) step, its fixed substep a classical one)."""
+    adaptive substep is a Bogacki–Shampine 5(4) step, its fixed substep a classical one)."""
     scene, (phi, w, tau), tol, dt = preset("paper"), (0.7, 2.0, 0.3), 1e-10, 0.05
     ref = _solve(scene, phi, w, tau, dt)
 
@@ -579,7 +579,7 @@ def test_cost_row_gives_the_least_fixed_count_of_a_linear_scan() -> None:
     auto = integ.step(batch, *a, dt, method="rk4", tol=tol)
     row = cost.compare(batch, *a, auto, ref.reshape(2, 1), np.zeros(1), "rk4", tol)
     assert row["measured"] == 1 and row["fixed_substeps"]["max"] == scan
-    per_auto, per_fixed = 6, 4  # the pair's 7 stages, the first the last substep's end; RK4's 4
+    per_auto, per_fixed = 7, 4  # the pair's 8 stages, the first the last substep's end; RK4's 4
     assert row["ratio"]["median"] == pytest.approx(auto.substeps[0] * per_auto
                                                    / (scan * per_fixed))
     assert row["within_tol"] == (err(auto) <= tol)

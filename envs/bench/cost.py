@@ -23,10 +23,9 @@ drum; e/r up to 0.999, k/r down to 0.01; |τ| up to 5 m g r; |φ'| up to 15 sqrt
 
 The ratio automatic / smallest is reported per tolerance and scheme, counted in
 right-hand-side evaluations (the same as substeps for rk8, and for taylor, whose substeps are
-one expansion each; rk4's substep under error control
-is a Tsitouras 5(4) step of 6 evaluations, its fixed substep one classical step of 4): its
-median,
-99th percentile and largest, with the share of steps whose automatic error is within ``tol``.
+one expansion each; rk4's substep under error control is a Bogacki–Shampine 5(4) step of 7
+evaluations, its fixed substep one classical step of 4): its median, 99th percentile and
+largest, with the share of steps whose automatic error is within ``tol``.
 
 **Two variants.** ``stateless``: the sample's independent steps, each started afresh as
 ``integrators.step`` does; the verdict uses it, since the sample is of independent control
@@ -226,8 +225,8 @@ def compare(scene: Scene, phi: np.ndarray, w: np.ndarray, tau: np.ndarray,
     found = smallest > 0
     used = keep[found]
     subs = np.asarray(auto.substeps, dtype=float)[used]
-    # in right-hand-side evaluations: rk4's substep under error control is a Tsitouras 5(4)
-    # step (6 evaluations), its fixed substep a classical one (4); rk8's are the same
+    # in right-hand-side evaluations: rk4's substep under error control is a Bogacki–Shampine
+    # 5(4) step (7 evaluations), its fixed substep a classical one (4); rk8's are the same
     scheme = integ.scheme(method)
     ratio = (subs * scheme.evaluations(fixed=False)
              / (smallest[found] * scheme.evaluations(fixed=True)))

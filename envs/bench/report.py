@@ -34,6 +34,7 @@ from roller_gym.bench.verdicts import (
     scene,
     verdict_cost,
 )
+from roller_gym.physics import integrators as integ
 
 __all__ = ["load_results", "plot", "render", "results_path", "save_results", "write"]
 
@@ -55,10 +56,17 @@ MARKERS = {"euler": "v", "rk4": "o", "rk4 auto": "s", "rk8": "h", "rk8 auto": "p
            "midpoint": "D", "dop853": "^", "MuJoCo default": "X", "MuJoCo tuned": "P"}
 #: MuJoCo's integrators in words.
 _INTEGRATORS = {"Euler": "semi-implicit Euler"}
-#: The work of one substep of each compiled error-controlled scheme, in words.
-SUBSTEP_WORK = {"rk8": "12 right-hand sides", "rk4": "4 right-hand sides",
-                "taylor": "one expansion to degree 18 (the sines once, then products of "
-                          "series)"}
+
+
+def substep_work(method: str) -> str:
+    """The work of one substep of a compiled error-controlled scheme under error control, in
+    words."""
+    if method == "taylor":
+        return "one expansion to degree 18 (the sines once, then products of series)"
+    scheme = integ.SCHEMES.get(method)
+    if scheme is None or scheme.tableau is None:
+        return "several stages"
+    return f"{scheme.evaluations(fixed=False)} right-hand sides"
 
 
 # ================================================================================================
@@ -364,7 +372,7 @@ def section_method(results: Results) -> list[str]:
         "- **Families**: `euler` = semi-implicit Euler with n fixed substeps (n = 1 is "
         "Gymnasium's Pendulum scheme); `rk4` = classical RK4 with n fixed substeps; `rk4 "
         "auto` = error control at a tolerance per control step (the environments' default: "
-        f"{st['tolerance']:.0e}) with the Tsitouras 5(4) pair (its 5th-order "
+        f"{st['tolerance']:.0e}) with the Bogacki–Shampine 5(4) pair (its 5th-order "
         "solution carried on); "
         "`rk8`, `rk8 auto` = the same with the 8th-order Dormand–Prince tableau and its "
         "embedded estimate; `taylor`, `taylor auto` = the Taylor series of the motion to "
@@ -638,7 +646,7 @@ def section_cost(results: Results) -> list[str]:
         "between n/2 and n. `ratio` = automatic / smallest fixed, per step, counted in "
         "right-hand-side evaluations: the same as substeps for `rk8` and `taylor` (one "
         "expansion a substep, automatic or fixed); `rk4` takes "
-        "Tsitouras 5(4) substeps of 6 evaluations under error control and classical "
+        "Bogacki–Shampine 5(4) substeps of 7 evaluations under error control and classical "
         "steps of 4 with fixed substeps. Skipped: steps "
         f"whose reference's own error (against a run at 10 × rtol) exceeds "
         f"{st['uncertainty_share']:g} tol, and steps no fixed count up to "
@@ -674,7 +682,7 @@ def section_cost(results: Results) -> list[str]:
         ])
     L += md_table(["method", "tol", "variant", "steps measured", "skipped",
                    "ratio median", "ratio 99th pct", "ratio max",
-                   "mean substeps automatic / smallest fixed (rk4: Tsitouras / classical)",
+                   "mean substeps automatic / smallest fixed (rk4: Bogacki–Shampine / classical)",
                    "error ≤ tol",
                    "worst error / tol", "tol_met False"], rows)
     L += ["", "The means compare totals: a fixed count must resolve a step's fastest part along "
@@ -743,7 +751,7 @@ def section_targets(results: Results) -> list[str]:
         text += (
             f"Missed: {r / target:.2f} of the target. The physics kernel alone runs at "
             f"{rk:.2f} × CartPoleVectorEnv ({per_roller[n]:,.0f} ns per roller per control "
-            f"step: {method}, ≥ 1 substep of {SUBSTEP_WORK.get(method, 'several stages')}, "
+            f"step: {method}, ≥ 1 substep of {substep_work(method)}, "
             "and the contact margins at every substep), against "
             f"{1e9 / v['CartPoleVectorEnv']:,.0f} ns per sub-environment for CartPole's whole "
             "step (one Euler step in a few NumPy operations). The environment runs at "
@@ -830,10 +838,10 @@ def section_targets(results: Results) -> list[str]:
         notes.append(
             f"- **Cost of the error control, {row['method']} at tol {row['tol']:.0e}**: "
             f"{v.miss}. The automatic count follows the scheme's error estimate, which "
-            + ("for rk4 is Tsitouras 5(4)'s: the estimate is of the embedded "
+            + ("for rk4 is Bogacki–Shampine 5(4)'s: the estimate is of the embedded "
                "4th-order solution's error, while the 5th-order solution is carried on, so "
                "it overstates the error of what is carried, most on the stiff scenes; a "
-               "substep costs 6 evaluations, against 4 for a classical one"
+               "substep costs 7 evaluations, against 4 for a classical one"
                if row["method"] == "rk4" else
                "for taylor is the size of the expansion's last two terms, which overstates "
                "what the terms left out add"
@@ -845,9 +853,8 @@ def section_targets(results: Results) -> list[str]:
             + ("The tail is set by steps (fast spins, nearly tight fits) along which the "
                "equal classical substeps' local errors cancel, their sum many times the error "
                "left at the step's end, which no controller that judges each substep by its "
-               "own estimate can see. The share of tol is set by the tests' bound on the energy "
-               "drift over 1e5 steps (5e-9 J): the share that meets this target reaches that "
-               "bound. taylor and rk8 meet the target."
+               "own estimate can see. The share of tol is bounded by the tests' bound on the "
+               "energy drift over 1e5 steps (5e-9 J)."
                if row["method"] == "rk4" else
                "To close it: a sharper error estimate (a larger tol_share or a bolder "
                "step-size controller alone lets some steps exceed tol).")
