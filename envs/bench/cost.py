@@ -225,8 +225,8 @@ def compare(scene: Scene, phi: np.ndarray, w: np.ndarray, tau: np.ndarray,
     found = smallest > 0
     used = keep[found]
     subs = np.asarray(auto.substeps, dtype=float)[used]
-    # in right-hand-side evaluations: rk4's substep under error control is a Bogacki–Shampine
-    # 5(4) step (7 evaluations), its fixed substep a classical one (4); rk8's are the same
+    # in right-hand-side evaluations: rk4's substep under error control is a step of its
+    # 5(4) pair, its fixed substep a classical one; rk8's are the same
     scheme = integ.scheme(method)
     ratio = (subs * scheme.evaluations(fixed=False)
              / (smallest[found] * scheme.evaluations(fixed=True)))
