@@ -567,9 +567,10 @@ def _outcome_range(lo, hi, result, context, constants, observed, out, flags, obs
         _copy_flag(flags[_F_TOL_MET], start, result[_S_TOL_MET], start, m)
         for pair in _PASSED_CONTEXT:
             _stream(out[pair[0]], start, context[pair[1]], start, m)
-        for i in range(m):
-            for j in range(observed.size):
-                obs[start + i, j] = b[(_B_OBS + observed[j]) * _B + i]
+        for j in range(observed.size):  # field by field: the inner loop reads one row
+            row = np.uint64((_B_OBS + observed[j]) * _B)
+            for i in range(np.uint64(m)):
+                obs[np.uint64(start) + i, j] = b[row + i]
     _fence()
 
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import numba
 import numpy as np
 from roller_gym.physics import Scene
 
@@ -80,18 +81,41 @@ def subset(name: str, value: Any, allowed: tuple[str, ...]) -> tuple[str, ...]:
     return tuple(x for x in allowed if x in names)
 
 
-def actions(value: Any, shape: tuple[int, ...]) -> np.ndarray:
-    """Actions as float64 in [−1, 1] of ``shape``: real numbers only; out-of-range values
-    are clipped; NaN, inf, another shape, complex or text raise ValueError."""
+def actions(value: Any, shape: tuple[int, ...], scale: float = 1.0,
+            out: np.ndarray | None = None) -> np.ndarray:
+    """Actions as float64 in [−1, 1] of ``shape``, times ``scale``: real numbers only;
+    out-of-range values are clipped; NaN, inf, another shape, complex or text raise
+    ValueError (and leave ``out`` as it was). Into ``out`` (C-contiguous float64 of as many
+    elements) if given: compiled, one pass to check and one to write."""
     a = np.asarray(value)
     if a.dtype.kind not in "iuf" or a.size != math.prod(shape):
         raise ValueError(f"action={value!r} is not allowed: it must be real numbers of shape "
                          f"{shape} in [-1, 1] (out-of-range values are clipped)")
-    a = a.astype(np.float64).reshape(shape)
-    if not np.isfinite(a).all():
+    if a.dtype not in _COMPILED_ACTIONS:
+        a = a.astype(np.float64)
+    out = np.empty(shape) if out is None else out
+    assert out.flags.c_contiguous and out.dtype == np.float64 and out.size == a.size
+    if not _clipped(a.reshape(-1), scale, out.reshape(-1)):
         raise ValueError(f"action={value!r} is not finite; actions must be finite numbers in "
                          "[-1, 1] (out-of-range values are clipped)")
-    return np.clip(a, -1.0, 1.0)
+    return out.reshape(shape)
+
+
+_COMPILED_ACTIONS = (np.dtype(np.float64), np.dtype(np.float32), np.dtype(np.int64))
+
+
+@numba.njit(cache=True, nogil=True)
+def _clipped(a: np.ndarray, scale: float, out: np.ndarray) -> bool:
+    """out = clip(a, −1, 1) · scale; False, ``out`` untouched, if some element of ``a`` is
+    not finite."""
+    finite = True
+    for i in range(a.size):
+        x = np.float64(a[i])
+        finite &= x - x == 0.0
+    if finite:
+        for i in range(a.size):
+            out[i] = min(max(np.float64(a[i]), -1.0), 1.0) * scale
+    return finite
 
 
 def check_integrable(scene: Scene, dt: float, max_torque: float) -> None:

@@ -313,11 +313,10 @@ class RollerVectorEnv(VectorEnv):
     def step(
         self, actions: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
-        a = validation.actions(actions, (self.num_envs, 1))[:, 0]
+        tau = self.torque  # the context's row, written in place
+        validation.actions(actions, (self.num_envs, 1), self.task.max_torque, tau)
         if not self._seeded:
             raise RuntimeError("call reset() before step()")
-        tau = self.torque  # the context's row, written in place
-        np.multiply(a, self.task.max_torque, out=tau)
         self.steps += 1
         if self.task.moving_target:
             self.target[:], self.target_rate[:] = self.task.target_at(

@@ -94,7 +94,13 @@ def test_coefficients_match_independent_series_arithmetic(name):
     for _ in range(5):
         phi, w = rng.uniform(-3, 3), rng.uniform(-8, 8)
         tau = rng.uniform(-0.5, 0.5) * scene.m * scene.g * scene.r
-        X, V = (np.array(p) for p in series.coefficients(phi, w, tau, *params))
+        X, V, angles = series.coefficients(phi, w, tau, *params)
+        X, V = np.array(X), np.array(V)
+        # the expansion point's sin θ, cos θ, sin ψ, cos ψ, for the margins: libm's
+        theta = phi / (1 - scene.r * scene.kappa)
+        psi = scene.r * scene.kappa * theta
+        exact = (math.sin(theta), math.cos(theta), math.sin(psi), math.cos(psi))
+        assert np.max(np.abs(np.subtract(angles, exact))) <= 4 * np.finfo(float).eps, name
         Xi, Vi = _independent(phi, w, tau, *params, series.ORDER)
         for got, want in ((X, Xi), (V, Vi)):
             n = np.arange(want.size)

@@ -156,11 +156,13 @@ def test_actions_are_clipped_and_nonfinite_rejected():
     vec.reset(seed=0, options={"state": (0.0, 0.0)})
     _, _, _, _, info = vec.step(np.array([[3.0], [-0.5]], np.float32))
     np.testing.assert_allclose(info["torque"], [0.5, -0.25])
-    before = vec.unwrapped.phi.copy()
+    before, torque = vec.unwrapped.phi.copy(), vec.unwrapped.torque.copy()
     for bad in (math.nan, math.inf):
         with pytest.raises(ValueError, match="not finite"):
-            vec.step(np.array([[0.0], [bad]], np.float32))
+            vec.step(np.array([[0.7], [bad]], np.float32))
     np.testing.assert_array_equal(vec.unwrapped.phi, before)
+    # the torques are written in place only once every action is known to be finite
+    np.testing.assert_array_equal(vec.unwrapped.torque, torque)
 
 
 def test_reset_options_and_mask():

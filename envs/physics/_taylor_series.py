@@ -15,8 +15,8 @@ _jit = numba.njit(cache=True, nogil=True, error_model="numpy", forceinline=True)
 
 @_jit
 def coefficients(phi, phi_dot, tau, m, r, kappa, e, k, g, c):
-    """(X, V): the Taylor coefficients of φ [rad] and φ' [rad/s] at this state, in
-    powers of the time [s]."""
+    """(X, V, angles): the Taylor coefficients of φ [rad] and φ' [rad/s] at this
+    state, in powers of the time [s], and its (sin θ, cos θ, sin ψ, cos ψ)."""
     L0, D0, ST0, CT0, SQ0, CQ0, SF0 = eq.accel_terms(phi, phi_dot, tau, m, r, kappa, e,
                                                      k, g, c)
     CF0 = CT0 * CQ0 + ST0 * SQ0
@@ -234,7 +234,7 @@ def coefficients(phi, phi_dot, tau, m, r, kappa, e, k, g, c):
     A17 = (L17 - (((((D1 * A16 + D2 * A15) + D3 * A14) + (D4 * A13 + D5 * A12)) + ((D6 * A11 + D7 * A10) + (D8 * A9 + D9 * A8))) + (((D10 * A7 + D11 * A6) + (D12 * A5 + D13 * A4)) + ((D14 * A3 + D15 * A2) + (D16 * A1 + D17 * A0))))) * inv_d0
     X18 = V17 * 0.05555555555555555
     V18 = A17 * 0.05555555555555555
-    return (X0, X1, X2, X3, X4, X5, X6, X7, X8, X9, X10, X11, X12, X13, X14, X15, X16, X17, X18), (V0, V1, V2, V3, V4, V5, V6, V7, V8, V9, V10, V11, V12, V13, V14, V15, V16, V17, V18)
+    return (X0, X1, X2, X3, X4, X5, X6, X7, X8, X9, X10, X11, X12, X13, X14, X15, X16, X17, X18), (V0, V1, V2, V3, V4, V5, V6, V7, V8, V9, V10, V11, V12, V13, V14, V15, V16, V17, V18), (ST0, CT0, SQ0, CQ0)
 
 
 @_jit

@@ -30,6 +30,7 @@ __all__ = [
     "accel",
     "accel_concentric",
     "accel_terms",
+    "angles",
     "contact_forces",
     "d2inertia",
     "d2potential",
@@ -37,23 +38,32 @@ __all__ = [
     "dinertia",
     "dpotential",
     "energy",
+    "energy_at",
+    "forces",
     "ic_squared",
     "inertia",
+    "inertia_per_mass",
     "instant_center_velocity",
     "margins",
     "positions",
     "potential",
     "shape_factors",
     "sinc",
+    "sinc_of",
 ]
 
 
 @register_jitable(inline="always")
 def sinc(x):
     """sin(x)/x, with its limit 1 at x = 0."""
+    return sinc_of(x, trig.sin(x))
+
+
+@register_jitable(inline="always")
+def sinc_of(x, sin_x):
+    """:func:`sinc` of x given its sine ``sin_x``."""
     nonzero = x != 0.0
-    safe = trig.select(nonzero, x, 1.0)
-    return trig.select(nonzero, trig.sin(safe) / safe, 1.0)
+    return trig.select(nonzero, sin_x / trig.select(nonzero, x, 1.0), 1.0)
 
 
 @register_jitable(inline="always")
@@ -71,9 +81,16 @@ def ic_squared(phi, r, kappa, e):
 
 
 @register_jitable(inline="always")
+def inertia_per_mass(half_sin, r, e, k):
+    """J_I/m = k² + |IC|² = k² + (r − e)² + 4re sin²(θ/2) [m²], from ``half_sin`` = sin(θ/2):
+    the denominator D of :func:`accel_terms`."""
+    return k * k + (r - e) * (r - e) + 4.0 * r * e * half_sin * half_sin
+
+
+@register_jitable(inline="always")
 def inertia(phi, m, r, kappa, e, k):
     """J_I = m (k² + |IC|²), the moment of inertia about the instant center I [kg·m²]."""
-    return m * (k * k + ic_squared(phi, r, kappa, e))
+    return m * inertia_per_mass(trig.sin(0.5 * phi / (1.0 - r * kappa)), r, e, k)
 
 
 @register_jitable(inline="always")
@@ -98,7 +115,8 @@ def potential(phi, m, r, kappa, e, g):
     """
     _, psi, _ = shape_factors(phi, r, kappa)
     h = trig.sin(0.5 * phi)
-    return m * g * (r * phi * trig.sin(0.5 * psi) * sinc(0.5 * psi) + 2.0 * e * h * h)
+    half_sin = trig.sin(0.5 * psi)
+    return m * g * (r * phi * half_sin * sinc_of(0.5 * psi, half_sin) + 2.0 * e * h * h)
 
 
 @register_jitable(inline="always")
@@ -142,19 +160,28 @@ def accel_terms(phi, phi_dot, tau, m, r, kappa, e, k, g, c):
     The Taylor series of the motion (:mod:`roller_gym.physics.taylor`) starts from them.
     """
     s = 1.0 - r * kappa
-    theta = phi / s
-    h, hc = trig.sincos(0.5 * theta)
-    sin_psi, cos_psi = trig.sincos(r * kappa * theta)
-    sin_t = 2.0 * h * hc
-    cos_t = 1.0 - 2.0 * h * h
-    sin_phi = sin_t * cos_psi - cos_t * sin_psi
+    h, sin_t, cos_t, sin_psi, cos_psi, sin_phi = angles(phi, r, kappa)
     lhs = (
         (tau - c * phi_dot) / m
         - e * r / s * phi_dot * phi_dot * sin_t
         - g * (r * sin_psi + e * sin_phi)
     )
-    inertia = k * k + (r - e) * (r - e) + 4.0 * r * e * h * h
-    return lhs, inertia, sin_t, cos_t, sin_psi, cos_psi, sin_phi
+    return lhs, inertia_per_mass(h, r, e, k), sin_t, cos_t, sin_psi, cos_psi, sin_phi
+
+
+@register_jitable(inline="always")
+def angles(phi, r, kappa):
+    """A state's trigonometry from two sine–cosine pairs (θ/2 and ψ): (sin(θ/2), sin θ,
+    cos θ, sin ψ, cos ψ, sin φ), with sin θ = 2 sin(θ/2) cos(θ/2), cos θ = 1 − 2 sin²(θ/2)
+    and, since φ = θ − ψ, sin φ = sin θ cos ψ − cos θ sin ψ. :func:`accel_terms` and
+    :func:`contact_forces` take theirs from here, so a kernel that has one may pass it on
+    (:func:`forces`)."""
+    theta = phi / (1.0 - r * kappa)
+    h, hc = trig.sincos(0.5 * theta)
+    sin_psi, cos_psi = trig.sincos(r * kappa * theta)
+    sin_t = 2.0 * h * hc
+    cos_t = 1.0 - 2.0 * h * h
+    return h, sin_t, cos_t, sin_psi, cos_psi, sin_t * cos_psi - cos_t * sin_psi
 
 
 @register_jitable(inline="always")
@@ -171,9 +198,14 @@ def accel_concentric(phi, phi_dot, tau, m, r, kappa, k, g, c):
 @register_jitable(inline="always")
 def energy(phi, phi_dot, m, r, kappa, e, k, g):
     """E = ½ J_I φ'² + V [J]."""
-    return 0.5 * inertia(phi, m, r, kappa, e, k) * phi_dot * phi_dot + potential(
-        phi, m, r, kappa, e, g
-    )
+    return energy_at(inertia_per_mass(trig.sin(0.5 * phi / (1.0 - r * kappa)), r, e, k), phi,
+                     phi_dot, m, r, kappa, e, g)
+
+
+@register_jitable(inline="always")
+def energy_at(d, phi, phi_dot, m, r, kappa, e, g):
+    """:func:`energy` given d = J_I/m [m²] at φ (:func:`accel_terms`' D)."""
+    return 0.5 * (m * d) * phi_dot * phi_dot + potential(phi, m, r, kappa, e, g)
 
 
 @register_jitable(inline="always")
@@ -219,11 +251,17 @@ def contact_forces(phi, phi_dot, phi_ddot, m, r, kappa, e, g):
     N/m = g cos ψ + (r²κ/s) φ'² + e (φ'' sin θ + φ'² cos θ)
     F/m = g sin ψ + (r − e cos θ) φ'' + e φ'² sin θ
     """
-    s, psi, theta = shape_factors(phi, r, kappa)
+    _, sin_t, cos_t, sin_psi, cos_psi, _ = angles(phi, r, kappa)
+    return forces(sin_t, cos_t, sin_psi, cos_psi, phi_dot, phi_ddot, m, r, kappa, e, g)
+
+
+@register_jitable(inline="always")
+def forces(sin_t, cos_t, sin_psi, cos_psi, phi_dot, phi_ddot, m, r, kappa, e, g):
+    """:func:`contact_forces` (N, F) [N] given the state's sin θ, cos θ, sin ψ and cos ψ
+    (:func:`angles`)."""
     w2 = phi_dot * phi_dot
-    sin_t, cos_t = trig.sincos(theta)
-    sin_psi, cos_psi = trig.sincos(psi)
-    normal = m * (g * cos_psi + r * r * kappa / s * w2 + e * (phi_ddot * sin_t + w2 * cos_t))
+    normal = m * (g * cos_psi + r * r * kappa / (1.0 - r * kappa) * w2
+                  + e * (phi_ddot * sin_t + w2 * cos_t))
     friction = m * (g * sin_psi + (r - e * cos_t) * phi_ddot + e * w2 * sin_t)
     return normal, friction
 

@@ -69,7 +69,9 @@ margins and ``error_estimate`` are NaN (so ``liftoff_margin <= 0`` is False: a f
 never reported as a lift-off).
 
 **Margins.** The lift-off and slip margins are the smallest met at the start of every
-accepted substep and at the end of the step.
+accepted substep and at the end of the step. At the end, the contact forces take the sines
+φ'' took (:func:`~roller_gym.physics.equations.angles`) and the energy its J_I/m; within a
+Taylor substep, the margins take the expansion's.
 
 **Batch kernel.** A batch is cut into chunks of ``CHUNK`` rollers, handed to the cores
 (``numba.prange``) from ``PARALLEL_THRESHOLD`` rollers on. Within a chunk, the running rollers
@@ -90,7 +92,8 @@ arithmetic in the same order, without lanes, in about half the time the lanes ta
 
 **The Taylor kernel** (``_taylor_chunk``, ``_taylor_one``) has the same structure: running
 rollers in lanes that shrink, one loop over lanes per part of a substep. Its substep
-(``_taylor_substep``: the expansion, the size, the polynomials' values) is one function of
+(``_taylor_substep``: the expansion, the size, the polynomials' values, the margins at its
+start from the sines the expansion took) is one function of
 straight-line code that both kernels call, compiled once and inlined by LLVM
 (``forceinline``); its lane loop reads one table and writes another, lane by lane, so that
 LLVM needs a single overlap check to run a body that long in SIMD lanes.
@@ -426,9 +429,11 @@ def _margin_lanes(phi, w, a, par, na, lift, slip):
 @numba.extending.register_jitable(inline="always")
 def _end_fields(phi, w, tau, m, r, kappa, e, k, g, c, mu):
     """(φ'', N, F, E, N/(m g), (μN − |F|)/(m g)) at the end state (no branch)."""
-    a = eq.accel(phi, w, tau, m, r, kappa, e, k, g, c)
-    normal, friction = eq.contact_forces(phi, w, a, m, r, kappa, e, g)
-    energy = eq.energy(phi, w, m, r, kappa, e, k, g)
+    lhs, d, sin_t, cos_t, sin_psi, cos_psi, _ = eq.accel_terms(phi, w, tau, m, r, kappa, e, k,
+                                                               g, c)
+    a = lhs / d  # eq.accel; the forces and the energy from its sines and J_I/m
+    normal, friction = eq.forces(sin_t, cos_t, sin_psi, cos_psi, w, a, m, r, kappa, e, g)
+    energy = eq.energy_at(d, phi, w, m, r, kappa, e, g)
     lift, slip = eq.margins(normal, friction, m, g, mu)
     return a, normal, friction, energy, lift, slip
 
@@ -785,7 +790,7 @@ PARALLEL_THRESHOLD = 2048
 # -- the Taylor kernel: one expansion a substep, its size chosen after expanding ----------------
 
 _T_IN = ("phi", "phi_dot", "tau", "rest", "floor")  # the rows a substep reads, after the scene's
-_T_OUT = ("phi", "phi_dot", "h", "err", "acc", "last", "rounding")  # what it gives, a lane
+_T_OUT = ("phi", "phi_dot", "h", "err", "lift", "slip", "last", "rounding")  # what it gives
 (_TI_PHI, _TI_W, _TI_TAU, _TI_REST, _TI_FLOOR) = (len(SCENE_FIELDS) + i for i in range(len(_T_IN)))
 _T_WIDTH = 8  # elements per lane in the substep loop's output (its fields, padded)
 assert len(_T_OUT) <= _T_WIDTH
@@ -798,9 +803,10 @@ def _root(x):
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy", forceinline=True)
-def _taylor_substep(phi, w, tau, m, r, kappa, e, k, g, c, rest, floor, hfixed, rate):
-    """One substep of ``"taylor"`` from (φ, φ'): (φ, φ', h [s], its error estimate, φ'' at
-    the start, 1.0 if it reaches ``rest`` [s], the float64 rounding of its state).
+def _taylor_substep(phi, w, tau, m, r, kappa, e, k, g, c, mu, rest, floor, hfixed, rate):
+    """One substep of ``"taylor"`` from (φ, φ'): (φ, φ', h [s], its error estimate, the
+    lift-off and slip margins at its start, 1.0 if it reaches ``rest`` [s], the float64
+    rounding of its state). The margins take the sines the expansion evaluated.
 
     The estimate is the size of the last two terms, t₁ h^(p−1) + t₂ hᵖ (p the degree, t the
     largest of |X| and |V| at that power): two terms, as one coefficient can vanish by
@@ -815,7 +821,8 @@ def _taylor_substep(phi, w, tau, m, r, kappa, e, k, g, c, rest, floor, hfixed, r
     TAYLOR_ROUNDING ε max(|φ|, |φ'|) at its end, is returned so that the step can report
     such a tolerance (``tol_met``). No branch: the batch runs it in SIMD lanes.
     """
-    X, V = series.coefficients(phi, w, tau, m, r, kappa, e, k, g, c)
+    X, V, (sin_t, cos_t, sin_psi, cos_psi) = series.coefficients(phi, w, tau, m, r, kappa, e,
+                                                                  k, g, c)
     p = series.ORDER
     t1 = max(abs(X[p - 1]), abs(V[p - 1]))
     t2 = max(abs(X[p]), abs(V[p]))
@@ -832,7 +839,9 @@ def _taylor_substep(phi, w, tau, m, r, kappa, e, k, g, c, rest, floor, hfixed, r
     last = trig.select(free >= rest, 1.0, 0.0)
     phin, wn = series.value(X, h), series.value(V, h)
     rounding = TAYLOR_ROUNDING * _EPS * max(abs(phin), abs(wn))
-    return phin, wn, h, err, V[1], last, rounding
+    normal, friction = eq.forces(sin_t, cos_t, sin_psi, cos_psi, w, V[1], m, r, kappa, e, g)
+    lift, slip = eq.margins(normal, friction, m, g, mu)
+    return phin, wn, h, err, lift, slip, last, rounding
 
 
 @_jit
@@ -844,9 +853,10 @@ def _taylor_lanes(x, na, hfixed, rate, out):
     for i in range(na):
         o = np.uint64(i) * np.uint64(_T_WIDTH)  # unsigned: no wraparound check on the index
         (out[o], out[o + np.uint64(1)], out[o + np.uint64(2)], out[o + np.uint64(3)],
-         out[o + np.uint64(4)], out[o + np.uint64(5)], out[o + np.uint64(6)]) = _taylor_substep(
+         out[o + np.uint64(4)], out[o + np.uint64(5)], out[o + np.uint64(6)],
+         out[o + np.uint64(7)]) = _taylor_substep(
             x[_TI_PHI, i], x[_TI_W, i], x[_TI_TAU, i], x[0, i], x[1, i], x[2, i], x[3, i],
-            x[4, i], x[5, i], x[6, i], x[_TI_REST, i], x[_TI_FLOOR, i], hfixed, rate)
+            x[4, i], x[5, i], x[6, i], x[7, i], x[_TI_REST, i], x[_TI_FLOOR, i], hfixed, rate)
 
 
 @numba.extending.register_jitable
@@ -880,10 +890,10 @@ def _taylor_chunk(io, lo, hi, tab, cfg):
     par = x[:nf]
     phi, w, tau, rest, floor = x[_TI_PHI], x[_TI_W], x[_TI_TAU], x[_TI_REST], x[_TI_FLOOR]
     out = np.empty(_T_WIDTH * n)
-    rows = np.empty((16, n + _PAD))
-    phin, wn, hh, err, acc, last = rows[0], rows[1], rows[2], rows[3], rows[4], rows[5]
+    rows = np.empty((17, n + _PAD))
+    phin, wn, hh, err, lift_at, slip_at = rows[0], rows[1], rows[2], rows[3], rows[4], rows[5]
     t, count, err_sum, hforce, status, slot = rows[6], rows[7], rows[8], rows[9], rows[10], rows[11]
-    lift, slip, rounding, round_sum = rows[12], rows[13], rows[14], rows[15]
+    lift, slip, rounding, round_sum, last = rows[12], rows[13], rows[14], rows[15], rows[16]
     for i in range(n):
         col = lo + i
         for f in range(nf):
@@ -900,10 +910,11 @@ def _taylor_chunk(io, lo, hi, tab, cfg):
         _taylor_lanes(x, na, hfixed, share / dt, out)
         for i in range(na):
             o = _T_WIDTH * i
-            phin[i], wn[i], hh[i], err[i], acc[i], last[i], rounding[i] = (
-                out[o], out[o + 1], out[o + 2], out[o + 3], out[o + 4], out[o + 5], out[o + 6])
-        _margin_lanes(phi, w, acc, par, na, lift, slip)  # at the substep's start
+            phin[i], wn[i], hh[i], err[i], lift_at[i], slip_at[i], last[i], rounding[i] = (
+                out[o], out[o + 1], out[o + 2], out[o + 3], out[o + 4], out[o + 5], out[o + 6],
+                out[o + 7])
         for i in range(na):
+            lift[i], slip[i] = min(lift[i], lift_at[i]), min(slip[i], slip_at[i])
             fin = _finite(phin[i]) & _finite(wn[i]) & _finite(err[i])
             status[i], t[i], count[i], err_sum[i], hforce[i], round_sum[i] = _taylor_tick(
                 fin, last[i], rounding[i], count[i], nfixed, t[i], hh[i], err_sum[i], err[i],
@@ -947,10 +958,9 @@ def _taylor_one(io, tab, cfg):
     for _attempt in range(_MAX_ATTEMPTS):
         if status != 0.0:
             break
-        phin, wn, h, err, a, last, rounding = _taylor_substep(
-            phi, w, tau, m, r, kappa, e, k, g, c, dt - t, max(1e-12 * dt, hforce), hfixed,
+        phin, wn, h, err, li, si, last, rounding = _taylor_substep(
+            phi, w, tau, m, r, kappa, e, k, g, c, mu, dt - t, max(1e-12 * dt, hforce), hfixed,
             share / dt)
-        li, si = _margins(phi, w, a, m, r, kappa, e, g, mu)
         lift, slip = min(lift, li), min(slip, si)
         fin = _finite(phin) & _finite(wn) & _finite(err)
         status, t, count, err_sum, hforce, round_sum = _taylor_tick(
@@ -1256,6 +1266,15 @@ def missed(flat: np.ndarray) -> bool:
     return flat[_TOL_MET] == 0.0 and flat[_FINITE] != 0.0
 
 
+@_jit
+def _any_missed(io: np.ndarray) -> bool:
+    """Whether some roller of a batch's ``io`` missed its tolerance (:func:`missed`)."""
+    col, n = 0, io.shape[1]
+    while col < n and not missed(io[:, col]):
+        col += 1
+    return col < n
+
+
 @numba.extending.register_jitable
 def put_inputs(flat: np.ndarray, phi: float, phi_dot: float, tau: float) -> None:
     """Write a Stepper's inputs (φ [rad], φ' [rad/s], τ [N·m]) into its ``io`` as one row, in
@@ -1455,7 +1474,7 @@ class BatchStepper(_Base):
             self._kernel(io, self._tab, self._cfg)
         else:
             fused(io, self._tab, self._cfg, self._results, *extra)
-        if not ((io[_TOL_MET] != 0.0) | (io[_FINITE] == 0.0)).all():
+        if _any_missed(io):
             self._warn(stacklevel)  # pointing at the caller of run() or advance()
         return self._results
 
