@@ -111,7 +111,7 @@ def _clipped(a: np.ndarray, scale: float, out: np.ndarray) -> bool:
     finite = True
     for i in range(a.size):
         x = np.float64(a[i])
-        finite &= x - x == 0.0
+        finite &= math.isfinite(x)
     if finite:
         for i in range(a.size):
             out[i] = min(max(np.float64(a[i]), -1.0), 1.0) * scale

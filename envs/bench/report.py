@@ -63,9 +63,10 @@ _RK4_EVALUATIONS = tuple(integ.scheme("rk4").evaluations(fixed=f) for f in (Fals
 def substep_work(method: str) -> str:
     """The work of one substep of a compiled error-controlled scheme under error control, in
     words."""
-    if method == "taylor":
-        return "one expansion to degree 18 (the sines once, then products of series)"
     scheme = integ.SCHEMES.get(method)
+    if method == "taylor":
+        return (f"one expansion to degree {scheme.order} (the sines once, then products of "
+                "series)")
     if scheme is None or scheme.tableau is None:
         return "several stages"
     return f"{scheme.evaluations(fixed=False)} right-hand sides"

@@ -40,6 +40,7 @@ __all__ = [
     "energy",
     "energy_at",
     "forces",
+    "half_theta_sin",
     "ic_squared",
     "inertia",
     "inertia_per_mass",
@@ -75,9 +76,15 @@ def shape_factors(phi, r, kappa):
 
 @register_jitable(inline="always")
 def ic_squared(phi, r, kappa, e):
-    """|IC|² = r² + e² − 2re cos θ [m²], written (r − e)² + 4re sin²(θ/2) (no cancellation)."""
-    h = trig.sin(0.5 * phi / (1.0 - r * kappa))
-    return (r - e) * (r - e) + 4.0 * r * e * h * h
+    """|IC|² = r² + e² − 2re cos θ [m²], written (r − e)² + 4re sin²(θ/2) (no cancellation):
+    :func:`inertia_per_mass` of a point mass (k = 0)."""
+    return inertia_per_mass(half_theta_sin(phi, r, kappa), r, e, 0.0)
+
+
+@register_jitable(inline="always")
+def half_theta_sin(phi, r, kappa):
+    """sin(θ/2), θ = φ/s: what |IC| and J_I depend on."""
+    return trig.sin(0.5 * phi / (1.0 - r * kappa))
 
 
 @register_jitable(inline="always")
@@ -90,7 +97,7 @@ def inertia_per_mass(half_sin, r, e, k):
 @register_jitable(inline="always")
 def inertia(phi, m, r, kappa, e, k):
     """J_I = m (k² + |IC|²), the moment of inertia about the instant center I [kg·m²]."""
-    return m * inertia_per_mass(trig.sin(0.5 * phi / (1.0 - r * kappa)), r, e, k)
+    return m * inertia_per_mass(half_theta_sin(phi, r, kappa), r, e, k)
 
 
 @register_jitable(inline="always")
@@ -198,8 +205,8 @@ def accel_concentric(phi, phi_dot, tau, m, r, kappa, k, g, c):
 @register_jitable(inline="always")
 def energy(phi, phi_dot, m, r, kappa, e, k, g):
     """E = ½ J_I φ'² + V [J]."""
-    return energy_at(inertia_per_mass(trig.sin(0.5 * phi / (1.0 - r * kappa)), r, e, k), phi,
-                     phi_dot, m, r, kappa, e, g)
+    return energy_at(inertia_per_mass(half_theta_sin(phi, r, kappa), r, e, k), phi, phi_dot,
+                     m, r, kappa, e, g)
 
 
 @register_jitable(inline="always")
