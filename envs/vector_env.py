@@ -26,6 +26,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
+import numba
 import numpy as np
 from gymnasium import spaces
 from gymnasium.utils import seeding
@@ -59,12 +60,6 @@ class _Starts:
     flags: np.ndarray
     observation: np.ndarray
 
-    def take(self, idx: np.ndarray, size: int) -> _Starts:
-        """Those of sub-environments ``idx`` (self holds all ``size`` of them)."""
-        return _Starts(episode.take(self.scene, idx, size), self.target_params[idx],
-                       self.context[idx], self.table[idx], self.flags[idx],
-                       self.observation[idx])
-
     def put(self, idx: np.ndarray, starts: _Starts, size: int) -> None:
         """Replace those of sub-environments ``idx`` by ``starts`` (self holds all ``size``)."""
         if starts.scene is not self.scene:
@@ -76,10 +71,43 @@ class _Starts:
 
 
 _NONE = np.uint64(2**64 - 1)  # an episode number no start is drawn for
-# The rows of the outcome's table and flags that are the info (after reward, terminated).
-_INFO_ROWS = _INFO_FLAGS = slice(1, None)
-assert set(episode.OUTCOME_ROWS[_INFO_ROWS] + episode.FLAG_ROWS[_INFO_FLAGS]) == set(
-    episode.INFO_KEYS)
+# The rows of the outcome's table and flags from _INFO on are the info (before it: the
+# reward, and the terminated flag).
+_INFO = 1
+assert set(episode.OUTCOME_ROWS[_INFO:] + episode.FLAG_ROWS[_INFO:]) == set(episode.INFO_KEYS)
+_PHI_ROW, _PHI_DOT_ROW = _ROW["phi"], _ROW["phi_dot"]
+
+
+# The copies of an episode start, compiled: an autoreset starts a few hundred of many
+# sub-environments, whose rows are scattered over the tables (a loop over them, rather than a
+# dozen fancy-indexed copies and their temporaries).
+@numba.njit(cache=True, nogil=True)
+def _start_rows(idx, rows, context, target_params, table, observation,  # the starts'
+                env_context, env_target_params, phi, phi_dot, steps, env_observation):
+    """Sub-environment idx[k] takes row rows[k] of the starts (a row per start: its step
+    context, target parameters, outcome and observation) as its context, target parameters,
+    state φ [rad], φ' [rad/s] and observation; its step count is 0."""
+    for k in range(idx.size):
+        i, j = idx[k], rows[k]
+        for c in range(context.shape[1]):
+            env_context[c, i] = context[j, c]
+        for c in range(target_params.shape[1]):
+            env_target_params[i, c] = target_params[j, c]
+        for c in range(observation.shape[1]):
+            env_observation[i, c] = observation[j, c]
+        phi[i], phi_dot[i], steps[i] = table[j, _PHI_ROW], table[j, _PHI_DOT_ROW], 0
+
+
+@numba.njit(cache=True, nogil=True)
+def _start_info(idx, rows, table, flags, env_table, env_flags):
+    """The info rows (from _INFO on) of sub-environments idx[k] in a step's outcome: those of
+    row rows[k] of the starts' ``table`` and ``flags``."""
+    for k in range(idx.size):
+        i, j = idx[k], rows[k]
+        for c in range(_INFO, table.shape[1]):
+            env_table[c, i] = table[j, c]
+        for c in range(_INFO, flags.shape[1]):
+            env_flags[c, i] = flags[j, c]
 
 
 def _context_row(name: str, doc: str) -> property:
@@ -249,20 +277,21 @@ class RollerVectorEnv(VectorEnv):
                        np.ascontiguousarray(out.table.T), np.ascontiguousarray(out.flags.T),
                        out.observation)
 
-    def _apply(self, idx: np.ndarray, starts: _Starts, scene_option: bool) -> None:
-        """Start the episodes ``starts`` in sub-environments ``idx`` (``scene_option``: with
-        the scene of a reset option, for these episodes only)."""
+    def _apply(self, idx: np.ndarray, starts: _Starts, scene_option: bool,
+               rows: np.ndarray | None = None) -> None:
+        """Start the episodes of ``starts`` (its rows ``rows``; all, in order, if None) in
+        sub-environments ``idx`` (``scene_option``: with the scene of a reset option, for
+        these episodes only)."""
+        rows = np.arange(idx.size) if rows is None else rows
         if self.config.randomize or scene_option or self._option_scene[idx].any():
-            self._scene = episode.put(self._scene, idx, starts.scene, self.num_envs)
-            self._stepper.set_scenes(starts.scene, idx)
+            scene = episode.take(starts.scene, rows, len(starts.context))
+            self._scene = episode.put(self._scene, idx, scene, self.num_envs)
+            self._stepper.set_scenes(scene, idx)
         self._option_scene[idx] = scene_option
-        self._outcome.context[:, idx] = starts.context.T
-        self._target_params[idx] = starts.target_params
-        self.phi[idx] = starts.table[:, _ROW["phi"]]
-        self.phi_dot[idx] = starts.table[:, _ROW["phi_dot"]]
+        _start_rows(idx, rows, starts.context, starts.target_params, starts.table,
+                    starts.observation, self._outcome.context, self._target_params, self.phi,
+                    self.phi_dot, self.steps, self._obs)
         self._stepper.forget(idx)  # a new episode does not continue the last one's substeps
-        self.steps[idx] = 0
-        self._obs[idx] = starts.observation
 
     def _start(self, idx: np.ndarray, options: Mapping[str, Any] | None) -> _Starts:
         """Start new episodes in sub-environments ``idx`` (a reset); returns their starts
@@ -328,6 +357,8 @@ class RollerVectorEnv(VectorEnv):
         reward = table[_ROW["reward"]]
         terminated = flags[_FLAG["terminated"]]
         truncated = self.steps >= self.max_episode_steps
+        # the state, a copy: the outcome's rows are the info's, which the caller may change
+        self.phi, self.phi_dot = table[_PHI_ROW].copy(), table[_PHI_DOT_ROW].copy()
         final: dict[str, Any] = {}
         if self.autoreset_mode == AutoresetMode.NEXT_STEP:
             # The sub-environments that ended last step start over now.
@@ -342,7 +373,6 @@ class RollerVectorEnv(VectorEnv):
             if ended.size:
                 final = self._final(ended, table, flags)
                 self._restart(ended, table, flags)
-        self.phi, self.phi_dot = table[_ROW["phi"]].copy(), table[_ROW["phi_dot"]].copy()
         info = episode.info_rows(table, flags, self.config.info_keys, views=True)
         everyone = np.ones(self.num_envs, dtype=bool)
         info.update({f"_{k}": everyone for k in list(info)})
@@ -385,10 +415,8 @@ class RollerVectorEnv(VectorEnv):
             self._ahead.put(stale, self._draw(stale, following[stale], None), n)
             self._ahead_for[stale] = following[stale]
         self._episodes[idx] += np.uint64(1)
-        starts = self._ahead.take(idx, n)
-        self._apply(idx, starts, False)
-        table[_INFO_ROWS, idx] = starts.table[:, _INFO_ROWS].T
-        flags[_INFO_FLAGS, idx] = starts.flags[:, _INFO_FLAGS].T
+        self._apply(idx, self._ahead, False, rows=idx)
+        _start_info(idx, idx, self._ahead.table, self._ahead.flags, table, flags)
 
     # -- observation and info ------------------------------------------------------------
     def _observation(self) -> np.ndarray:

@@ -269,6 +269,37 @@ def test_what_a_step_returns_never_changes_afterwards(mode):
     assert sum(bool((h[2] | h[3]).any()) for h in held[1:] if len(h) == 5) >= 2  # episodes ended
 
 
+@pytest.mark.parametrize("mode", [AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP])
+def test_what_a_caller_does_to_the_returned_arrays_never_changes_the_environment(mode):
+    """The converse: a caller that writes into every array a step or reset returned (the
+    observation, reward, flags and each info array, the state's among them) does not change
+    what the environment does next; a twin whose outputs are left alone gives the same."""
+    def scribble(value):
+        if isinstance(value, dict):
+            for v in value.values():
+                scribble(v)
+        elif isinstance(value, tuple):
+            for v in value:
+                scribble(v)
+        elif isinstance(value, np.ndarray) and value.dtype != object:
+            value[...] = ~value if value.dtype == bool else value + 1
+
+    kwargs = {"num_envs": 5, "max_episode_steps": 3, "autoreset_mode": mode}
+    vandal = gym.make_vec("roller_gym/RollerHold-v1", **kwargs)
+    twin = gym.make_vec("roller_gym/RollerHold-v1", **kwargs)
+    rng = np.random.default_rng(4)
+    ours, theirs = vandal.reset(seed=3), twin.reset(seed=3)
+    ended = 0
+    for _ in range(9):
+        assert _same(_snapshot(ours), _snapshot(theirs))
+        scribble(ours)
+        a = rng.uniform(-1, 1, (5, 1)).astype(np.float32)
+        ours, theirs = vandal.step(a), twin.step(a)
+        ended += int((theirs[2] | theirs[3]).sum())
+    assert _same(_snapshot(ours), _snapshot(theirs))
+    assert ended >= 5  # autoresets happened in between
+
+
 def _snapshot(value):
     if isinstance(value, dict):
         return {k: _snapshot(v) for k, v in value.items()}

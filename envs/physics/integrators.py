@@ -1405,6 +1405,7 @@ class BatchStepper(_Base):
         super().__init__(int(num), method, dt, tol, substeps)
         self.num = int(num)
         self._io[: len(SCENE_FIELDS)] = np.nan  # no scene yet
+        self._unset = True  # some roller has no scene (checked where scenes are set)
         self._substeps = np.zeros(self.num, dtype=np.int64)
         self._finite = np.zeros(self.num, dtype=bool)
         self._tol_met = np.zeros(self.num, dtype=bool)
@@ -1432,8 +1433,13 @@ class BatchStepper(_Base):
         size = scene.batch_size
         if size is not None and size != np.size(rows):
             raise ValueError(f"scene has {size} rollers for {np.size(rows)} rows of index")
-        self._io[: len(SCENE_FIELDS), rows] = scene_arrays(scene, np.size(rows)).reshape(
-            len(SCENE_FIELDS), *np.shape(rows))
+        self._put_scenes(scene_arrays(scene, np.size(rows)).reshape(
+            len(SCENE_FIELDS), *np.shape(rows)), rows)
+
+    def _put_scenes(self, numbers: Any, rows: Any) -> None:
+        """Put the scene ``numbers`` (SCENE_FIELDS rows) into the rollers ``rows``."""
+        self._io[: len(SCENE_FIELDS), rows] = numbers
+        self._unset = self._unset and bool(np.isnan(self._io[_M]).any())
         self.forget(rows)
 
     def forget(self, index=None) -> None:
@@ -1468,7 +1474,7 @@ class BatchStepper(_Base):
              stacklevel: int, fused: Callable | None = None, extra: tuple = ()) -> np.ndarray:
         io = self._io
         io[_PHI_IN], io[_W_IN], io[_TAU] = phi, phi_dot, tau
-        if np.isnan(io[_M]).any():
+        if self._unset:
             raise ValueError("some rollers have no scene: call set_scenes first")
         if fused is None:
             self._kernel(io, self._tab, self._cfg)
@@ -1568,7 +1574,7 @@ def step(
     shape = arrays[0].shape
     n = max(1, int(np.prod(shape)))
     stepper = BatchStepper(n, method=method, dt=dt, tol=tol, substeps=substeps)
-    stepper._io[: len(SCENE_FIELDS)] = [a.reshape(-1) for a in arrays[3:]]
+    stepper._put_scenes([a.reshape(-1) for a in arrays[3:]], slice(None))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         out = stepper.advance(*(a.reshape(-1) for a in arrays[:3]))
