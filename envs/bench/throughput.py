@@ -168,6 +168,7 @@ def measure_vector(sizes: Sequence[int], steps: int, repeats: int,
     the share outside the physics kernel (default ``repeats``)."""
     import gymnasium as gym
 
+    share_repeats = share_repeats or repeats
     out: dict[str, Any] = {}
     rng = np.random.default_rng(0)
     for n in sizes:
@@ -205,8 +206,8 @@ def measure_vector(sizes: Sequence[int], steps: int, repeats: int,
         out[str(n)] = {name: rate for name, (rate, _) in rates.items()}
         out[str(n)].update({"ours_steps": episode, "kernel": kernel_rate,
                             "outside_kernel_share": outside_physics_share(
-                                ours, a, REPLAY_EVERY, share_repeats or repeats),
-                            "outside_kernel_repeats": share_repeats or repeats,
+                                ours, a, REPLAY_EVERY, share_repeats),
+                            "outside_kernel_repeats": share_repeats,
                             "outside_compiled_share": 1.0 - rates["ours"][1],
                             **measure_arithmetic(stepper, base, tau, repeats)})
         ours.close()
