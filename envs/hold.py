@@ -59,8 +59,9 @@ import math
 from typing import Any
 
 import numpy as np
+from roller_gym import validation
 from roller_gym.physics import Scene
-from roller_gym.task import Task, hold_range, per_scene, register, wrap_rate
+from roller_gym.task import Task, hold_range, hold_ranges, register, wrap_rate
 
 __all__ = ["HoldTask"]
 
@@ -75,15 +76,11 @@ class HoldTask(Task):
     default_max_torque = 1.0
 
     def sample_targets(self, u: np.ndarray, scene: Scene) -> np.ndarray:
-        low = per_scene(lambda s: hold_range(s, self.max_torque)[0], scene)
-        high = per_scene(lambda s: hold_range(s, self.max_torque)[1], scene)
+        low, high = hold_ranges(scene, self.max_torque)  # one compiled call for the batch
         return low + (high - low) * u
 
     def target_from_option(self, value: Any, scene: Scene) -> float:
-        try:
-            target = float(value)
-        except (TypeError, ValueError):
-            raise ValueError(f"options['target']={value!r} must be a number [rad]") from None
+        target = validation.real("options['target']", value, unit="rad")
         q = wrap_rate(scene)  # on the floor the target is φ* itself (q = 1)
         phi = target / q
         low, high = hold_range(scene, self.max_torque)

@@ -60,7 +60,7 @@ from typing import Any
 
 import numpy as np
 from roller_gym.physics import Scene, trig
-from roller_gym.task import Task, hold_range, per_scene, register
+from roller_gym.task import Task, hold_range, hold_ranges, register
 
 __all__ = ["TrackTask"]
 
@@ -81,8 +81,7 @@ class TrackTask(Task):
     frequencies = (0.2, 0.8)
 
     def sample_target_params(self, u: np.ndarray, scene: Scene) -> np.ndarray:
-        low = per_scene(lambda s: hold_range(s, self.max_torque)[0], scene)
-        high = per_scene(lambda s: hold_range(s, self.max_torque)[1], scene)
+        low, high = hold_ranges(scene, self.max_torque)  # one compiled call for the batch
         middle, half = 0.5 * (high + low), 0.5 * (high - low)
         center = middle + 0.3 * half * (2.0 * u[:, 0] - 1.0)
         room = half - np.abs(center - middle)  # the sinusoids stay within the range

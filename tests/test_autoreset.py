@@ -204,6 +204,39 @@ def test_a_failed_step_is_not_reported_as_lift_off_or_slip():
     np.testing.assert_array_equal(out.info["lifting"], [False, False, False])
 
 
+def test_a_step_that_blows_up_is_failed_not_handed_back_as_nan():
+    """A coarse fixed-substep scheme (one rk4 substep of 0.3 s on "rim_mass", full torque
+    both ways) blows up: φ' grows to ~1e32 rad/s and φ past 2⁵⁰ rad, where the sines of the
+    observation are NaN (trig.DOMAIN). Such a step is failed (flagged nonfinite, the state
+    before it kept), so no observation, final observation or reward is ever NaN, in the
+    vector environment and in the single environment on the same seed and actions."""
+    kwargs = {"scene": "rim_mass", "integrator": "rk4", "substeps": 1, "dt": 0.3}
+    n, steps = 64, 40
+    vec = gym.make_vec(IDS[0], num_envs=n, autoreset_mode=AutoresetMode.SAME_STEP, **kwargs)
+    vec.reset(seed=0)
+    actions = np.where(np.arange(n) % 2, 1.0, -1.0).astype(np.float32)[:, None]
+    failed = np.zeros(n, dtype=bool)
+    for _ in range(steps):
+        obs, reward, *_, info = vec.step(actions)
+        assert np.isfinite(obs).all() and np.isfinite(reward).all()
+        if "final_obs" in info:
+            ended = info["_final_obs"]
+            assert all(np.isfinite(o).all() for o in info["final_obs"][ended])
+            failed |= ended & info["final_info"]["nonfinite"]
+    assert failed.any()  # the blow-up happened, and was caught
+    i = int(np.flatnonzero(failed)[0])
+    single = gym.make(IDS[0], **kwargs)
+    single.reset(seed=i)
+    caught = False
+    for _ in range(steps):
+        obs, reward, terminated, truncated, info = single.step(actions[i])
+        assert np.isfinite(obs).all() and np.isfinite(reward)
+        caught |= bool(info["nonfinite"])
+        if terminated or truncated:
+            single.reset()
+    assert caught
+
+
 def test_a_huge_start_speed_is_refused_at_reset():
     env = gym.make(IDS[0])
     with pytest.raises(ValueError, match="does not roll"):

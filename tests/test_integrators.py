@@ -27,6 +27,7 @@ from roller_gym.physics import (
     predicted_substeps,
     preset,
     step,
+    trig,
 )
 from roller_gym.physics import equations as eq
 from scipy.integrate import solve_ivp
@@ -1009,6 +1010,21 @@ def test_taylor_stays_within_tol_through_the_dip_of_j_i():
         assert checked.sum() >= 450, (tol, checked.sum())
         err = np.maximum(np.abs(out.phi - ref.phi), np.abs(out.phi_dot - ref.phi_dot))
         assert err[checked].max() <= tol, (tol, err[checked].max() / tol)
+
+
+@pytest.mark.parametrize("method", ["taylor", "rk8", "rk4"])
+def test_a_step_ending_past_the_domain_of_the_sines_is_failed(method):
+    """A concentric roller on the floor (it rolls at constant speed) at 1000 rad/s, 0.05 s
+    from φ = 2⁵⁰ − 10 rad: the step ends past trig.DOMAIN = 2⁵⁰ rad, where sin φ is NaN, so
+    it fails (the state before it, NaN fields); from 2⁵⁰ − 100 rad it ends inside and is an
+    ordinary step, 50 rad on."""
+    scene, domain = Scene(R=math.inf, e=0.0), trig.DOMAIN
+    assert domain == 2.0**50 and math.isnan(trig.sin(domain * 1.01))
+    out = step(scene, domain - 10.0, 1000.0, 0.0, DT, method=method)
+    assert not out.finite and (out.phi, out.phi_dot) == (domain - 10.0, 1000.0)
+    assert math.isnan(out.energy) and math.isnan(out.normal_force)
+    inside = step(scene, domain - 100.0, 1000.0, 0.0, DT, method=method)
+    assert inside.finite and abs(inside.phi - (domain - 50.0)) <= 1.0
 
 
 def test_taylor_at_rest_over_a_huge_step_stays_finite():

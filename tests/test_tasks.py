@@ -16,7 +16,16 @@ import roller_gym.config
 from gymnasium.envs.registration import register as gym_register
 from gymnasium.vector import SyncVectorEnv
 from roller_gym.agents import controller_for, rollout
-from roller_gym.task import OBSERVATION_FIELDS, TASKS, Task, hold_range, register
+from roller_gym.physics import Scene, contact, holding_torque
+from roller_gym.task import (
+    OBSERVATION_FIELDS,
+    TASKS,
+    Task,
+    hold_range,
+    hold_ranges,
+    register,
+    wrap_rate,
+)
 
 TASK_CLASSES = list(TASKS.values())
 
@@ -208,3 +217,91 @@ def test_the_start_state_is_the_first_accepted_candidate_in_draw_order(name):
         assert (phi[i], phi_dot[i]) == (c_phi[0, 0], c_dot[0, 0]), (i, j)
     # Balance starts near rest at the bottom, where every candidate rolls
     assert later > 0 or name == "RollerBalance"
+
+
+# -- the holdable range ---------------------------------------------------------------------
+def grid_scan_hold_range(scene, max_torque, torque_share=0.8, friction_share=0.9, points=2001):
+    """The reference: hold_range as it was written before its compiled walk, a NumPy scan of
+    the whole grid of each side (one scalar scene)."""
+    half = math.pi / abs(wrap_rate(scene))
+    bounds = []
+    for sign in (1.0, -1.0):
+        phi = sign * np.linspace(0.0, half, points)
+        c = contact(scene, phi, 0.0, holding_torque(scene, phi))
+        normal, friction = np.asarray(c.normal), np.asarray(c.friction)
+        ok = (np.abs(holding_torque(scene, phi)) <= torque_share * max_torque) & (normal > 0)
+        ok &= np.abs(friction) <= friction_share * scene.mu * normal
+        last = int(np.argmin(ok)) - 1 if not ok.all() else points - 1
+        bounds.append(float(phi[max(last, 0)]))
+    return bounds[1], bounds[0]
+
+
+def random_scenes(n, seed):
+    """Scenes inside a cylinder, on the floor and on a drum, some with e = 0, a few without
+    friction, over wide ranges of every field."""
+    rng = np.random.default_rng(seed)
+    scenes = []
+    for i in range(n):
+        r = rng.uniform(0.02, 0.3)
+        R = (r * rng.uniform(1.01, 20), math.inf, -r * rng.uniform(0.5, 20))[i % 3]
+        scenes.append(Scene(m=rng.uniform(0.2, 5.0), r=r, R=R,
+                            e=0.0 if i % 5 == 0 else rng.uniform(0.0, 1.2) * r,
+                            k=rng.uniform(0.1, 1.5) * r, g=rng.uniform(1.0, 20.0),
+                            mu=0.0 if i % 17 == 0 else rng.uniform(0.0, 2.0),
+                            damping=rng.uniform(0.0, 0.1)))
+    return scenes
+
+
+def same_bits(a, b) -> bool:
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    return a.shape == b.shape and bool(np.all(a == b)) and np.array_equal(np.signbit(a),
+                                                                          np.signbit(b))
+
+
+def test_hold_ranges_is_the_grid_scan_bit_for_bit():
+    """The compiled walk (early exit) gives, for a batch, each scene's bounds exactly as the
+    NumPy scan of the whole grid did (``==`` on every element, and the sign of −0.0), over
+    300 random scenes and five torque limits: where the whole half-turn holds, where nothing
+    beyond φ = 0 does, and between."""
+    scenes = random_scenes(300, seed=11)
+    batch = Scene.stack(scenes)
+    whole = nothing = between = 0
+    for max_torque in (0.05, 0.3, 1.0, 5.0, 100.0):
+        low, high = hold_ranges(batch, max_torque)
+        want = np.array([grid_scan_hold_range(s, max_torque) for s in scenes])
+        assert same_bits(low, want[:, 0]) and same_bits(high, want[:, 1]), max_torque
+        half = math.pi / np.abs(wrap_rate(batch))
+        whole += int(np.sum(high == half) + np.sum(low == -half))
+        nothing += int(np.sum(high == 0.0) + np.sum(low == 0.0))
+        between += int(np.sum((high > 0.0) & (high < half)))
+    assert whole > 100 and nothing > 50 and between > 300
+
+
+@pytest.mark.parametrize("points", [1, 2, 3, 10, 2001])
+def test_hold_range_grid_of_any_size_is_the_grid_scan(points):
+    """Grids of any size, the shares included, give the reference's bounds (the scalar
+    function, memoized, and the batch one)."""
+    scenes = random_scenes(30, seed=points)
+    low, high = hold_ranges(Scene.stack(scenes), 0.7, 0.6, 0.5, points)
+    for i, scene in enumerate(scenes):
+        want = grid_scan_hold_range(scene, 0.7, 0.6, 0.5, points)
+        assert same_bits(hold_range(scene, 0.7, 0.6, 0.5, points), want), i
+        assert same_bits((low[i], high[i]), want), i
+
+
+def test_hold_ranges_of_a_batch_is_each_scene_alone():
+    """A batch of distinct scenes (array fields next to scalar ones) gives each roller's
+    range as that scene alone does, and a scalar scene gives arrays of one."""
+    rng = np.random.default_rng(5)
+    batch = Scene(m=rng.uniform(0.5, 2.0, 40), e=rng.uniform(0.0, 0.09, 40),
+                  R=np.where(rng.uniform(size=40) < 0.5, 0.6, -0.6), mu=0.8)
+    low, high = hold_ranges(batch, 1.0)
+    assert low.shape == high.shape == (40,) and len(set(high)) > 20
+    for i in range(40):
+        alone = hold_ranges(batch.item(i), 1.0)
+        assert alone[0].shape == (1,)
+        assert same_bits((low[i], high[i]), (alone[0][0], alone[1][0]))
+        assert same_bits(hold_range(batch.item(i), 1.0), (low[i], high[i]))
+    # numbers of other types count as the floats they are
+    assert same_bits(hold_ranges(Scene(m=1, R=np.float32(0.5)), 1.0),
+                     hold_ranges(Scene(m=1.0, R=float(np.float32(0.5))), 1.0))
