@@ -27,7 +27,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from gymnasium.vector import AutoresetMode
-from roller_gym.episode import INFO_KEYS
+from roller_gym.episode import INFO_KEYS, vector_seeds
 from stable_baselines3.common.vec_env import DummyVecEnv
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices
 
@@ -35,7 +35,13 @@ __all__ = ["RollerVecEnv", "from_env_fns"]
 
 #: Wrappers that ``gymnasium.make`` and SB3's ``make_vec_env`` add, which the native batch
 #: does itself (``from_env_fns`` falls back to DummyVecEnv over any other wrapper).
-_PLAIN_WRAPPERS = {"Monitor", "TimeLimit", "OrderEnforcing", "PassiveEnvChecker"}
+#: ``PatchedTimeLimit`` is the ``TimeLimit`` of a process that imported rl-zoo3: it sets
+#: ``info["TimeLimit.truncated"]`` as :class:`RollerVecEnv` does.
+_PLAIN_WRAPPERS = {"Monitor", "TimeLimit", "PatchedTimeLimit", "OrderEnforcing",
+                   "PassiveEnvChecker"}
+#: Attributes whose sub-environment's value the native batch holds under another name.
+_SINGLE = {"observation_space": "single_observation_space",
+           "action_space": "single_action_space"}
 
 
 class RollerVecEnv(VecEnv):
@@ -56,6 +62,11 @@ class RollerVecEnv(VecEnv):
 
     def __init__(self, env_id: str, n_envs: int = 1, seed: int | None = None,
                  monitor: bool | str = False, **env_kwargs: Any) -> None:
+        if isinstance(n_envs, bool) or not isinstance(n_envs, int | np.integer) or n_envs < 1:
+            raise ValueError(f"n_envs={n_envs!r} must be a positive integer")
+        if not isinstance(monitor, bool | str):
+            raise ValueError(f"monitor={monitor!r} must be True, False or a path (str)")
+        vector_seeds(seed, int(n_envs))  # the seeds' check, before anything is built
         self.venv = gym.make_vec(env_id, num_envs=n_envs, vectorization_mode="vector_entry_point",
                                  autoreset_mode=AutoresetMode.SAME_STEP, **env_kwargs)
         base = self.venv.unwrapped
@@ -78,10 +89,19 @@ class RollerVecEnv(VecEnv):
 
     # -- SB3's VecEnv API ----------------------------------------------------------------
     def reset(self) -> np.ndarray:
+        """Every sub-environment starts a new episode, with the seeds and options set by
+        ``seed()`` and ``set_options()`` (each sub-environment its own, as DummyVecEnv)."""
+        n = self.num_envs
         seeds = None if all(s is None for s in self._seeds) else list(self._seeds)
-        options = self._options[0] if self._options and self._options[0] else None
-        obs, info = self.venv.reset(seed=seeds, options=options)
-        self.reset_infos = _rows(info, self.num_envs)
+        groups = _option_groups(self._options, n)
+        self.reset_infos = [{} for _ in range(n)]
+        for options, mask in groups:
+            if len(groups) > 1:  # the sub-environments that share these options
+                options = {**(options or {}), "reset_mask": mask}
+            obs, info = self.venv.reset(seed=seeds, options=options)
+            rows = _rows(info, n)
+            for i in np.flatnonzero(mask):
+                self.reset_infos[i] = rows[i]
         self._returns[:], self._lengths[:] = 0.0, 0
         self._reset_seeds()
         self._reset_options()
@@ -125,16 +145,48 @@ class RollerVecEnv(VecEnv):
         return list(frames) if frames is not None else [None] * self.num_envs
 
     def get_attr(self, attr_name: str, indices: VecEnvIndices = None) -> list[Any]:
-        value = getattr(self.venv.unwrapped, attr_name)
-        return [value] * len(self._get_indices(indices))
+        """The attribute of each sub-environment in ``indices``: an array of the native batch
+        with one entry per sub-environment (``phi``, ``target``, …) gives each its own; the
+        spaces are a sub-environment's; anything else is the batch's one value."""
+        index = list(self._get_indices(indices))
+        value = getattr(self.venv.unwrapped, _SINGLE.get(attr_name, attr_name))
+        if self._per_env(value):
+            return [value[i].item() if value.ndim == 1 else value[i] for i in index]
+        return [value] * len(index)
 
     def set_attr(self, attr_name: str, value: Any, indices: VecEnvIndices = None) -> None:
-        setattr(self.venv.unwrapped, attr_name, value)
+        """Set the attribute of the sub-environments in ``indices``: the entries of an array
+        with one entry per sub-environment; a value of the whole batch only for all of them."""
+        index = list(self._get_indices(indices))
+        current = getattr(self.venv.unwrapped, attr_name)
+        if self._per_env(current):
+            current[index] = value
+        elif sorted(index) == list(range(self.num_envs)):
+            setattr(self.venv.unwrapped, attr_name, value)
+        else:
+            raise ValueError(
+                f"set_attr({attr_name!r}, indices={indices!r}): {attr_name!r} is one value for "
+                f"the whole native batch of {self.num_envs} sub-environments, so it can only "
+                f"be set for all of them (indices=None)")
 
     def env_method(self, method_name: str, *method_args: Any, indices: VecEnvIndices = None,
                    **method_kwargs: Any) -> list[Any]:
+        """Call a method of the native batch (once, for all sub-environments: the result is
+        repeated for each). ``indices`` may only name all of them."""
+        index = list(self._get_indices(indices))
+        if sorted(index) != list(range(self.num_envs)):
+            raise ValueError(
+                f"env_method({method_name!r}, indices={indices!r}): the native batch's "
+                f"methods act on all {self.num_envs} sub-environments at once, so indices "
+                f"may only be None (all of them); DummyVecEnv over single environments calls "
+                f"each on its own")
         result = getattr(self.venv.unwrapped, method_name)(*method_args, **method_kwargs)
-        return [result] * len(self._get_indices(indices))
+        return [result] * len(index)
+
+    def _per_env(self, value: Any) -> bool:
+        """Whether ``value`` is an array with one entry per sub-environment."""
+        return isinstance(value, np.ndarray) and value.ndim >= 1 and \
+            value.shape[0] == self.num_envs
 
     def env_is_wrapped(self, wrapper_class: type[gym.Wrapper],
                        indices: VecEnvIndices = None) -> list[bool]:
@@ -169,6 +221,18 @@ def from_env_fns(env_fns: list[Any], **vec_env_kwargs: Any) -> VecEnv:
             return RollerVecEnv(spec.id, n_envs=len(env_fns), monitor=monitor,
                                 max_episode_steps=spec.max_episode_steps, **kwargs)
     return DummyVecEnv(env_fns, **vec_env_kwargs)
+
+
+def _option_groups(options: list[dict | None], n: int) -> list[tuple[dict | None,
+                                                                       np.ndarray]]:
+    """The sub-environments' reset options as groups that share them: (options, mask), the
+    empty ones (None or {}) as one group (SB3's ``set_options`` repeats one dict)."""
+    groups: dict[int, tuple[dict | None, np.ndarray]] = {}
+    for i in range(n):
+        value = options[i] if options and options[i] else None
+        key = 0 if value is None else id(value)
+        groups.setdefault(key, (value, np.zeros(n, dtype=bool)))[1][i] = True
+    return list(groups.values())
 
 
 def _rows(info: dict[str, Any], n: int) -> list[dict[str, Any]]:

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import argparse
 import ast
+from collections.abc import Callable
 from typing import Any
 
-__all__ = ["key_values"]
+__all__ = ["at_least", "key_values"]
 
 
 def key_values(items: list[str], option: str, separator: str = "=") -> dict[str, Any]:
@@ -27,3 +29,19 @@ def key_values(items: list[str], option: str, separator: str = "=") -> dict[str,
         except (ValueError, SyntaxError):
             out[key] = value
     return out
+
+
+def at_least(least: int) -> Callable[[str], int]:
+    """An argparse ``type``: an integer of at least ``least``, else argparse's error naming
+    the option, the value and what is allowed."""
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            value = least - 1
+        if value < least:
+            raise argparse.ArgumentTypeError(f"{text!r} is not an integer >= {least}")
+        return value
+
+    parse.__name__ = f"integer >= {least}"
+    return parse

@@ -71,20 +71,18 @@ def main(argv: Sequence[str] | None = None) -> None:
         parser.parse_args(argv[:1])
     name = parser.parse_args(argv[:1]).command
     command = COMMANDS[name]
-    try:
-        program = importlib.import_module(f"roller_gym.scripts.{command.module}")
-    except ImportError as exc:  # a package of an extra that is not installed
-        if exc.name is not None and exc.name.split(".")[0] == "roller_gym":
-            raise
-        extras = f"roller-gym[{command.extra}]"
-        raise SystemExit(f"roller-gym {name} needs {exc.name!r}, which is not installed: "
-                         f'pip install "{extras}"') from None
     # The program's usage lines read "roller-gym COMMAND ...": argparse names a program
     # after sys.argv[0].
     saved = sys.argv[0]
     sys.argv[0] = f"roller-gym {name}"
-    try:
-        program.main(argv[1:])
+    try:  # a program imports what only some of its options need when they are given
+        importlib.import_module(f"roller_gym.scripts.{command.module}").main(argv[1:])
+    except ImportError as exc:  # a package of an extra that is not installed
+        if exc.name is None or exc.name.split(".")[0] == "roller_gym":
+            raise
+        extras = f"roller-gym[{command.extra}]"
+        raise SystemExit(f"roller-gym {name} needs {exc.name!r}, which is not installed: "
+                         f'pip install "{extras}"') from None
     finally:
         sys.argv[0] = saved
 

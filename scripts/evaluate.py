@@ -51,6 +51,7 @@ from roller_gym.agents.policies import (
     read_config,
     rollout,
 )
+from roller_gym.scripts.arguments import at_least
 from roller_gym.task import get_task
 
 #: How the baselines are named in the tables.
@@ -77,7 +78,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="with --runs: the algorithms to take (default: sac td3 ppo)")
     p.add_argument("--baselines", nargs="*", default=list(BASELINES), choices=BASELINES,
                    help="baselines to compare (default: classical zero random)")
-    p.add_argument("--episodes", type=int, default=100, help="episodes per policy (default 100)")
+    p.add_argument("--episodes", type=at_least(1), default=100,
+                   help="episodes per policy (default 100)")
     p.add_argument("--best", action="store_true",
                    help="evaluate best_model.zip (best periodic evaluation) instead of the final "
                         "model")
@@ -240,6 +242,14 @@ def main(argv: list[str] | None = None) -> None:
         for name in args.baselines:
             label = classical_label(env_id) if name == "classical" else BASELINE_LABELS[name]
             policies.append(({"name": name, "label": label}, baseline(name, env, seed=0)))
+        if not policies:
+            where = f" (--runs {args.runs!r} holds no run of it)" if args.runs else ""
+            raise SystemExit(f"nothing to evaluate on {env_id}{where}: give --models, --runs "
+                             f"with runs of it, or --baselines with at least one of "
+                             f"{', '.join(BASELINES)}")
+        if args.runs and not run_dirs:
+            print(f"--runs {args.runs!r}: no run of {env_id} ({', '.join(args.algos)}); "
+                  "evaluating the baselines only")
 
         # -- the same seeded episodes for every policy ----------------------------------
         rows = []

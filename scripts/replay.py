@@ -20,6 +20,7 @@ import imageio.v2 as imageio
 import roller_gym  # registers the tasks
 from roller_gym import file_name
 from roller_gym.agents.policies import BASELINES, baseline, load_policy, read_config, rollout
+from roller_gym.scripts.arguments import at_least
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -29,12 +30,14 @@ def build_parser() -> argparse.ArgumentParser:
                                   f"{', '.join(BASELINES)}")
     p.add_argument("--env", default=None, choices=roller_gym.ENV_IDS,
                    help="the task (default: the run's; required for a baseline)")
-    p.add_argument("--seed", type=int, default=0, help="the episode's reset seed (default 0)")
+    p.add_argument("--seed", type=at_least(0), default=0,
+                   help="the episode's reset seed (default 0)")
     p.add_argument("--out", default=None,
                    help="output .gif or .mp4 (default <run dir>/replay.gif, or "
                         "<policy>-<env>.gif for a baseline)")
     p.add_argument("--best", action="store_true", help="use the run's best_model.zip")
-    p.add_argument("--fps", type=int, default=20, help="frames per second (default 20 = 1/dt)")
+    p.add_argument("--fps", type=at_least(1), default=20,
+                   help="frames per second (default 20 = 1/dt)")
     return p
 
 

@@ -43,6 +43,7 @@ from roller_gym.agents import stats
 from roller_gym.agents.hyperparams import ALGOS
 from roller_gym.agents.policies import BASELINES, baseline, load_policy, read_config
 from roller_gym.bench.throughput import package_versions
+from roller_gym.scripts.arguments import at_least
 from roller_gym.scripts.evaluate import (  # its targets, read here from the intervals
     BASELINE_LABELS,
     RETURN_TOLERANCE,
@@ -63,9 +64,9 @@ def build_parser() -> argparse.ArgumentParser:
                    choices=roller_gym.ENV_IDS, help="the tasks (default: all)")
     p.add_argument("--algos", nargs="+", default=list(ALGOS), choices=ALGOS,
                    help="the algorithms (default: sac td3 ppo)")
-    p.add_argument("--episodes", type=int, default=100,
+    p.add_argument("--episodes", type=at_least(1), default=100,
                    help="evaluation episodes per agent (default 100)")
-    p.add_argument("--workers", type=int, default=2,
+    p.add_argument("--workers", type=at_least(1), default=2,
                    help="evaluation processes (default 2)")
     p.add_argument("--results", default="docs/results/results.json",
                    help="the results file (default docs/results/results.json)")

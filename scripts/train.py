@@ -30,7 +30,7 @@ from pathlib import Path
 import roller_gym  # registers the tasks
 from roller_gym.agents.hyperparams import ALGOS, config_file, hyperparams
 from roller_gym.agents.policies import ZOO_HINT, find_run
-from roller_gym.scripts.arguments import key_values
+from roller_gym.scripts.arguments import at_least, key_values
 
 #: Algorithms that learn from whole rollouts of n_envs x n_steps environment steps.
 ON_POLICY = ("ppo",)
@@ -42,10 +42,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--algo", default="sac", choices=ALGOS, help="the algorithm (default sac)")
     p.add_argument("--env", default="roller_gym/RollerStabilize-v1", choices=roller_gym.ENV_IDS,
                    help="the task (default roller_gym/RollerStabilize-v1)")
-    p.add_argument("--steps", type=int, default=None,
+    p.add_argument("--steps", type=at_least(1), default=None,
                    help="environment steps, all environments together (default: the "
                         "hyperparameter file's n_timesteps); PPO rounds up to whole rollouts")
-    p.add_argument("--seed", type=int, default=0, help="the seed of training (default 0)")
+    p.add_argument("--seed", type=at_least(0), default=0, help="the seed of training (default 0)")
     p.add_argument("--env-kwargs", nargs="+", default=[], metavar="KEY=VALUE",
                    help="keyword arguments of gymnasium.make, e.g. max_torque=0.6 scene=floor "
                         "(values are Python literals, else strings)")
@@ -55,13 +55,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--log-folder", default="runs",
                    help="rl-zoo3's log folder: the run goes to <log folder>/<algo>/<env name>_<N> "
                         "(default runs)")
-    p.add_argument("--eval-freq", type=int, default=None,
+    p.add_argument("--eval-freq", type=at_least(1), default=None,
                    help="evaluate every this many steps (default: the run's steps / 20)")
-    p.add_argument("--eval-episodes", type=int, default=10,
+    p.add_argument("--eval-episodes", type=at_least(1), default=10,
                    help="episodes per periodic evaluation (default 10)")
-    p.add_argument("--checkpoints", type=int, default=5,
+    p.add_argument("--checkpoints", type=at_least(0), default=5,
                    help="number of checkpoints over the run (default 5; 0: none)")
-    p.add_argument("--threads", type=int, default=1,
+    p.add_argument("--threads", type=at_least(1), default=1,
                    help="torch threads (default 1: small networks gain nothing from more)")
     p.add_argument("--verbose", type=int, default=1, choices=(0, 1, 2),
                    help="rl-zoo3's and stable-baselines3's output (0: none, 1: progress "

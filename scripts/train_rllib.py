@@ -34,7 +34,7 @@ from typing import Any
 
 import gymnasium as gym
 from roller_gym import ENV_IDS
-from roller_gym.scripts.arguments import key_values
+from roller_gym.scripts.arguments import at_least, key_values
 
 VECTORIZE_MODES = {"sync": "sync", "async": "async", "native": "vector_entry_point"}
 
@@ -48,34 +48,35 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--env-kwarg", action="append", default=[], metavar="KEY=VALUE",
                    help="a keyword argument of gymnasium.make (VALUE is a Python literal if it "
                         "parses, else a string), e.g. dt=0.02, scene=paper; repeat for more")
-    p.add_argument("--iterations", type=int, default=10, help="training iterations")
-    p.add_argument("--num-env-runners", type=int, default=2,
+    p.add_argument("--iterations", type=at_least(1), default=10, help="training iterations")
+    p.add_argument("--num-env-runners", type=at_least(0), default=2,
                    help="sampling actors (Ray processes), 1 CPU each; 0 samples in the driver")
-    p.add_argument("--envs-per-runner", type=int, default=1,
+    p.add_argument("--envs-per-runner", type=at_least(1), default=1,
                    help="environments each runner steps as one vector")
     p.add_argument("--vectorize", choices=list(VECTORIZE_MODES), default="sync",
                    help="how a runner vectorizes its environments: Gymnasium's sync or async "
                         "vector of single environments, or the task's native vector env")
-    p.add_argument("--train-batch-size", type=int, default=None,
+    p.add_argument("--train-batch-size", type=at_least(1), default=None,
                    help="PPO: env steps per iteration (default 4000); SAC: replay minibatch "
                         "(default 256)")
-    p.add_argument("--minibatch-size", type=int, default=128, help="PPO's SGD minibatch")
-    p.add_argument("--num-epochs", type=int, default=10, help="PPO's epochs over each batch")
+    p.add_argument("--minibatch-size", type=at_least(1), default=128, help="PPO's SGD minibatch")
+    p.add_argument("--num-epochs", type=at_least(1), default=10,
+                   help="PPO's epochs over each batch")
     p.add_argument("--lr", type=float, default=3e-4, help="the learning rate")
     p.add_argument("--gamma", type=float, default=0.99, help="the discount factor")
-    p.add_argument("--hidden", type=int, nargs="+", default=[64, 64],
+    p.add_argument("--hidden", type=at_least(1), nargs="+", default=[64, 64],
                    help="hidden layer sizes of the networks")
     p.add_argument("--address", default=None,
                    help="a running Ray cluster to join (HOST:PORT, 'auto', or ray://HOST:PORT "
                         "with ray[client]); default: start a local Ray on this machine")
-    p.add_argument("--num-cpus", type=int, default=None,
+    p.add_argument("--num-cpus", type=at_least(1), default=None,
                    help="CPUs of the local Ray (default: all of this machine's)")
     p.add_argument("--checkpoint-dir", type=Path, default=None,
                    help="where to save the checkpoint (default runs/rllib-ALGO-ENV)")
-    p.add_argument("--torch-threads", type=int, default=1,
+    p.add_argument("--torch-threads", type=at_least(1), default=1,
                    help="torch threads of the learner (in this process); small networks gain "
                         "nothing from more, and on a busy machine more threads are much slower")
-    p.add_argument("--seed", type=int, default=0, help="the seed of training")
+    p.add_argument("--seed", type=at_least(0), default=0, help="the seed of training")
     return p
 
 

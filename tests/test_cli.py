@@ -86,9 +86,35 @@ def test_no_command_fails_asking_for_one():
     assert result.returncode == 2 and "required: COMMAND" in result.stderr
 
 
+@pytest.mark.parametrize(("command", "argv", "message"), [
+    ("train", ["--steps", "-5"], "argument --steps: '-5' is not an integer >= 1"),
+    ("train", ["--steps", "0"], "argument --steps: '0' is not an integer >= 1"),
+    ("train", ["--checkpoints", "-1"], "argument --checkpoints: '-1' is not an integer >= 0"),
+    ("train", ["--eval-freq", "x"], "argument --eval-freq: 'x' is not an integer >= 1"),
+    ("evaluate", ["--episodes", "0"], "argument --episodes: '0' is not an integer >= 1"),
+])
+def test_counts_out_of_range_are_refused_naming_the_option(command, argv, message,
+                                                           monkeypatch, capsys):
+    parser = program_parser(command, monkeypatch)
+    monkeypatch.undo()
+    with pytest.raises(SystemExit):
+        parser.parse_args(argv)
+    assert message in capsys.readouterr().err
+
+
+def test_evaluate_with_nothing_to_evaluate_says_so(tmp_path):
+    pytest.importorskip("matplotlib")
+    from roller_gym.scripts.evaluate import main
+
+    with pytest.raises(SystemExit, match="nothing to evaluate on roller_gym/RollerStabilize-v1 "
+                                         r"\(--runs .* holds no run of it\)"):
+        main(["--runs", str(tmp_path), "--baselines", "--out", str(tmp_path / "out")])
+
+
 @pytest.mark.parametrize(("command", "missing", "extra"), [
     ("train", "rl_zoo3", "roller-gym[zoo]"),
     ("evaluate", "matplotlib", "roller-gym[zoo,plots]"),
+    ("benchmark", "mujoco", "roller-gym[bench,plots]"),  # imported once it measures
 ])
 def test_a_command_without_its_extra_says_what_to_install(command, missing, extra):
     code = (f"import sys; sys.modules[{missing!r}] = None\n"
@@ -122,6 +148,10 @@ def test_train_evaluate_replay_end_to_end(tmp_path):
     # rl-zoo3's experiment folder: no colon, no folder per namespace.
     (run_dir,) = (tmp_path / "runs" / "sac").iterdir()
     assert run_dir.name == "roller_gym-RollerStabilize-v1_1"
+    # trained on the native batch (roller_gym.sb3), which wrote the episode of 200 steps
+    header, columns, *episodes = (run_dir / "batch.monitor.csv").read_text().splitlines()
+    assert header.startswith("#{") and columns == "r,l,t"  # SB3 Monitor's format
+    assert [row.split(",")[1] for row in episodes] == ["200"]
 
     roller_gym("evaluate", "--env", env_id, "--runs", "runs", "--episodes", "3",
                "--out", "results", "--report", "RESULTS.md", cwd=tmp_path)

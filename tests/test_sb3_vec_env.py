@@ -4,6 +4,9 @@ and algorithms on top of it."""
 
 from __future__ import annotations
 
+import gymnasium
+import gymnasium.envs.registration
+import gymnasium.wrappers.common
 import numpy as np
 import pytest
 
@@ -18,6 +21,7 @@ from stable_baselines3.common.vec_env import (
     VecMonitor,
     VecNormalize,
 )
+from zoo import HAVE_RL_ZOO3, import_rl_zoo3
 
 IDS = list(roller_gym.ENV_IDS)
 
@@ -83,9 +87,19 @@ def test_sb3_wrappers_and_algorithms_run_on_it():
     assert sac.num_timesteps == 64
 
 
-def test_make_vec_env_builds_the_native_batch_with_the_same_episodes():
+@pytest.mark.parametrize("time_limit", ["gymnasium", "rl_zoo3"])
+def test_make_vec_env_builds_the_native_batch_with_the_same_episodes(time_limit, monkeypatch):
     """``vec_env_cls=from_env_fns`` (what ``roller-gym train`` gives rl-zoo3): SB3's own
-    make_vec_env then steps the native batch, with DummyVecEnv's episodes."""
+    make_vec_env then steps the native batch, with DummyVecEnv's episodes; also in a process
+    that imported rl-zoo3, whose own TimeLimit then wraps every environment."""
+    if time_limit == "rl_zoo3":
+        if not HAVE_RL_ZOO3:
+            pytest.skip("rl-zoo3 is not installed (the zoo extra; CI installs it)")
+        patched = import_rl_zoo3("rl_zoo3.gym_patches").PatchedTimeLimit
+        for owner in (gymnasium.wrappers, gymnasium.wrappers.common,
+                      gymnasium.envs.registration):  # where rl-zoo3 puts it
+            monkeypatch.setattr(owner, "TimeLimit", patched, raising=False)
+        assert type(gymnasium.make(IDS[1], max_episode_steps=5)).__name__ == "PatchedTimeLimit"
     kwargs = {"max_episode_steps": 5}
     ours = make_vec_env(IDS[1], n_envs=3, seed=7, env_kwargs=kwargs, vec_env_cls=from_env_fns)
     ref = make_vec_env(IDS[1], n_envs=3, seed=7, env_kwargs=kwargs)
@@ -104,3 +118,44 @@ def test_make_vec_env_builds_the_native_batch_with_the_same_episodes():
                 assert mine["episode"]["r"] == pytest.approx(theirs["episode"]["r"], abs=1e-5)
     other = make_vec_env("Pendulum-v1", n_envs=2, vec_env_cls=from_env_fns)
     assert not isinstance(other, RollerVecEnv)
+
+
+def test_reset_options_are_each_sub_environments_own_as_in_dummy_vec_env():
+    """``set_options`` with a list gives each sub-environment its own reset options (None:
+    none), with one dict all of them the same: the same starts as DummyVecEnv's."""
+    ours, ref = RollerVecEnv(IDS[1], n_envs=3, seed=0), make_vec_env(IDS[1], n_envs=3, seed=0)
+    for options in ([None, {"target": 0.3}, {"target": -0.2}], [{"target": 0.3}, None, None],
+                    {"target": 0.1}, None):
+        ours.set_options(options)
+        ref.set_options(options)
+        np.testing.assert_array_equal(ours.reset(), ref.reset())
+        assert [i["target_phi"] for i in ours.reset_infos] == \
+            [i["target_phi"] for i in ref.reset_infos]
+
+
+def test_attributes_per_sub_environment_as_in_dummy_vec_env():
+    """get_attr gives each sub-environment in ``indices`` its own value (an array of the
+    batch split, the spaces a single environment's), as DummyVecEnv over single
+    environments; set_attr sets only those; what is one value for the whole batch, or a
+    method, cannot be applied to some of them only, and says so."""
+    ours, ref = RollerVecEnv(IDS[1], n_envs=3, seed=0), make_vec_env(IDS[1], n_envs=3, seed=0)
+    ours.reset(), ref.reset()
+    for name, indices in (("phi", None), ("phi", [1]), ("target", [2, 0]),
+                          ("observation_space", 1)):
+        assert ours.get_attr(name, indices) == ref.get_attr(name, indices), name
+    ours.set_attr("phi", 0.5, [2])
+    ref.set_attr("phi", 0.5, [2])
+    assert ours.get_attr("phi") == ref.get_attr("phi")
+    with pytest.raises(ValueError, match="'render_mode' is one value for the whole"):
+        ours.set_attr("render_mode", None, [1])
+    with pytest.raises(ValueError, match=r"env_method\('reset', indices=\[0\]\)"):
+        ours.env_method("reset", indices=[0])
+
+
+@pytest.mark.parametrize(("kwargs", "message"), [
+    ({"n_envs": 0}, r"n_envs=0 must be a positive integer"),
+    ({"n_envs": 2.0}, r"n_envs=2.0 must be"), ({"seed": -1}, r"seed=-1 must be None"),
+    ({"seed": "x"}, r"seed='x' must be None"), ({"monitor": 3}, r"monitor=3 must be")])
+def test_bad_arguments_are_refused_naming_them(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        RollerVecEnv(IDS[0], **{"n_envs": 2, **kwargs})
