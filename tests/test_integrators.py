@@ -784,6 +784,21 @@ def test_rim_mass_cost_follows_its_trajectory(method):
     assert np.mean(adaptive) <= 2 * np.mean(smallest), (adaptive, smallest)
 
 
+def test_euler_past_its_substep_cap_reports_the_tolerance_unmet():
+    """Semi-implicit Euler at tol 1e-8 on "paper" would need more than MAX_SUBSTEPS
+    substeps: it takes that many, and its error against DOP853, over tol, is reported as
+    tol_met=False with a warning (the same step at tol 1e-4 is within its prediction)."""
+    scene, state = preset("paper"), (0.5, 2.0, 0.3)
+    stepper = integrators.Stepper(scene, method="euler", dt=DT, tol=1e-8)
+    with pytest.warns(RuntimeWarning, match="of the 200000 substeps a step may take"):
+        out = dict(zip(integrators.STEP_FIELDS, stepper.advance(*state), strict=True))
+    assert out["substeps"] == integrators.MAX_SUBSTEPS == 200_000
+    assert out["finite"] and not out["tol_met"]
+    assert error(StepResultView(out), reference(scene, *state)) > 1e-8
+    loose = step(scene, *state, DT, method="euler", tol=1e-4)
+    assert loose.tol_met and loose.substeps < integrators.MAX_SUBSTEPS
+
+
 def test_unreachable_tolerance_is_flagged_and_warned_not_looped():
     """tol = 1e-16 cannot be met in float64 at |φ| ~ 1: the step ends (at most
     2·MAX_ADAPTIVE_SUBSTEPS substeps), reports tol_met=False, and the Stepper warns once."""

@@ -196,15 +196,16 @@ def test_a_step_and_its_outcome_in_one_call_are_the_two_calls(method):
     from roller_gym.physics import integrators as integ
 
     task, scene, rng = HoldTask(), roller_gym.preset("paper"), np.random.default_rng(4)
+    tol = 1e-4 if method == "euler" else 1e-8  # within euler's substeps
     for n in (1, 300):
         phi, phi_dot, tau = rng.uniform(-1, 1, (3, n))
         runs = []
         for way in ("fused", "two calls", "bound"):
             kernel = episode.OutcomeKernel(task, n)
             if n == 1:
-                stepper = integ.Stepper(scene, method=method, dt=0.05, tol=1e-8)
+                stepper = integ.Stepper(scene, method=method, dt=0.05, tol=tol)
             else:
-                stepper = integ.BatchStepper(n, method=method, dt=0.05, tol=1e-8)
+                stepper = integ.BatchStepper(n, method=method, dt=0.05, tol=tol)
                 stepper.set_scenes(scene)
             kernel.context[:] = np.linspace(0.1, 0.6, 6)[:, None]
             kernel.context[episode.CONTEXT_FIELDS.index("torque")] = tau  # as the bound writes

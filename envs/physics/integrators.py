@@ -61,11 +61,15 @@ each scheme's estimates may add up to only ``tol_share · tol``.
 
 **Fixed-substep schemes (euler, midpoint)** and taylor, rk8 and rk4 with ``substeps=n`` take n
 equal substeps; for euler and midpoint n is, unless given, predicted from the scene's fastest time
-scale and the speed at the start (taken again with more if the speed reached asks for more).
+scale and the speed at the start (taken again with more if the speed reached asks for more); a
+step whose prediction asks for more than ``MAX_SUBSTEPS`` takes that many and reports
+``tol_met=False`` (its tolerance is out of their reach).
 
-**Failure.** Where a step cannot stay finite, ``finite`` is False, φ and φ' are the state
-before the step, and ``phi_ddot``, ``normal_force``, ``friction_force``, ``energy``, both
-margins and ``error_estimate`` are NaN (so ``liftoff_margin <= 0`` is False: a failed step is
+**Failure.** Where a step cannot stay finite, or ends with |φ| past ``trig.DOMAIN`` (2⁵⁰
+rad, beyond which the sines are NaN: only a step that blew up gets there), ``finite`` is
+False, φ and φ' are the state before the step, and ``phi_ddot``, ``normal_force``,
+``friction_force``, ``energy``, both margins and ``error_estimate`` are NaN (so
+``liftoff_margin <= 0`` is False: a failed step is
 never reported as a lift-off).
 
 **Margins.** The lift-off and slip margins are the smallest met at the start of every
@@ -172,7 +176,8 @@ class StepResult:
         phi_dot: φ' [rad/s].
         phi_ddot: φ'' [rad/s²] under the step's torque (NaN where not finite).
         substeps: accepted substeps (for ``"dop853"``, its accepted steps).
-        finite: False where the step could not stay finite; there φ and φ' are the state
+        finite: False where the step could not stay finite (or ended with |φ| past
+            ``trig.DOMAIN``, 2⁵⁰ rad, where sines are NaN); there φ and φ' are the state
             before the step, unchanged, and every other float field is NaN.
         normal_force: N [N] (positive: pressing; see ``equations.contact_forces``).
         friction_force: F [N].
@@ -183,7 +188,8 @@ class StepResult:
             (max of |Δφ| [rad], |Δφ'| [rad/s]); NaN for fixed schemes and DOP853.
         tol_met: False where the accepted substeps' error estimates add up to more than the
             scheme's share of ``tol`` (substeps accepted at float64 rounding or past the
-            budget: the tolerance was out of reach and is not verified).
+            budget: the tolerance was out of reach and is not verified); for euler and
+            midpoint, where the predicted substeps were more than ``MAX_SUBSTEPS``.
     """
 
     phi: np.ndarray | float
@@ -441,8 +447,8 @@ def _end_fields(phi, w, tau, m, r, kappa, e, k, g, c, mu):
 @numba.extending.register_jitable
 def _write(io, col, ok, phi, w, nsub, a, normal, friction, energy, lift, slip, err, tol_met):
     """Write one roller's outputs: the end state's fields, or the failure's (see module docs)."""
-    ok = ok and math.isfinite(a) and math.isfinite(energy) and math.isfinite(phi)
-    ok = ok and math.isfinite(w)
+    ok = ok and math.isfinite(a) and math.isfinite(energy) and math.isfinite(w)
+    ok = ok and abs(phi) <= trig.DOMAIN  # (False for NaN) past it, sin φ would be NaN
     io[_NSUB, col] = nsub
     if ok:
         io[_PHI, col], io[_W, col], io[_ACC, col] = phi, w, a
@@ -996,7 +1002,7 @@ def _fixed_steps(io, cfg, substep):
         phi0, w0, tau = io[_PHI_IN, col], io[_W_IN, col], io[_TAU, col]
         n = nfixed if nfixed > 0 else _substeps(abs(w0), m, r, kappa, e, k, g, c, dt, tol,
                                                cfg[4], cfg[5], cfg[6], cfg[7])
-        phi, w = phi0, w0
+        phi, w, needed = phi0, w0, n
         lift, slip = np.inf, np.inf
         for _attempt in range(20):
             h = dt / n
@@ -1018,7 +1024,10 @@ def _fixed_steps(io, cfg, substep):
             if needed <= n:
                 break
             n = min(needed, MAX_SUBSTEPS)
-        _finish(io, col, True, phi, w, tau, n, lift, slip, math.nan, True)
+        # the tolerance is met as far as the prediction tells, unless it asked for more
+        # substeps than MAX_SUBSTEPS
+        _finish(io, col, True, phi, w, tau, n, lift, slip, math.nan,
+                nfixed > 0 or needed < MAX_SUBSTEPS)
 
 
 # Each fixed-substep scheme's kernel: the shared loop around its substep function. A function
@@ -1253,9 +1262,10 @@ class _Base:
         if not self._warned:
             self._warned = True
             warnings.warn(
-                f"tol={self.tol!r} is out of reach of float64 for some step (method "
-                f"{self.method!r}, dt={self.dt!r}): those steps report tol_met=False; a looser "
-                "tol avoids this", RuntimeWarning, stacklevel=stacklevel)
+                f"tol={self.tol!r} is out of reach for some step (method {self.method!r}, "
+                f"dt={self.dt!r}: of float64's rounding, or of the {MAX_SUBSTEPS} substeps a "
+                "step may take): those steps report tol_met=False; a looser tol or a more "
+                "accurate method avoids this", RuntimeWarning, stacklevel=stacklevel)
 
 
 @numba.extending.register_jitable
