@@ -12,7 +12,8 @@ from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
-from roller_gym import feasibility, validation
+from gymnasium.error import DependencyNotInstalled
+from roller_gym import feasibility, rendering, validation
 from roller_gym.episode import INFO_KEYS
 from roller_gym.physics import METHODS, Scene, preset
 from roller_gym.physics.integrators import MAX_SUBSTEPS
@@ -83,6 +84,8 @@ class EnvConfig:
         if substeps is not None:
             substeps = validation.count("substeps", substeps, high=MAX_SUBSTEPS)
         render_mode = validation.choice("render_mode", render_mode, (*render_modes, None))
+        if render_mode is not None and not rendering.have_pygame():
+            raise DependencyNotInstalled(f"render_mode={render_mode!r}: {rendering.NEEDS_PYGAME}")
         info_keys = validation.subset("info_keys", info_keys, tuple(INFO_KEYS))
         validation.check_integrable(scene, dt, task.max_torque)
         reason = task.infeasible(scene)
@@ -131,7 +134,11 @@ def check_randomize(task: Task, scene: Scene, dt: float,
         ranges[name] = (low, high)
     for name, (low, high) in ranges.items():  # each field's own rule, on the whole interval
         for end in (low, high):
-            scene.replace(**{name: end})
+            try:
+                scene.replace(**{name: end})
+            except ValueError as exc:
+                raise ValueError(f"randomize[{name!r}]={randomize[name]!r} reaches a scene "
+                                 f"that is not allowed: {exc}") from None
     if "R" in ranges:
         low, high = ranges["R"]
         r_high = ranges.get("r", (0.0, float(scene.r)))[1]

@@ -157,29 +157,65 @@ def per_scene_target(task: Any, scene: Scene, size: int) -> np.ndarray:
     return np.broadcast_to(per_scene(task.default_target, scene), (size,)).copy()
 
 
-def vector_seeds(seed: Any, n: int) -> list[int | None] | None:
-    """The seeds of n sub-environments from ``reset(seed=...)``: an int s gives s + i, a
-    sequence gives one each (None: a fresh one); None gives None (no reseeding).
+#: The largest seed: the random streams are keyed by 64-bit seeds.
+SEED_MAX = 2**64 - 1
+
+
+def _valid_seed(s: Any) -> bool:
+    return s is None or (isinstance(s, int | np.integer) and not isinstance(s, bool)
+                         and 0 <= s <= SEED_MAX)
+
+
+def check_seed(seed: Any) -> int | None:
+    """A single environment's ``reset(seed=...)``: None or an int in [0, 2⁶⁴ − 1].
 
     Raises:
-        ValueError: a seed is not a non-negative integer (or None), or the sequence's
-            length is not n.
+        ValueError: anything else, naming the value and the range.
     """
-    def valid(s: Any) -> bool:
-        return s is None or (isinstance(s, int | np.integer) and not isinstance(s, bool)
-                             and s >= 0)
+    if not _valid_seed(seed):
+        raise ValueError(f"seed={seed!r} must be None or an integer in [0, 2**64 - 1]")
+    return None if seed is None else int(seed)
 
+
+def vector_seeds(seed: Any, n: int) -> list[int | None] | None:
+    """The seeds of n sub-environments from ``reset(seed=...)``: an int s gives s + i, a
+    sequence gives one each (None: that one not reseeded); None gives None (none reseeded).
+
+    Raises:
+        ValueError: a seed is not an integer in [0, 2⁶⁴ − 1] (or None; for an int s, s + n −
+            1 too), or the sequence's length is not n.
+    """
     if seed is None:
         return None
-    if isinstance(seed, int | np.integer) and valid(seed):
+    if isinstance(seed, int | np.integer) and _valid_seed(seed):
+        if int(seed) + n - 1 > SEED_MAX:
+            raise ValueError(
+                f"seed={seed!r} gives sub-environment i the seed seed + i, up to seed + "
+                f"{n - 1} for num_envs={n}, which must be at most 2**64 - 1: seed must be at "
+                f"most {SEED_MAX - n + 1}")
         return [int(seed) + i for i in range(n)]
-    if isinstance(seed, list | tuple | np.ndarray) and all(valid(s) for s in seed):
+    if isinstance(seed, list | tuple | np.ndarray) and all(_valid_seed(s) for s in seed):
         if len(seed) != n:
             raise ValueError(f"seed has {len(seed)} entries for num_envs={n}; it needs {n}")
         return [None if s is None else int(s) for s in seed]
     raise ValueError(
-        f"seed={seed!r} must be None, a non-negative integer, or a sequence of {n} of them"
+        f"seed={seed!r} must be None, an integer in [0, 2**64 - 1], or a sequence of {n} of "
+        "them"
     )
+
+
+def reset_options(options: Any) -> dict[str, Any]:
+    """``reset(options=...)`` as a new dict ({} for None).
+
+    Raises:
+        ValueError: options that are not a mapping, naming them.
+    """
+    if options is None:
+        return {}
+    if not isinstance(options, Mapping):
+        raise ValueError(f"options={options!r} must be a dict of reset options (or None), "
+                         "e.g. {'state': (0.3, 0.0)}")
+    return dict(options)
 
 
 def reset_mask(value: Any, n: int) -> np.ndarray:
@@ -231,7 +267,7 @@ def start_episodes(
             same episode in the single and the vector environment.
     """
     n = len(seed)
-    options = dict(options or {})
+    options = reset_options(options)
     unknown = set(options) - {"state", "target", "scene"}
     if unknown:
         raise ValueError(
@@ -330,7 +366,8 @@ INFO_KEYS: dict[str, tuple[type, str]] = {
     "substeps": (int, "integrator substeps taken (0 at reset)"),
     "lifting": (bool, "the roller left the surface (N <= 0) during the step"),
     "slipping": (bool, "the friction needed exceeded μN during the step"),
-    "nonfinite": (bool, "the step could not stay finite: the state is the one before it"),
+    "nonfinite": (bool, "the step could not stay finite (or |φ| passed 2⁵⁰ rad, where "
+                       "sines are NaN): the state is the one before it"),
     "tol_met": (bool, "the step met the integrator's tolerance (False: out of float64's reach)"),
     "is_success": (bool, "inside the task's success band at rest"),
 }
@@ -480,6 +517,17 @@ def _outcome_one(result, context, constants, observed, out, flags, obs):
     seen = observation_values(phi, phi_dot, target, rate, target_rate)
     for j in range(observed.size):
         obs[0, j] = seen[observed[j]]
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _observe(phi, phi_dot, context, observed, obs):
+    """The observation of rollers at φ [rad], φ' [rad/s] under their ``context``: what a
+    step ending there writes (:func:`_outcome_one`'s formulas)."""
+    for i in range(phi.size):
+        seen = observation_values(phi[i], phi_dot[i], context[_C_TARGET, i],
+                                  context[_C_PSI_RATE, i], context[_C_TARGET_RATE, i])
+        for j in range(observed.size):
+            obs[i, j] = seen[observed[j]]
 
 
 @register_jitable(inline="always")
@@ -763,6 +811,13 @@ class OutcomeKernel:
         stepper.run(phi, phi_dot, tau, fused, *self._buffers())
         return self.table
 
+    def observe(self, phi: np.ndarray, phi_dot: np.ndarray) -> np.ndarray:
+        """The observation of every roller at φ [rad], φ' [rad/s] under :attr:`context`, as a
+        step ending there gives it (a new array, rollers × fields, float32)."""
+        obs = np.empty_like(self.observation)
+        _observe(phi, phi_dot, self.context, self.observed, obs)
+        return obs
+
     def bind(self, stepper: Stepper) -> Callable[[float, float, float], tuple]:
         """:meth:`step` for one Stepper, with the kernels and buffers looked up once: a
         function ``step(φ [rad], φ' [rad/s], τ [N·m])`` for the single environment, which
@@ -851,15 +906,20 @@ def flag_table(n: int) -> np.ndarray:
 
 
 def info_rows(table: np.ndarray, flags: np.ndarray, keys: tuple[str, ...],
-              views: bool = False) -> dict[str, np.ndarray]:
+              views: bool = False, only: np.ndarray | None = None) -> dict[str, np.ndarray]:
     """The info arrays of ``keys`` from an outcome's ``table`` and ``flags``, each of its
     INFO_KEYS type: new arrays, or with ``views`` the float and boolean rows themselves (for
-    tables never written again)."""
+    tables never written again); with ``only`` (column indices), new arrays of those columns'
+    values and 0 (False) in the others, as Gymnasium's vector infos leave unmasked entries."""
     info = {}
     for key in keys:
         kind = INFO_KEYS[key][0]
         row = (flags if kind is bool else table)[INFO_ROW[key]]
-        info[key] = row if views and kind is not int else row.astype(kind)
+        if only is not None:
+            info[key] = np.zeros(row.shape, dtype=kind)
+            info[key][only] = row[only]
+        else:
+            info[key] = row if views and kind is not int else row.astype(kind)
     return info
 
 

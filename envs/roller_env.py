@@ -120,9 +120,10 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
     ) -> tuple[np.ndarray, dict[str, Any]]:
         """Start an episode. ``options``: ``"state"``: (φ [rad], φ' [rad/s]); ``"target"``:
         the task's target (see the task); ``"scene"``: a Scene or preset for this episode."""
+        seed = episode.check_seed(seed)
         super().reset(seed=seed)
         if seed is not None or self._stream_seed is None:
-            self._stream_seed = episode.random_seed() if seed is None else int(seed)
+            self._stream_seed = episode.random_seed() if seed is None else seed
             self._episode = 0
         else:
             self._episode += 1

@@ -83,14 +83,19 @@ def subset(name: str, value: Any, allowed: tuple[str, ...]) -> tuple[str, ...]:
 
 def actions(value: Any, shape: tuple[int, ...], scale: float = 1.0,
             out: np.ndarray | None = None) -> np.ndarray:
-    """Actions as float64 in [−1, 1] of ``shape``, times ``scale``: real numbers only;
-    out-of-range values are clipped; NaN, inf, another shape, complex or text raise
-    ValueError (and leave ``out`` as it was). Into ``out`` (C-contiguous float64 of as many
-    elements) if given: compiled, one pass to check and one to write."""
+    """Actions as float64 in [−1, 1] of ``shape``, times ``scale``: real numbers only, of
+    ``shape`` or, where its last axis is 1, of ``shape`` without it (an action a number, a
+    batch's a row); out-of-range values are clipped; NaN, inf, another shape (a transposed
+    batch among them), complex or text raise ValueError (and leave ``out`` as it was). Into
+    ``out`` (C-contiguous float64 of as many elements) if given: compiled, one pass to check
+    and one to write."""
     a = np.asarray(value)
-    if a.dtype.kind not in "iuf" or a.size != math.prod(shape):
+    shapes = (shape, shape[:-1]) if shape and shape[-1] == 1 else (shape,)
+    if a.dtype.kind not in "iuf" or a.shape not in shapes:
+        allowed = " or ".join(str(s) for s in shapes)
         raise ValueError(f"action={value!r} is not allowed: it must be real numbers of shape "
-                         f"{shape} in [-1, 1] (out-of-range values are clipped)")
+                         f"{allowed} in [-1, 1] (out-of-range values are clipped), not "
+                         f"{a.dtype} of shape {a.shape}")
     if a.dtype not in _COMPILED_ACTIONS:
         a = a.astype(np.float64)
     out = np.empty(shape) if out is None else out

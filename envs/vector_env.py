@@ -110,6 +110,19 @@ def _start_info(idx, rows, table, flags, env_table, env_flags):
             env_flags[c, i] = flags[j, c]
 
 
+def _shared(mask: np.ndarray) -> np.ndarray:
+    """``mask``, made read-only: one array serves as the ``_key`` mask of many info keys, so
+    a write into one key's mask must not change the others' silently."""
+    mask.flags.writeable = False
+    return mask
+
+
+def _some(idx: np.ndarray) -> str:
+    """Sub-environment numbers for a message: the first ten, and how many more."""
+    more = f" and {idx.size - 10} more" if idx.size > 10 else ""
+    return f"{idx[:10].tolist()}{more}"
+
+
 def _context_row(name: str, doc: str) -> property:
     """A row of the step's context table (a view: written in place, never rebound)."""
     return property(lambda self: self._outcome.context[_CONTEXT[name]], doc=doc)
@@ -225,7 +238,9 @@ class RollerVectorEnv(VectorEnv):
         self._done = np.zeros(num_envs, dtype=bool)
         self._seeds = np.zeros(num_envs, np.uint64)
         self._episodes = np.zeros(num_envs, np.uint64)
-        self._seeded = False
+        self._has_seed = np.zeros(num_envs, dtype=bool)
+        self._started = np.zeros(num_envs, dtype=bool)  # each has had an episode start
+        self._ready = False  # all have
         self._ahead: _Starts | None = None  # the next start of each, drawn ahead (_restart)
         self._ahead_for = np.zeros(num_envs, np.uint64)  # the episode each was drawn for
         # the last observation: the step's own (new every step) until a reset copies it
@@ -310,32 +325,38 @@ class RollerVectorEnv(VectorEnv):
         array of ``num_envs``).
 
         ``seed``: an int gives sub-environment i the seed ``seed + i``; a list gives each its
-        own (None: a fresh one). ``options`` as in
+        own, where None (like ``seed=None``) reseeds none: its episodes go on from its seed,
+        as a single environment's ``reset(seed=None)`` (a fresh seed if it has none yet).
+        Only the reset sub-environments take their seeds. ``options`` as in
         :meth:`roller_gym.roller_env.RollerEnv.reset`, for every reset sub-environment.
         """
         n = self.num_envs
-        options = dict(options or {})
+        options = episode.reset_options(options)
         mask = episode.reset_mask(options.pop("reset_mask", None), n)
-        seeds = episode.vector_seeds(seed, n)
-        if seeds is None and not self._seeded:
-            seeds = [None] * n
-        if seeds is not None:
-            # Seeded rows start their streams anew; on the first reset every row gets one.
-            update = mask | (not self._seeded)
-            fresh = np.array([episode.random_seed() if s is None else s for s in seeds],
-                             dtype=np.uint64)
-            self._seeds[update] = fresh[update]
-            self._episodes[update] = 0
-            self._ahead_for[update] = _NONE  # those drawn ahead came from the old seeds
-            self._seeded = True
-            if isinstance(seed, int | np.integer):
-                self._np_random, self._np_random_seed = seeding.np_random(int(seed))
-        else:
-            self._episodes[mask] += np.uint64(1)
+        seeds = episode.vector_seeds(seed, n) or [None] * n
+        given = np.array([s is not None for s in seeds])
+        # Seeded rows start their streams anew, as do rows without a seed yet (a fresh one);
+        # the others go on to their next episode.
+        anew = mask & (given | ~self._has_seed)
+        if anew.any():
+            rows = np.flatnonzero(anew)
+            self._seeds[rows] = np.array(
+                [episode.random_seed() if seeds[i] is None else seeds[i] for i in rows],
+                dtype=np.uint64)
+            self._episodes[rows] = 0
+            self._ahead_for[rows] = _NONE  # those drawn ahead came from the old seeds
+            self._has_seed[rows] = True
+        self._episodes[mask & ~anew] += np.uint64(1)
+        if isinstance(seed, int | np.integer):
+            self._np_random, self._np_random_seed = seeding.np_random(int(seed))
         idx = np.flatnonzero(mask)
-        self._obs = self._observation()  # the last step returned the one it holds
+        # anew: the array the last step returned is the caller's, who may have changed it
+        self._obs = self._outcome.observe(self.phi, self.phi_dot)
         starts = self._start(idx, options)
         self._done[idx] = False
+        if not self._ready:
+            self._started[idx] = True
+            self._ready = bool(self._started.all())
         return self._observation(), self._masked_info(starts, idx)
 
     # -- a step --------------------------------------------------------------------------
@@ -344,8 +365,16 @@ class RollerVectorEnv(VectorEnv):
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         tau = self.torque  # the context's row, written in place
         validation.actions(actions, (self.num_envs, 1), self.task.max_torque, tau)
-        if not self._seeded:
-            raise RuntimeError("call reset() before step()")
+        if not self._ready:
+            never = np.flatnonzero(~self._started)
+            raise RuntimeError(
+                f"call reset() before step(): sub-environments {_some(never)} have not started "
+                f"an episode (reset() without a reset_mask starts every one)")
+        if self.autoreset_mode == AutoresetMode.DISABLED and self._done.any():
+            raise RuntimeError(
+                f"step() with autoreset_mode=DISABLED: the episodes of sub-environments "
+                f"{_some(np.flatnonzero(self._done))} have ended; start new ones first with "
+                f"reset(options={{'reset_mask': mask}}) (mask: terminated | truncated)")
         self.steps += 1
         if self.task.moving_target:
             self.target[:], self.target_rate[:] = self.task.target_at(
@@ -373,8 +402,10 @@ class RollerVectorEnv(VectorEnv):
             if ended.size:
                 final = self._final(ended, table, flags)
                 self._restart(ended, table, flags)
+        else:  # DISABLED: the ended ones wait for reset(options={"reset_mask": ...})
+            self._done = terminated | truncated
         info = episode.info_rows(table, flags, self.config.info_keys, views=True)
-        everyone = np.ones(self.num_envs, dtype=bool)
+        everyone = _shared(np.ones(self.num_envs, dtype=bool))
         info.update({f"_{k}": everyone for k in list(info)})
         info.update(final)
         return self._obs, reward, terminated, truncated, info
@@ -386,11 +417,12 @@ class RollerVectorEnv(VectorEnv):
         each with its ``_`` mask)."""
         ended_mask = np.zeros(self.num_envs, dtype=bool)
         ended_mask[ended] = True
+        _shared(ended_mask)
         final_obs = np.full(self.num_envs, None, dtype=object)
         last = self._observation()
         for i in ended:  # per ended episode
             final_obs[i] = last[i]
-        final_info = episode.info_rows(table, flags, self.config.info_keys)  # copies
+        final_info = episode.info_rows(table, flags, self.config.info_keys, only=ended)
         final_info.update({f"_{k}": ended_mask for k in self.config.info_keys})
         return {"final_obs": final_obs, "_final_obs": ended_mask, "final_info": final_info,
                 "_final_info": ended_mask}
@@ -433,7 +465,7 @@ class RollerVectorEnv(VectorEnv):
         info = episode.info_rows(full, flags, self.config.info_keys, views=True)
         mask = np.zeros(self.num_envs, dtype=bool)
         mask[idx] = True
-        info.update({f"_{key}": mask for key in self.config.info_keys})
+        info.update({f"_{key}": _shared(mask) for key in self.config.info_keys})
         return info
 
     # -- rendering -------------------------------------------------------------------------

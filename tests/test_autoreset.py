@@ -39,6 +39,9 @@ def assert_infos_equal(native: dict, sync: dict) -> None:
                     np.testing.assert_array_equal(a, b)
         elif isinstance(value, dict):
             assert_infos_equal(native[key], value)
+            for k, v in native[key].items():  # elsewhere 0 or False, as Sync's (or None)
+                if not k.startswith("_"):
+                    assert not np.asarray(v)[~native[key][f"_{k}"]].any(), k
         elif key.startswith("_"):
             np.testing.assert_array_equal(native[key], value, err_msg=key)
         else:
@@ -116,20 +119,36 @@ def test_reset_mask_resets_only_the_masked_and_marks_only_them():
     ("options", "message"),
     [({"reset_mask": np.array([0, 1, 2])}, "boolean array"),
      ({"reset_mask": np.array([True, False])}, r"shape \(3,\)"),
-     ({"reset_mask": np.zeros(3, bool)}, "at least one True")],
+     ({"reset_mask": np.zeros(3, bool)}, "at least one True"),
+     ([1, 2], r"options=\[1, 2\] must be a dict of reset options"),
+     ("state", r"options='state' must be a dict")],
 )
 def test_bad_reset_masks_are_refused(options, message):
+    """(Options that are not a dict at all, in the single environment too.)"""
     vec = gym.make_vec(IDS[0], num_envs=3)
     vec.reset(seed=0)
     with pytest.raises(ValueError, match=message):
         vec.reset(options=options)
+    if not isinstance(options, dict):
+        with pytest.raises(ValueError, match=message):
+            gym.make(IDS[0]).reset(seed=0, options=options)
 
 
-@pytest.mark.parametrize("seed", [1.5, -1, "3", [1, 2]])
+@pytest.mark.parametrize("seed", [1.5, -1, "3", [1, 2], 2**64 - 2, [0, 2**64, 1]])
 def test_bad_seeds_are_refused(seed):
+    """Not an integer in [0, 2⁶⁴ − 1] for every sub-environment (an int s gives them s + i:
+    2⁶⁴ − 2 overflows at the third), or not one per sub-environment."""
     vec = gym.make_vec(IDS[0], num_envs=3)
     with pytest.raises(ValueError, match="seed"):
         vec.reset(seed=seed)
+
+
+@pytest.mark.parametrize("seed", [2**64, -1, 1.5, "3", True])
+def test_a_single_environment_refuses_seeds_outside_the_64_bit_range(seed):
+    env = gym.make(IDS[0])
+    with pytest.raises(ValueError, match=r"seed=.* must be None or an integer in \[0, 2\*\*64"):
+        env.reset(seed=seed)
+    assert env.reset(seed=2**64 - 1)[0].shape == env.observation_space.shape  # the largest
 
 
 @pytest.mark.parametrize("steps", [0, -5, 2.7, True])
@@ -179,6 +198,22 @@ def test_a_seed_gives_the_same_episode_sequence_in_both_environments():
         obs = vec.reset()[0]
         for i, env in enumerate(singles):
             np.testing.assert_array_equal(env.reset()[0], obs[i])
+
+
+def test_a_seed_list_reseeds_where_it_gives_a_seed_and_goes_on_where_it_gives_none():
+    """``reset(seed=[0, None, 2])`` after a seeded reset, as Gymnasium's SyncVectorEnv over
+    single environments: sub-environments 0 and 2 start their new seeds' streams, 1 goes on
+    to the next episode of its seed (deterministic), also under a reset_mask (only the
+    masked ones take their seeds)."""
+    native = gym.make_vec(IDS[1], num_envs=3)
+    sync = SyncVectorEnv([lambda: gym.make(IDS[1])] * 3)
+    for seed, mask in ((10, None), ([0, None, 2], None), ([5, None, 7], [True, True, False]),
+                       (None, [False, True, True])):
+        options = None if mask is None else {"reset_mask": np.array(mask)}
+        ours, theirs = native.reset(seed=seed, options=options), sync.reset(seed=seed,
+                                                                            options=options)
+        np.testing.assert_array_equal(ours[0], theirs[0])
+        np.testing.assert_array_equal(ours[1]["target_phi"], theirs[1]["target_phi"])
 
 
 # -- the failure rule --------------------------------------------------------------------

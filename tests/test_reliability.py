@@ -135,6 +135,7 @@ def test_numpy_numbers_are_numbers():
      ({"max_torque": [1, 2]}, "max_torque"), ({"integrator": []}, "integrator"),
      ({"randomize": ["m"]}, "randomize"), ({"randomize": "m"}, "randomize"),
      ({"randomize": {"m": (0.8, "1.2")}}, r"randomize\['m'\]\[1\]"),
+     ({"randomize": {"m": (-1, 1)}}, r"randomize\['m'\]"),  # Scene.m=-1.0 is not allowed
      ({"substeps": 2.0}, "substeps"), ({"substeps": True}, "substeps"),
      ({"tolerance": complex(1e-8, 0)}, "tolerance")],
 )
@@ -144,12 +145,26 @@ def test_wrong_types_are_refused_naming_the_argument(kwargs, name):
 
 
 @pytest.mark.parametrize("action", [np.array([1j]), np.array(["0.5"]), "0.5",
-                                    np.array([0.1, 0.2])])
+                                    np.array([0.1, 0.2]), np.array([[0.5]])])
 def test_actions_must_be_real_numbers_of_the_right_shape(action):
     env = gym.make(STABILIZE).unwrapped
     env.reset(seed=0)
     with pytest.raises(ValueError, match="action="):
         env.step(action)
+
+
+def test_a_batch_of_actions_must_have_the_batch_shape_not_its_transpose():
+    """(n, 1), the action space's shape, and (n,) are a batch's actions; (1, n), a
+    transposed batch of as many numbers, is refused, naming the shapes allowed."""
+    vec = gym.make_vec(STABILIZE, num_envs=3)
+    vec.reset(seed=0)
+    a = np.array([0.1, -0.2, 0.3], np.float32)
+    first, second = gym.make_vec(STABILIZE, num_envs=3), gym.make_vec(STABILIZE, num_envs=3)
+    first.reset(seed=0), second.reset(seed=0)
+    np.testing.assert_array_equal(first.step(a[:, None])[0], second.step(a)[0])
+    with pytest.raises(ValueError, match=r"of shape \(3, 1\) or \(3,\).*not float32 of "
+                                         r"shape \(1, 3\)"):
+        vec.step(a[None, :])
 
 
 # -- 4. settings that cannot be integrated ----------------------------------------------------

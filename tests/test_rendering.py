@@ -51,6 +51,26 @@ def test_import_and_stepping_do_not_import_pygame():
     assert out.returncode == 0, out.stderr
 
 
+@pytest.mark.parametrize("make", ["gym.make(ID, render_mode='rgb_array')",
+                                  "gym.make_vec(ID, num_envs=2, render_mode='rgb_array')"])
+def test_a_render_mode_without_pygame_is_refused_at_construction(make):
+    """Without pygame, asking for frames fails when the environment is made (saying what
+    to install), not at its first render()."""
+    code = ("import sys; sys.modules['pygame'] = None\n"
+            "import gymnasium as gym, roller_gym\n"
+            "ID = 'roller_gym/RollerStabilize-v1'\n"
+            "gym.make(ID).reset(seed=0)  # without a render_mode: fine\n"
+            "try:\n"
+            f"    {make}\n"
+            "except gym.error.DependencyNotInstalled as exc:\n"
+            "    print(exc)\n")
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True,
+                         text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == ("render_mode='rgb_array': rendering needs pygame: pip "
+                                  "install 'roller-gym[render]'")
+
+
 @pytest.mark.parametrize("env_id", IDS)
 def test_rgb_array_frames(env_id):
     env = gym.make(env_id, render_mode="rgb_array")

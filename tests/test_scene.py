@@ -70,6 +70,14 @@ def test_a_bad_element_of_a_batch_is_rejected():
         Scene(e=np.array([0.0, math.nan]))
 
 
+@pytest.mark.parametrize(("field", "value"), [("m", "2"), ("e", "0.04"), ("R", "inf"),
+                                              ("m", True), ("k", 1j), ("g", [9.81, "x"])])
+def test_text_bools_and_complex_numbers_are_not_real_numbers(field, value):
+    """What NumPy would convert to a float ("2", True) is refused as well, naming the field."""
+    with pytest.raises(ValueError, match=rf"Scene\.{field}=.* is not a real number"):
+        Scene(**{field: value})
+
+
 def test_not_a_number_is_rejected():
     with pytest.raises(ValueError, match=r"Scene\.m='heavy' is not a real number"):
         Scene(m="heavy")

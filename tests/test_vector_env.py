@@ -269,11 +269,13 @@ def test_what_a_step_returns_never_changes_afterwards(mode):
     assert sum(bool((h[2] | h[3]).any()) for h in held[1:] if len(h) == 5) >= 2  # episodes ended
 
 
-@pytest.mark.parametrize("mode", [AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP])
+@pytest.mark.parametrize("mode", list(AutoresetMode))
 def test_what_a_caller_does_to_the_returned_arrays_never_changes_the_environment(mode):
     """The converse: a caller that writes into every array a step or reset returned (the
     observation, reward, flags and each info array, the state's among them) does not change
-    what the environment does next; a twin whose outputs are left alone gives the same."""
+    what the environment does next, nor what a partial reset (``reset_mask``) returns for
+    the sub-environments it leaves alone; a twin whose outputs are left alone gives the
+    same."""
     def scribble(value):
         if isinstance(value, dict):
             for v in value.values():
@@ -282,6 +284,10 @@ def test_what_a_caller_does_to_the_returned_arrays_never_changes_the_environment
             for v in value:
                 scribble(v)
         elif isinstance(value, np.ndarray) and value.dtype != object:
+            if not value.flags.writeable:  # the masks, shared by the info's keys
+                with pytest.raises(ValueError, match="read-only"):
+                    value[...] = ~value
+                return
             value[...] = ~value if value.dtype == bool else value + 1
 
     kwargs = {"num_envs": 5, "max_episode_steps": 3, "autoreset_mode": mode}
@@ -290,12 +296,19 @@ def test_what_a_caller_does_to_the_returned_arrays_never_changes_the_environment
     rng = np.random.default_rng(4)
     ours, theirs = vandal.reset(seed=3), twin.reset(seed=3)
     ended = 0
-    for _ in range(9):
+    for k in range(9):
         assert _same(_snapshot(ours), _snapshot(theirs))
         scribble(ours)
         a = rng.uniform(-1, 1, (5, 1)).astype(np.float32)
         ours, theirs = vandal.step(a), twin.step(a)
-        ended += int((theirs[2] | theirs[3]).sum())
+        done = theirs[2] | theirs[3]
+        ended += int(done.sum())
+        mask = done if mode == AutoresetMode.DISABLED else np.arange(5) == k % 5
+        if mask.any():  # a partial reset, after the step's arrays were written into
+            assert _same(_snapshot(ours), _snapshot(theirs))
+            scribble(ours)
+            options = {"reset_mask": mask}
+            ours, theirs = vandal.reset(options=options), twin.reset(options=options)
     assert _same(_snapshot(ours), _snapshot(theirs))
     assert ended >= 5  # autoresets happened in between
 
@@ -452,3 +465,51 @@ def test_a_moving_target_has_the_same_bits_alone_and_in_a_batch(n):
         assert (info["target_phi"][0], info["target_torque"][0], reward[0]) == (
             one["target_phi"], one["target_torque"], r)
         done = terminated[0] or truncated[0]
+
+
+def test_a_sub_environment_never_started_cannot_be_stepped():
+    """A first reset with a reset_mask starts only the masked sub-environments: step()
+    refuses, naming the others, until a reset has started them too."""
+    vec = gym.make_vec("roller_gym/RollerStabilize-v1", num_envs=4)
+    vec.reset(seed=0, options={"reset_mask": np.array([True, False, True, False])})
+    a = np.zeros((4, 1), np.float32)
+    with pytest.raises(RuntimeError, match=r"sub-environments \[1, 3\] have not started"):
+        vec.step(a)
+    vec.reset(seed=0, options={"reset_mask": np.array([False, True, False, True])})
+    obs = vec.step(a)[0]
+    reference = gym.make_vec("roller_gym/RollerStabilize-v1", num_envs=4)
+    reference.reset(seed=0)
+    np.testing.assert_array_equal(obs, reference.step(a)[0])
+
+
+def test_disabled_autoreset_refuses_to_step_an_ended_episode():
+    """With autoreset_mode=DISABLED an ended episode waits for reset(reset_mask): stepping
+    it before (as Gymnasium's SyncVectorEnv refuses to) raises, naming it."""
+    vec = gym.make_vec("roller_gym/RollerStabilize-v1", num_envs=3, max_episode_steps=2,
+                       autoreset_mode=AutoresetMode.DISABLED)
+    vec.reset(seed=0, options={"reset_mask": np.array([True, True, True])})
+    a = np.zeros((3, 1), np.float32)
+    vec.step(a)
+    vec.reset(options={"reset_mask": np.array([False, True, False])})
+    truncated = vec.step(a)[3]
+    np.testing.assert_array_equal(truncated, [True, False, True])
+    with pytest.raises(RuntimeError, match=r"sub-environments \[0, 2\] have ended"):
+        vec.step(a)
+    vec.reset(options={"reset_mask": truncated})
+    np.testing.assert_array_equal(vec.step(a)[3], [False, True, False])  # 1's second step
+
+
+@pytest.mark.parametrize("mode", [AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP])
+def test_a_write_into_one_keys_mask_cannot_change_another_keys(mode):
+    """The info's ``_key`` masks (of a reset, a step, and SAME_STEP's final info) are one
+    array per info: it is read-only, so writing into ``info["_phi"]`` raises instead of
+    changing ``info["_energy"]``."""
+    vec = gym.make_vec("roller_gym/RollerStabilize-v1", num_envs=3, max_episode_steps=1,
+                       autoreset_mode=mode)
+    infos = [vec.reset(seed=0)[1], vec.step(np.zeros((3, 1), np.float32))[4]]
+    if mode == AutoresetMode.SAME_STEP:
+        infos.append(infos[-1]["final_info"])
+    for info in infos:
+        with pytest.raises(ValueError, match="read-only"):
+            info["_phi"][0] = not info["_phi"][0]
+        assert info["_phi"][0] == info["_energy"][0]

@@ -85,9 +85,13 @@ class Scene:
         for f in fields(self):
             raw = getattr(self, f.name)
             try:
-                value = np.asarray(raw, dtype=float)
+                value = np.asarray(raw)
             except (TypeError, ValueError):
-                raise ValueError(f"Scene.{f.name}={raw!r} is not a real number") from None
+                value = np.asarray(None)
+            if value.dtype.kind not in "iuf":  # not text, bool, complex or objects
+                raise ValueError(f"Scene.{f.name}={raw!r} is not a real number (SI units); "
+                                 f"it must be an int or a float, or an array of them")
+            value = value.astype(float)
             if np.isnan(value).any():
                 raise ValueError(f"Scene.{f.name}={_describe(value)} is NaN; it must be a number")
             if f.name == "R":
