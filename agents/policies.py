@@ -12,7 +12,8 @@ hyperparameter files) is an rl-zoo3 experiment folder::
         best_model.zip                   the best model of the periodic evaluations
         evaluations.npz                  the periodic evaluations (the learning curve)
         rl_model_<steps>_steps.zip       checkpoints
-        0.monitor.csv, ...               the training episodes
+        batch.monitor.csv                the training episodes (of the native batch;
+                                         0.monitor.csv, ... over DummyVecEnv)
         <env name>/config.yml            the hyperparameters the run used
         <env name>/args.yml              the command-line arguments (algo, env, seed, ...)
         <env name>/vecnormalize.pkl      the normalization statistics (if the run normalized)

@@ -206,17 +206,20 @@ def from_env_fns(env_fns: list[Any], **vec_env_kwargs: Any) -> VecEnv:
     environments carry wrappers of their own."""
     if env_fns:
         probe = env_fns[0]()
-        wrappers, env, monitor = set(), probe, True
+        wrappers, env, monitor, probe_file = set(), probe, True, None
         while isinstance(env, gym.Wrapper):
             wrappers.add(type(env).__name__)
             writer = getattr(env, "results_writer", None)
             if writer is not None:  # make_vec_env's monitor_dir: write there too
-                monitor = str(Path(writer.file_handler.name).parent / "batch")
+                probe_file = Path(writer.file_handler.name)
+                monitor = str(probe_file.parent / "batch")
             env = env.env
         spec = probe.spec  # the outermost: it carries make()'s max_episode_steps
         probe.close()
         if wrappers <= _PLAIN_WRAPPERS and spec is not None and spec.id.startswith(
                 "roller_gym/"):
+            if probe_file is not None:  # the probe's own Monitor file: never written to
+                probe_file.unlink(missing_ok=True)
             kwargs = {k: v for k, v in spec.kwargs.items() if k != "render_mode"}
             return RollerVecEnv(spec.id, n_envs=len(env_fns), monitor=monitor,
                                 max_episode_steps=spec.max_episode_steps, **kwargs)

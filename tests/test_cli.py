@@ -149,6 +149,7 @@ def test_train_evaluate_replay_end_to_end(tmp_path):
     (run_dir,) = (tmp_path / "runs" / "sac").iterdir()
     assert run_dir.name == "roller_gym-RollerStabilize-v1_1"
     # trained on the native batch (roller_gym.sb3), which wrote the episode of 200 steps
+    assert not (run_dir / "0.monitor.csv").exists()  # (the probe's, of no episode)
     header, columns, *episodes = (run_dir / "batch.monitor.csv").read_text().splitlines()
     assert header.startswith("#{") and columns == "r,l,t"  # SB3 Monitor's format
     assert [row.split(",")[1] for row in episodes] == ["200"]
