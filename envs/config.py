@@ -12,8 +12,7 @@ from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
-from gymnasium.error import DependencyNotInstalled
-from roller_gym import feasibility, rendering, validation
+from roller_gym import feasibility, validation
 from roller_gym.episode import INFO_KEYS
 from roller_gym.physics import METHODS, Scene, preset
 from roller_gym.physics.integrators import MAX_SUBSTEPS
@@ -84,8 +83,8 @@ class EnvConfig:
         if substeps is not None:
             substeps = validation.count("substeps", substeps, high=MAX_SUBSTEPS)
         render_mode = validation.choice("render_mode", render_mode, (*render_modes, None))
-        if render_mode is not None and not rendering.have_pygame():
-            raise DependencyNotInstalled(f"render_mode={render_mode!r}: {rendering.NEEDS_PYGAME}")
+        # (pygame is not required here: SB3's make_vec_env asks every environment for
+        # render_mode="rgb_array" whether or not it will render; render() says what to install)
         info_keys = validation.subset("info_keys", info_keys, tuple(INFO_KEYS))
         validation.check_integrable(scene, dt, task.max_torque)
         reason = task.infeasible(scene)

@@ -8,25 +8,12 @@ arc around the axle, its length proportional to τ/max_torque, its arrow the sen
 
 from __future__ import annotations
 
-import importlib.util
 import math
 
 import numpy as np
 from roller_gym.physics import Scene, kinematics
 
-__all__ = ["NEEDS_PYGAME", "Renderer", "have_pygame"]
-
-#: What to do when pygame is missing.
-NEEDS_PYGAME = "rendering needs pygame: pip install 'roller-gym[render]'"
-
-
-def have_pygame() -> bool:
-    """Whether pygame can be imported (found, without importing it)."""
-    try:
-        return importlib.util.find_spec("pygame") is not None
-    except ValueError:  # sys.modules["pygame"] is None: imports of it are blocked
-        return False
-
+__all__ = ["Renderer"]
 
 SIZE = 500  # window side [px]
 _WALL = (60, 60, 70)
@@ -47,7 +34,9 @@ class Renderer:
             import pygame
             from pygame import gfxdraw
         except ImportError as exc:  # pragma: no cover - depends on the install
-            raise ImportError(NEEDS_PYGAME) from exc
+            raise ImportError(
+                "rendering needs pygame: pip install 'roller-gym[render]'"
+            ) from exc
         self.pg, self.gfx = pygame, gfxdraw
         self.mode, self.fps = mode, fps
         if mode == "human":
