@@ -520,10 +520,10 @@ def _outcome_one(result, context, constants, observed, out, flags, obs):
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _observe(phi, phi_dot, context, observed, obs):
-    """The observation of rollers at φ [rad], φ' [rad/s] under their ``context``: what a
-    step ending there writes (:func:`_outcome_one`'s formulas)."""
-    for i in range(phi.size):
+def _observe(rows, phi, phi_dot, context, observed, obs):
+    """The observation of rollers ``rows`` at φ [rad], φ' [rad/s] under their ``context``:
+    what a step ending there writes (:func:`_outcome_one`'s formulas)."""
+    for i in rows:
         seen = observation_values(phi[i], phi_dot[i], context[_C_TARGET, i],
                                   context[_C_PSI_RATE, i], context[_C_TARGET_RATE, i])
         for j in range(observed.size):
@@ -811,12 +811,11 @@ class OutcomeKernel:
         stepper.run(phi, phi_dot, tau, fused, *self._buffers())
         return self.table
 
-    def observe(self, phi: np.ndarray, phi_dot: np.ndarray) -> np.ndarray:
-        """The observation of every roller at φ [rad], φ' [rad/s] under :attr:`context`, as a
-        step ending there gives it (a new array, rollers × fields, float32)."""
-        obs = np.empty_like(self.observation)
-        _observe(phi, phi_dot, self.context, self.observed, obs)
-        return obs
+    def observe(self, phi: np.ndarray, phi_dot: np.ndarray, rows: np.ndarray,
+                obs: np.ndarray) -> None:
+        """Write into ``obs`` (rollers × fields, float32) the observation of rollers ``rows``
+        at φ [rad], φ' [rad/s] under :attr:`context`, as a step ending there gives it."""
+        _observe(rows, phi, phi_dot, self.context, self.observed, obs)
 
     def bind(self, stepper: Stepper) -> Callable[[float, float, float], tuple]:
         """:meth:`step` for one Stepper, with the kernels and buffers looked up once: a

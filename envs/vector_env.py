@@ -243,8 +243,10 @@ class RollerVectorEnv(VectorEnv):
         self._ready = False  # all have
         self._ahead: _Starts | None = None  # the next start of each, drawn ahead (_restart)
         self._ahead_for = np.zeros(num_envs, np.uint64)  # the episode each was drawn for
-        # the last observation: the step's own (new every step) until a reset copies it
+        # the last observation: the step's own (new every step, handed out as it is; a reset
+        # computes the one of the sub-environments it leaves alone anew), or the reset's
         self._obs = np.zeros((num_envs, size), dtype=np.float32)
+        self._obs_handed_out = False
         self._renderers: list[Any] | None = None
 
     @staticmethod
@@ -350,8 +352,10 @@ class RollerVectorEnv(VectorEnv):
         if isinstance(seed, int | np.integer):
             self._np_random, self._np_random_seed = seeding.np_random(int(seed))
         idx = np.flatnonzero(mask)
-        # anew: the array the last step returned is the caller's, who may have changed it
-        self._obs = self._outcome.observe(self.phi, self.phi_dot)
+        if self._obs_handed_out:  # the caller's, who may have changed it: the others' anew
+            self._obs = np.empty_like(self._obs)
+            self._outcome.observe(self.phi, self.phi_dot, np.flatnonzero(~mask), self._obs)
+            self._obs_handed_out = False
         starts = self._start(idx, options)
         self._done[idx] = False
         if not self._ready:
@@ -383,6 +387,7 @@ class RollerVectorEnv(VectorEnv):
         # the physics and the outcome; a new table: its rows are handed out as they are
         table = self._outcome.step(self._stepper, self.phi, self.phi_dot, tau)
         flags, self._obs = self._outcome.flags, self._outcome.observation  # new: returned
+        self._obs_handed_out = True
         reward = table[_ROW["reward"]]
         terminated = flags[_FLAG["terminated"]]
         truncated = self.steps >= self.max_episode_steps
