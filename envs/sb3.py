@@ -158,7 +158,7 @@ class RollerVecEnv(VecEnv):
         """Set the attribute of the sub-environments in ``indices``: the entries of an array
         with one entry per sub-environment; a value of the whole batch only for all of them."""
         index = list(self._get_indices(indices))
-        current = getattr(self.venv.unwrapped, attr_name)
+        current = getattr(self.venv.unwrapped, attr_name, None)  # (None: a new attribute)
         if self._per_env(current):
             current[index] = value
         elif sorted(index) == list(range(self.num_envs)):

@@ -34,8 +34,11 @@ LARGEST_PHASE_PER_STEP = 1e4
 
 def real(name: str, value: Any, *, positive: bool = False, nonnegative: bool = False,
          unit: str = "") -> float:
-    """``value`` as a finite float, or ValueError naming ``name``."""
+    """``value`` (a number, or an array of one: 0-d) as a finite float, or ValueError naming
+    ``name``."""
     allowed = "a finite real number" + (" > 0" if positive else " >= 0" if nonnegative else "")
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value[()]  # its NumPy scalar
     if not isinstance(value, _REAL) or isinstance(value, bool | np.bool_):
         raise ValueError(f"{name}={value!r} is not allowed: it must be {allowed}"
                          f"{f' [{unit}]' if unit else ''} (a Python or NumPy number, not "

@@ -110,13 +110,6 @@ def _start_info(idx, rows, table, flags, env_table, env_flags):
             env_flags[c, i] = flags[j, c]
 
 
-def _shared(mask: np.ndarray) -> np.ndarray:
-    """``mask``, made read-only: one array serves as the ``_key`` mask of many info keys, so
-    a write into one key's mask must not change the others' silently."""
-    mask.flags.writeable = False
-    return mask
-
-
 def _some(idx: np.ndarray) -> str:
     """Sub-environment numbers for a message: the first ten, and how many more."""
     more = f" and {idx.size - 10} more" if idx.size > 10 else ""
@@ -410,8 +403,9 @@ class RollerVectorEnv(VectorEnv):
         else:  # DISABLED: the ended ones wait for reset(options={"reset_mask": ...})
             self._done = terminated | truncated
         info = episode.info_rows(table, flags, self.config.info_keys, views=True)
-        everyone = _shared(np.ones(self.num_envs, dtype=bool))
-        info.update({f"_{k}": everyone for k in list(info)})
+        keys = list(info)
+        info.update(zip((f"_{k}" for k in keys), np.ones((len(keys), self.num_envs), bool),
+                        strict=True))  # a mask of its own per key, from one allocation
         info.update(final)
         return self._obs, reward, terminated, truncated, info
 
@@ -420,17 +414,17 @@ class RollerVectorEnv(VectorEnv):
         """SAME_STEP's report of the episodes ``ended`` before they start over: their last
         observation and info (Gymnasium's layout: an object array, None where none ended;
         each with its ``_`` mask)."""
-        ended_mask = np.zeros(self.num_envs, dtype=bool)
-        ended_mask[ended] = True
-        _shared(ended_mask)
+        keys = self.config.info_keys
+        masks = np.zeros((len(keys) + 2, self.num_envs), dtype=bool)  # one per key
+        masks[:, ended] = True
         final_obs = np.full(self.num_envs, None, dtype=object)
         last = self._observation()
         for i in ended:  # per ended episode
             final_obs[i] = last[i]
         final_info = episode.info_rows(table, flags, self.config.info_keys, only=ended)
-        final_info.update({f"_{k}": ended_mask for k in self.config.info_keys})
-        return {"final_obs": final_obs, "_final_obs": ended_mask, "final_info": final_info,
-                "_final_info": ended_mask}
+        final_info.update(zip((f"_{k}" for k in keys), masks[2:], strict=True))
+        return {"final_obs": final_obs, "_final_obs": masks[0], "final_info": final_info,
+                "_final_info": masks[1]}
 
     def _restart(self, idx: np.ndarray, table: np.ndarray, flags: np.ndarray) -> None:
         """Autoreset: new episodes in ``idx``, their reset info written into the info rows of
@@ -468,9 +462,10 @@ class RollerVectorEnv(VectorEnv):
         flags = episode.flag_table(self.num_envs)
         flags[:, idx] = starts.flags.T
         info = episode.info_rows(full, flags, self.config.info_keys, views=True)
-        mask = np.zeros(self.num_envs, dtype=bool)
-        mask[idx] = True
-        info.update({f"_{key}": _shared(mask) for key in self.config.info_keys})
+        keys = self.config.info_keys
+        masks = np.zeros((len(keys), self.num_envs), dtype=bool)  # one per key
+        masks[:, idx] = True
+        info.update(zip((f"_{k}" for k in keys), masks, strict=True))
         return info
 
     # -- rendering -------------------------------------------------------------------------

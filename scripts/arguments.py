@@ -31,17 +31,19 @@ def key_values(items: list[str], option: str, separator: str = "=") -> dict[str,
     return out
 
 
-def at_least(least: int) -> Callable[[str], int]:
-    """An argparse ``type``: an integer of at least ``least``, else argparse's error naming
-    the option, the value and what is allowed."""
+def at_least(least: int, most: int | None = None) -> Callable[[str], int]:
+    """An argparse ``type``: an integer of at least ``least`` (and at most ``most``), else
+    argparse's error naming the option, the value and what is allowed."""
+    allowed = f"an integer >= {least}" + (f" and <= {most}" if most is not None else "")
+
     def parse(text: str) -> int:
         try:
             value = int(text)
         except ValueError:
             value = least - 1
-        if value < least:
-            raise argparse.ArgumentTypeError(f"{text!r} is not an integer >= {least}")
+        if value < least or (most is not None and value > most):
+            raise argparse.ArgumentTypeError(f"{text!r} is not {allowed}")
         return value
 
-    parse.__name__ = f"integer >= {least}"
+    parse.__name__ = allowed
     return parse

@@ -45,7 +45,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--steps", type=at_least(1), default=None,
                    help="environment steps, all environments together (default: the "
                         "hyperparameter file's n_timesteps); PPO rounds up to whole rollouts")
-    p.add_argument("--seed", type=at_least(0), default=0, help="the seed of training (default 0)")
+    p.add_argument("--seed", type=at_least(0, 2**32 - 1), default=0,
+                   help="the seed of training (default 0)")
     p.add_argument("--env-kwargs", nargs="+", default=[], metavar="KEY=VALUE",
                    help="keyword arguments of gymnasium.make, e.g. max_torque=0.6 scene=floor "
                         "(values are Python literals, else strings)")

@@ -90,6 +90,8 @@ def test_no_command_fails_asking_for_one():
     ("train", ["--steps", "-5"], "argument --steps: '-5' is not an integer >= 1"),
     ("train", ["--steps", "0"], "argument --steps: '0' is not an integer >= 1"),
     ("train", ["--checkpoints", "-1"], "argument --checkpoints: '-1' is not an integer >= 0"),
+    ("train", ["--seed", str(2**32)],  # NumPy's legacy seeding, which rl-zoo3 calls
+     f"argument --seed: '{2**32}' is not an integer >= 0 and <= {2**32 - 1}"),
     ("train", ["--eval-freq", "x"], "argument --eval-freq: 'x' is not an integer >= 1"),
     ("evaluate", ["--episodes", "0"], "argument --episodes: '0' is not an integer >= 1"),
 ])

@@ -292,6 +292,8 @@ def test_reset_option_target_hold():
                                          math.sin(0.8)], atol=2e-7)
     with pytest.raises(ValueError, match=r"options\['target'\]=2\.0"):
         env.reset(options={"target": 2.0})
+    assert env.reset(seed=0, options={"target": np.array(0.2)})[1]["target_psi"] == \
+        info["target_psi"]  # a 0-d array is a number
     for bad in ("0.2", True, math.nan):  # text and bools are not numbers here
         with pytest.raises(ValueError, match=r"options\['target'\]=.* must be a finite real"):
             env.reset(options={"target": bad})

@@ -146,6 +146,8 @@ def test_attributes_per_sub_environment_as_in_dummy_vec_env():
     ours.set_attr("phi", 0.5, [2])
     ref.set_attr("phi", 0.5, [2])
     assert ours.get_attr("phi") == ref.get_attr("phi")
+    ours.set_attr("curriculum_level", 3)  # a new attribute, for all of them
+    assert ours.get_attr("curriculum_level", [0, 2]) == [3, 3]
     with pytest.raises(ValueError, match="'render_mode' is one value for the whole"):
         ours.set_attr("render_mode", None, [1])
     with pytest.raises(ValueError, match=r"env_method\('reset', indices=\[0\]\)"):
