@@ -514,20 +514,25 @@ def _outcome_one(result, context, constants, observed, out, flags, obs):
     flags[_F_TOL_MET, 0] = result[_S_TOL_MET, 0] != 0.0
     for pair in _PASSED_CONTEXT:
         out[pair[0], 0] = context[pair[1], 0]
-    seen = observation_values(phi, phi_dot, target, rate, target_rate)
+    _observe_row(obs, 0, phi, phi_dot, context, observed)
+
+
+@register_jitable(inline="always")
+def _observe_row(obs, i, phi, phi_dot, context, observed):
+    """Row i of ``obs``: the ``observed`` fields of a roller at φ [rad], φ' [rad/s] under
+    column i of ``context``."""
+    seen = observation_values(phi, phi_dot, context[_C_TARGET, i], context[_C_PSI_RATE, i],
+                              context[_C_TARGET_RATE, i])
     for j in range(observed.size):
-        obs[0, j] = seen[observed[j]]
+        obs[i, j] = seen[observed[j]]
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _observe(rows, phi, phi_dot, context, observed, obs):
     """The observation of rollers ``rows`` at φ [rad], φ' [rad/s] under their ``context``:
-    what a step ending there writes (:func:`_outcome_one`'s formulas)."""
+    what a step ending there writes (the batch of one's :func:`_observe_row`)."""
     for i in rows:
-        seen = observation_values(phi[i], phi_dot[i], context[_C_TARGET, i],
-                                  context[_C_PSI_RATE, i], context[_C_TARGET_RATE, i])
-        for j in range(observed.size):
-            obs[i, j] = seen[observed[j]]
+        _observe_row(obs, i, phi[i], phi_dot[i], context, observed)
 
 
 @register_jitable(inline="always")

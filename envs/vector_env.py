@@ -110,6 +110,18 @@ def _start_info(idx, rows, table, flags, env_table, env_flags):
             env_flags[c, i] = flags[j, c]
 
 
+def _masks(keys: Sequence[str], n: int, where: np.ndarray | None = None) -> dict[str, Any]:
+    """The ``_key`` masks of a vector info: for each key an array of its own (the rows of one
+    allocation; a caller, or Gymnasium's ``_add_info``, may write into one), True for every
+    sub-environment, or for those in ``where`` only."""
+    if where is None:
+        rows = np.ones((len(keys), n), dtype=bool)
+    else:
+        rows = np.zeros((len(keys), n), dtype=bool)
+        rows[:, where] = True
+    return dict(zip((f"_{k}" for k in keys), rows, strict=True))
+
+
 def _some(idx: np.ndarray) -> str:
     """Sub-environment numbers for a message: the first ten, and how many more."""
     more = f" and {idx.size - 10} more" if idx.size > 10 else ""
@@ -403,9 +415,7 @@ class RollerVectorEnv(VectorEnv):
         else:  # DISABLED: the ended ones wait for reset(options={"reset_mask": ...})
             self._done = terminated | truncated
         info = episode.info_rows(table, flags, self.config.info_keys, views=True)
-        keys = list(info)
-        info.update(zip((f"_{k}" for k in keys), np.ones((len(keys), self.num_envs), bool),
-                        strict=True))  # a mask of its own per key, from one allocation
+        info.update(_masks(list(info), self.num_envs))
         info.update(final)
         return self._obs, reward, terminated, truncated, info
 
@@ -414,17 +424,16 @@ class RollerVectorEnv(VectorEnv):
         """SAME_STEP's report of the episodes ``ended`` before they start over: their last
         observation and info (Gymnasium's layout: an object array, None where none ended;
         each with its ``_`` mask)."""
-        keys = self.config.info_keys
-        masks = np.zeros((len(keys) + 2, self.num_envs), dtype=bool)  # one per key
-        masks[:, ended] = True
+        masks = _masks(("final_obs", "final_info", *self.config.info_keys), self.num_envs,
+                       ended)
         final_obs = np.full(self.num_envs, None, dtype=object)
         last = self._observation()
         for i in ended:  # per ended episode
             final_obs[i] = last[i]
         final_info = episode.info_rows(table, flags, self.config.info_keys, only=ended)
-        final_info.update(zip((f"_{k}" for k in keys), masks[2:], strict=True))
-        return {"final_obs": final_obs, "_final_obs": masks[0], "final_info": final_info,
-                "_final_info": masks[1]}
+        final_info.update({f"_{k}": masks[f"_{k}"] for k in self.config.info_keys})
+        return {"final_obs": final_obs, "_final_obs": masks["_final_obs"],
+                "final_info": final_info, "_final_info": masks["_final_info"]}
 
     def _restart(self, idx: np.ndarray, table: np.ndarray, flags: np.ndarray) -> None:
         """Autoreset: new episodes in ``idx``, their reset info written into the info rows of
@@ -462,10 +471,7 @@ class RollerVectorEnv(VectorEnv):
         flags = episode.flag_table(self.num_envs)
         flags[:, idx] = starts.flags.T
         info = episode.info_rows(full, flags, self.config.info_keys, views=True)
-        keys = self.config.info_keys
-        masks = np.zeros((len(keys), self.num_envs), dtype=bool)  # one per key
-        masks[:, idx] = True
-        info.update(zip((f"_{k}" for k in keys), masks, strict=True))
+        info.update(_masks(self.config.info_keys, self.num_envs, idx))
         return info
 
     # -- rendering -------------------------------------------------------------------------
