@@ -69,10 +69,13 @@ def choice(name: str, value: Any, allowed: Any) -> Any:
 
 
 def subset(name: str, value: Any, allowed: tuple[str, ...]) -> tuple[str, ...]:
-    """``value``, a sequence of distinct names among ``allowed``, as a tuple in the order of
-    ``allowed`` (None: all of them), or ValueError naming ``name``."""
+    """``value``, a sequence of distinct names among ``allowed`` (a list, tuple, set or 1-d
+    NumPy array), as a tuple in the order of ``allowed`` (None: all of them), or ValueError
+    naming ``name``."""
     if value is None:
         return allowed
+    if isinstance(value, np.ndarray) and value.ndim == 1:
+        value = value.tolist()  # a NumPy array of names: its names, as Python strings
     names = list(value) if isinstance(value, list | tuple | set | frozenset) else None
     if names is None or not all(isinstance(x, str) for x in names):
         raise ValueError(f"{name}={value!r} is not allowed: it must be None (all) or a list of "

@@ -222,3 +222,23 @@ def test_train_passes_env_kwargs_to_rl_zoo3_as_python_literals():
     at = argv.index("--env-kwargs")
     assert argv[at + 1:at + 4] == ["max_torque:0.6", "scene:'floor'",
                                    "randomize:{'m': (0.8, 1.2)}"]
+
+
+@NEEDS_RL_ZOO3
+@pytest.mark.parametrize(("item", "message"), [
+    ("max_torque=-1", "--env-kwargs: max_torque=-1 is out of range"),
+    ("bogus=3", "--env-kwargs: .*unexpected keyword argument 'bogus'"),
+])
+def test_train_refuses_env_kwargs_the_env_refuses_before_rl_zoo3_starts(item, message, tmp_path,
+                                                                       monkeypatch):
+    """A value the environment refuses ends ``train`` with the environment's message, and
+    rl-zoo3's training is never entered (it would end in a traceback from its setup)."""
+    import rl_zoo3.train
+    from roller_gym.scripts import train
+
+    def never():
+        raise AssertionError("rl-zoo3 started")
+
+    monkeypatch.setattr(rl_zoo3.train, "train", never)
+    with pytest.raises(SystemExit, match=message):
+        train.main(["--env-kwargs", item, "--log-folder", str(tmp_path)])

@@ -9,6 +9,7 @@ single environment, reported with reward 0 and both flags False.
 from __future__ import annotations
 
 import math
+from functools import partial
 
 import gymnasium as gym
 import numpy as np
@@ -233,11 +234,23 @@ def test_info_keys_choose_what_the_info_holds():
         assert rest1[1:] == rest2[1:]
 
 
+def test_info_keys_may_be_a_numpy_array_of_names():
+    """A 1-d NumPy array of names chooses the same keys as the list of them (a NumPy array is
+    how names often arrive, from a config or a sweep)."""
+    names = ["substeps", "energy"]
+    for make in (gym.make, partial(gym.make_vec, num_envs=2)):
+        listed = make(IDS[0], info_keys=names).unwrapped.config.info_keys
+        assert make(IDS[0], info_keys=np.array(names)).unwrapped.config.info_keys == listed
+        assert set(listed) == set(names)
+
+
 @pytest.mark.parametrize(("value", "message"), [
     (["nope"], r"info_keys=\['nope'\] has unknown names \['nope'\]; allowed: phi, "),
     ("energy", r"info_keys='energy' is not allowed: it must be None \(all\) or a list"),
     (["energy", "energy"], r"info_keys=.* has repeated names"),
     ([1], r"info_keys=\[1\] is not allowed"),
+    (np.array([["energy"]]), r"info_keys=array\(\[\['energy'\]\], .* is not allowed"),
+    (np.array([1, 2]), r"info_keys=\[1, 2\] is not allowed"),
 ])
 def test_bad_info_keys_are_refused_naming_the_argument(value, message):
     for make in (lambda: gym.make(IDS[0], info_keys=value),
