@@ -12,6 +12,7 @@ ID                                task                                        st
 ``roller_gym/RollerStabilize-v1``  bring the roller to rest at the bottom      200 (0.05 s)
 ``roller_gym/RollerHold-v1``       hold it at rest at a target on the wall     200 (0.05 s)
 ``roller_gym/RollerBalance-v1``    swing the mass center up and balance it     400 (0.05 s)
+``roller_gym/RollerTrack-v0``      follow a target moving along the wall       400 (0.05 s)
 ================================  ==========================================  ==============
 
 A change to a task's dynamics, reward, observation or spaces registers it under the next
@@ -19,7 +20,8 @@ version (``-v1``), as Gymnasium does.
 
 The physics, which knows nothing of Gymnasium, is :mod:`roller_gym.physics`; the tasks
 are in the registry :data:`roller_gym.task.TASKS` (one module each:
-:mod:`roller_gym.stabilize`, :mod:`roller_gym.hold`, :mod:`roller_gym.balance`), and every
+:mod:`roller_gym.stabilize`, :mod:`roller_gym.hold`, :mod:`roller_gym.balance`,
+:mod:`roller_gym.track`), and every
 task runs in the same two environments, :class:`roller_gym.roller_env.RollerEnv` and
 :class:`roller_gym.vector_env.RollerVectorEnv`; the sample agents are
 :mod:`roller_gym.agents`.

@@ -4,7 +4,7 @@ keep it there.
 In the preset ``"balance"`` (R = 10 r, e = 0.8 r) the roller has an unstable rest
 position at zero torque with its mass center over the contact point, at ψ ≈ ±23°
 (φ ≈ ±3.66 rad), where it still rolls (N > 0, |F| <= μN). The torque limit
-(default 0.4 N·m) is below the largest holding torque on the way up (≈ 0.95 N·m), so the
+(default 0.4 N·m) is below the largest holding torque on the way up (≈ 0.96 N·m), so the
 agent must pump energy back and forth, as in Pendulum's swing-up, then balance. Either
 of the two symmetric rest positions counts. On the floor the target is the mass center
 straight above the axle (φ = π).

@@ -368,8 +368,10 @@ INFO_KEYS: dict[str, tuple[type, str]] = {
     "slipping": (bool, "the friction needed exceeded μN during the step"),
     "nonfinite": (bool, "the step could not stay finite (or |φ| passed 2⁵⁰ rad, where "
                        "sines are NaN): the state is the one before it"),
-    "tol_met": (bool, "the step met the integrator's tolerance (False: out of float64's reach)"),
-    "is_success": (bool, "inside the task's success band at rest"),
+    "tol_met": (bool, "the step met the integrator's tolerance (False: out of reach of "
+                     "float64, or of the substeps a step may take)"),
+    "is_success": (bool, "inside the task's success band, at rest (moving with the target "
+                         "in Track)"),
 }
 
 

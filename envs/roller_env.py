@@ -1,8 +1,9 @@
 """The single roller environment: a Gymnasium ``Env`` on the physics of :mod:`roller_gym.physics`.
 
-The tasks (``stabilize.py``, ``hold.py``, ``balance.py``) subclass :class:`RollerEnv`
-with their :class:`~roller_gym.task.Task`; this file holds what they share: construction,
-reset, step, info and rendering.
+Every task (a :class:`~roller_gym.task.Task` of ``stabilize.py``, ``hold.py``,
+``balance.py`` or ``track.py``) runs in this one class: each ID is registered as
+``RollerEnv`` with ``task=`` its name. This file holds construction, reset, step, info and
+rendering.
 """
 
 from __future__ import annotations

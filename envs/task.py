@@ -6,7 +6,7 @@ per-episode methods (targets, start states) take arrays of rollers. Its per-step
 same for every task and parametrized by the task's class variables (:data:`TASK_CONSTANTS`);
 the single and the vector environment run them in one compiled kernel
 (:func:`roller_gym.episode.outcome`). Each task is one class in its own module (``stabilize.py``,
-``hold.py``, ``balance.py``), added to the registry :data:`TASKS` by the decorator
+``hold.py``, ``balance.py``, ``track.py``), added to the registry :data:`TASKS` by the decorator
 :func:`register`, as dm_control's suite does; registration with Gymnasium, the agents,
 the scripts and the tests iterate over the registry. A new task is one class here and its
 hyperparameters.
@@ -140,7 +140,9 @@ def wrap_rate(scene: Scene) -> float | np.ndarray:
 
 
 class Task:
-    """The base of the tasks. Subclasses set the class variables and ``sample_target``."""
+    """The base of the tasks. Subclasses set the class variables and, where the task has a
+    target to draw, ``sample_targets`` (a rest position) or ``sample_target_params`` and
+    ``target_at`` (a moving target)."""
 
     name: ClassVar[str]
     #: The version in the task's ID; a change to its dynamics, reward or spaces bumps it.

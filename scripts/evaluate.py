@@ -3,8 +3,8 @@
     roller-gym evaluate --env roller_gym/RollerStabilize-v1 \\
         --models runs/sac/roller_gym-RollerStabilize-v1_1
     roller-gym evaluate --env roller_gym/RollerStabilize-v1 roller_gym/RollerHold-v1 \\
-        roller_gym/RollerBalance-v1 \\
-        --runs runs --out docs/results --report docs/RESULTS.md --notes docs/results/notes.md
+        roller_gym/RollerBalance-v1 roller_gym/RollerTrack-v0 \\
+        --runs runs --out results --report results/REPORT.md
 
 The trained models are experiment folders of ``roller-gym train`` (or of ``python -m
 rl_zoo3.train`` with roller-gym's hyperparameter files): named with --models, or the latest
@@ -22,7 +22,8 @@ so all face the same start states and targets. Per task it prints and writes (in
 * ``<env>-trajectories.png``: episode 0 of every policy, side by side.
 
 ``--report`` assembles the tasks' tables, the targets and the plots into one
-Markdown file (``docs/RESULTS.md``).
+Markdown file. These are one training seed's results; ``roller-gym results`` (``make
+results``) trains several seeds and writes ``docs/RESULTS.md`` with rliable's intervals.
 """
 
 from __future__ import annotations
@@ -292,11 +293,12 @@ def write_report(path: Path, out: Path, sections: list[tuple[str, str, str]],
         "CPU) against each task's classical controller (LQR; on Balance an energy swing-up "
         "handing over to LQR), zero torque and random actions.",
         "",
-        "Reproduce with `make results` (it trains the agents with `roller-gym train`, "
-        "rl-zoo3 with the hyperparameter files of `agents/hyperparams/`, into `runs/`, "
-        f"seed 0, then runs `roller-gym evaluate --env {' '.join(args.env)} --runs {args.runs} "
+        "Reproduce by training the agents with `roller-gym train` (rl-zoo3, with the "
+        f"hyperparameter files of `agents/hyperparams/`) into `{args.runs}/`, then "
+        f"`roller-gym evaluate --env {' '.join(args.env)} --runs {args.runs} "
         f"--out {args.out} --report {args.report}"
-        + (f" --notes {args.notes}" if args.notes else "") + "`).",
+        + (f" --notes {args.notes}" if args.notes else "") + "`. One training seed per "
+        "agent: `roller-gym results` trains several and reports intervals.",
         "",
         f"Every policy plays the same {args.episodes} episodes, `env.reset(seed=s)` for s = 0 "
         f"… {args.episodes - 1}, acting deterministically ({'best' if args.best else 'final'} "
