@@ -54,6 +54,7 @@ from roller_gym.physics.integrators import (
 from roller_gym.physics.packed import unpack
 from roller_gym.task import (
     OBSERVATION_FIELDS,
+    TASK_CONSTANTS,
     observation_values,
     position_error,
     state_observation,
@@ -395,6 +396,12 @@ INFO_ROW = {key: _F[key] if kind is bool else _O[key] for key, (kind, _) in INFO
 (_C_TORQUE, _C_TARGET, _C_TARGET_RATE, _C_TARGET_TORQUE, _C_Q,
  _C_PSI_RATE) = range(len(CONTEXT_FIELDS))
 assert STEP_FIELDS[_S_TOL_MET] == "tol_met" and CONTEXT_FIELDS[_C_PSI_RATE] == "psi_rate"
+# A task's numbers (Task.constants), each read by its name's place in TASK_CONSTANTS.
+(_K_BAND, _K_MARGIN, _K_PRECISION, _K_SPEED_MARGIN, _K_SPEED_WEIGHT, _K_CONTROL_WEIGHT,
+ _K_SUCCESS_SPEED, _K_MAX_TORQUE, _K_SYMMETRIC, _K_OBSERVES_TARGET) = (
+    TASK_CONSTANTS.index(name) for name in (
+        "success_band", "position_margin", "precision_weight", "speed_margin", "speed_weight",
+        "control_weight", "success_speed", "max_torque", "symmetric_target", "observes_target"))
 # Row numbers as compile-time constants of the kernel.
 (_O_REWARD, _O_PHI, _O_PHI_DOT, _O_PSI, _O_TORQUE, _O_NORMAL, _O_FRICTION, _O_ENERGY,
  _O_SUBSTEPS, _O_LIFT, _O_SLIP, _O_ERR, _O_TARGET_PHI, _O_TARGET_PSI, _O_TARGET_RATE,
@@ -448,9 +455,10 @@ def _outcome_of(phi, phi_dot, failed, lift, slip, estimate, tau, target, target_
     """One roller's computed outcome, the values of _B_COMPUTED_NAMES in order (a flag as
     1.0 or 0.0), from its step (φ [rad], φ' [rad/s], failed, the margins, the error
     estimate) and its context (the formulas are :mod:`roller_gym.task`'s)."""
-    band, margin, w_p, speed_margin, w_v, w_u = (constants[0], constants[1], constants[2],
-                                                 constants[3], constants[4], constants[5])
-    success_speed, max_torque, symmetric = constants[6], constants[7], constants[8]
+    band, margin, w_p = constants[_K_BAND], constants[_K_MARGIN], constants[_K_PRECISION]
+    speed_margin, w_v = constants[_K_SPEED_MARGIN], constants[_K_SPEED_WEIGHT]
+    w_u, success_speed = constants[_K_CONTROL_WEIGHT], constants[_K_SUCCESS_SPEED]
+    max_torque, symmetric = constants[_K_MAX_TORQUE], constants[_K_SYMMETRIC]
     error = position_error(phi, target, q, symmetric)
     speed_error = phi_dot - target_rate
     reward = step_reward(error, speed_error, (tau - target_torque) / max_torque, band, margin,
@@ -474,7 +482,7 @@ def _outcome_of(phi, phi_dot, failed, lift, slip, estimate, tau, target, target_
 def _outcome_block(b, m, constants):
     """The outcome of the block's m rollers in the scratch ``b`` (rows _B apart): from the
     input rows into the computed rows and the observation's rows."""
-    with_target = constants[9] != 0.0
+    with_target = constants[_K_OBSERVES_TARGET] != 0.0
     for i in range(m):
         phi, phi_dot, rate = b[_B_PHI * _B + i], b[_B_PHI_DOT * _B + i], b[_B_RATE * _B + i]
         o = _B_OUT * _B + i

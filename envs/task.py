@@ -8,8 +8,9 @@ the single and the vector environment run them in one compiled kernel
 (:func:`roller_gym.episode.outcome`). Each task is one class in its own module (``stabilize.py``,
 ``hold.py``, ``balance.py``, ``track.py``), added to the registry :data:`TASKS` by the decorator
 :func:`register`, as dm_control's suite does; registration with Gymnasium, the agents,
-the scripts and the tests iterate over the registry. A new task is one class here and its
-hyperparameters.
+the scripts and the tests iterate over the registry. A new task is one class in a module of
+its own, listed in ``roller_gym.TASK_MODULES``, with its hyperparameters (README, "Adding a
+task").
 
 **The position error.** The target is a rest position φ* [rad]. The error is measured
 along the configuration, one turn of ψ either way: with the wrap rate q = rκ/(1 − rκ)
@@ -24,7 +25,9 @@ declared once in :data:`OBSERVATION_FIELDS`; a task lists the ones it observes, 
 in ``Task.observation``, and agents read them by name (:meth:`Task.index`).
 
 **The reward** (:func:`step_reward`) is a product of bounded terms (:mod:`roller_gym.rewards`),
-in [0, 1] per step, the same for every task; a new term is added there, once:
+in [0, 1] per step, the same formula for every task with each task's weights; a new term is
+a function there, a weighted factor in :func:`step_reward` and its weight's name in
+:data:`TASK_CONSTANTS` (README, "Adding a task"):
 
     reward = position(ε)
              · (1 − w_v + w_v · near(φ' − φ*', speed_margin))
@@ -355,7 +358,8 @@ class Task:
         ``target_torque``)."""
         return step_reward(step["position_error"], step["phi_dot"] - step["target_phi_dot"],
                            (step["torque"] - step["target_torque"]) / self.max_torque,
-                           *self.constants[:_REWARD_CONSTANTS])
+                           self.success_band, self.position_margin, self.precision_weight,
+                           self.speed_margin, self.speed_weight, self.control_weight)
 
     def success(self, step: Mapping[str, Any]):
         """Inside the success band, moving with the target (:func:`step_success`)."""
@@ -368,11 +372,12 @@ class Task:
 # floats and arrays from Python and, compiled, the environments' per-step kernel
 # (:func:`roller_gym.episode.outcome`), which takes a task's numbers as :data:`TASK_CONSTANTS`.
 
-#: The task's class variables the per-step formulas take, in order (the reward's first).
+#: The task's class variables the per-step formulas take: the order of :meth:`Task.constants`,
+#: the numbers the compiled kernel takes. The kernel finds each by its name's place here
+#: (``TASK_CONSTANTS.index``), so a new name may go anywhere.
 TASK_CONSTANTS = ("success_band", "position_margin", "precision_weight", "speed_margin",
                   "speed_weight", "control_weight", "success_speed", "max_torque",
                   "symmetric_target", "observes_target")
-_REWARD_CONSTANTS = 6
 
 
 @register_jitable(inline="always")

@@ -65,6 +65,19 @@ scale and the speed at the start (taken again with more if the speed reached ask
 step whose prediction asks for more than ``MAX_SUBSTEPS`` takes that many and reports
 ``tol_met=False`` (its tolerance is out of their reach).
 
+**Adding a scheme.** A fixed-substep scheme is three pieces of this module: its substep,
+``f(phi, w, tau, m, r, kappa, e, k, g, c, h) -> (phi, w)`` compiled with ``_jit`` (as
+``_euler_substep``); its kernel, two lines around ``_fixed_steps`` (as ``_euler_kernel``, a
+function of its own so that numba caches it); and its row of :data:`SCHEMES`
+(``Scheme(name, order, stable_step, False, substep, kernel=kernel, constant=C)``).
+``constant`` and ``stable_step`` set only the predicted count of substeps: too large costs
+time, too small fails the tests' tolerances. An explicit Runge–Kutta pair is its
+coefficients (:func:`_tableau`) and a row with ``tableau=``, ``halvings`` and ``tol_share``:
+it runs in the shared pair kernels, and the single environment fuses its step with the
+step's outcome in one compiled call, as for taylor (the other schemes take two calls).
+``tests/test_integrators.py`` runs every row; give a new one its tolerances in ``TOLS`` and
+its substep counts in ``test_observed_order_of_convergence``.
+
 **Failure.** Where a step cannot stay finite, or ends with |φ| past ``trig.DOMAIN`` (2⁵⁰
 rad, beyond which the sines are NaN: only a step that blew up gets there), ``finite`` is
 False, φ and φ' are the state before the step, and ``phi_ddot``, ``normal_force``,
