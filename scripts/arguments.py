@@ -7,7 +7,7 @@ import ast
 from collections.abc import Callable
 from typing import Any
 
-__all__ = ["at_least", "key_values"]
+__all__ = ["at_least", "checked_env_kwargs", "key_values"]
 
 
 def key_values(items: list[str], option: str, separator: str = "=") -> dict[str, Any]:
@@ -29,6 +29,26 @@ def key_values(items: list[str], option: str, separator: str = "=") -> dict[str,
         except (ValueError, SyntaxError):
             out[key] = value
     return out
+
+
+def checked_env_kwargs(env_id: str, items: list[str], option: str) -> dict[str, Any]:
+    """The keyword arguments of ``gymnasium.make(env_id, ...)`` in ``items`` (as
+    :func:`key_values`), checked by building the environment once with them, so that a value
+    the environment refuses ends the program with the environment's own message before any
+    training library starts (where it would end in a traceback from that library's setup).
+
+    Raises:
+        SystemExit: an item is not KEY=VALUE, or the environment refuses the arguments; the
+            message names ``option``.
+    """
+    import gymnasium as gym
+
+    kwargs = key_values(items, option)
+    try:
+        gym.make(env_id, **kwargs).close()
+    except (TypeError, ValueError) as exc:
+        raise SystemExit(f"{option}: {exc}") from None
+    return kwargs
 
 
 def at_least(least: int, most: int | None = None) -> Callable[[str], int]:

@@ -30,7 +30,7 @@ from pathlib import Path
 import roller_gym  # registers the tasks
 from roller_gym.agents.hyperparams import ALGOS, config_file, hyperparams
 from roller_gym.agents.policies import ZOO_HINT, find_run
-from roller_gym.scripts.arguments import at_least, key_values
+from roller_gym.scripts.arguments import at_least, checked_env_kwargs, key_values
 
 #: Algorithms that learn from whole rollouts of n_envs x n_steps environment steps.
 ON_POLICY = ("ppo",)
@@ -107,18 +107,6 @@ def zoo_arguments(args: argparse.Namespace, conf: str) -> list[str]:
     return out + list(args.zoo_args)
 
 
-def check_env_kwargs(env_id: str, env_kwargs: dict[str, object]) -> None:
-    """Build ``env_id`` once with ``env_kwargs``: a value the environment refuses ends the
-    command with the environment's own message, before rl-zoo3 starts (where it would end in
-    a traceback from inside rl-zoo3's setup)."""
-    import gymnasium as gym
-
-    try:
-        gym.make(env_id, **env_kwargs).close()
-    except (TypeError, ValueError) as exc:
-        raise SystemExit(f"--env-kwargs: {exc}") from None
-
-
 def main(argv: list[str] | None = None) -> Path | None:
     """Train with rl-zoo3; return the experiment folder (None with ``--show-command``)."""
     args = build_parser().parse_args(argv)
@@ -132,7 +120,7 @@ def main(argv: list[str] | None = None) -> Path | None:
         if args.show_command:
             print(shlex.join([sys.executable, "-m", "rl_zoo3.train", *zoo_argv]))
             return None
-        check_env_kwargs(args.env, key_values(args.env_kwargs, "--env-kwargs"))
+        checked_env_kwargs(args.env, args.env_kwargs, "--env-kwargs")  # before rl-zoo3 starts
         from rl_zoo3.exp_manager import ExperimentManager
         from roller_gym.sb3 import from_env_fns
 

@@ -34,7 +34,7 @@ from typing import Any
 
 import gymnasium as gym
 from roller_gym import ENV_IDS
-from roller_gym.scripts.arguments import at_least, key_values
+from roller_gym.scripts.arguments import at_least, checked_env_kwargs
 
 VECTORIZE_MODES = {"sync": "sync", "async": "async", "native": "vector_entry_point"}
 
@@ -183,7 +183,7 @@ def progress(result: dict[str, Any], env_steps_before: int) -> tuple[str, int]:
 
 def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
-    env_kwargs = key_values(args.env_kwarg, "--env-kwarg")
+    env_kwargs = checked_env_kwargs(args.env, args.env_kwarg, "--env-kwarg")  # before Ray starts
     try:
         import ray
         import torch

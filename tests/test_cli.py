@@ -209,7 +209,7 @@ def test_train_and_train_rllib_parse_env_kwargs_with_the_one_parser():
             program = importlib.import_module(f"roller_gym.scripts.{module}")
         except ImportError as exc:
             pytest.skip(f"{module} needs {exc.name}, not installed here")
-        assert program.key_values is arguments.key_values, module
+        assert program.checked_env_kwargs is arguments.checked_env_kwargs, module
 
 
 @NEEDS_RL_ZOO3
@@ -242,3 +242,18 @@ def test_train_refuses_env_kwargs_the_env_refuses_before_rl_zoo3_starts(item, me
     monkeypatch.setattr(rl_zoo3.train, "train", never)
     with pytest.raises(SystemExit, match=message):
         train.main(["--env-kwargs", item, "--log-folder", str(tmp_path)])
+
+
+@pytest.mark.parametrize(("item", "message"), [
+    ("max_torque=-1", "--env-kwarg: max_torque=-1 is out of range"),
+    ("bogus=3", "--env-kwarg: .*unexpected keyword argument 'bogus'"),
+])
+def test_train_rllib_refuses_env_kwargs_the_env_refuses_before_ray_starts(item, message,
+                                                                         monkeypatch):
+    """The same for ``train-rllib``: the environment's message, and Ray never imported (here a
+    stand-in that fails if it is)."""
+    from roller_gym.scripts import train_rllib
+
+    monkeypatch.setitem(sys.modules, "ray", None)  # importing it would raise ImportError
+    with pytest.raises(SystemExit, match=message):
+        train_rllib.main(["--env-kwarg", item])
