@@ -43,6 +43,7 @@ __all__ = [
     "TrainedPolicy",
     "algorithm_class",
     "baseline",
+    "evaluation_env",
     "find_run",
     "load_policy",
     "read_config",
@@ -236,6 +237,19 @@ def baseline(name: str, env: gym.Env, seed: int = 0) -> Controller:
     raise ValueError(f"baseline {name!r} is not one of {', '.join(BASELINES)}")
 
 
+#: The info keys :func:`rollout` reads at every step.
+ROLLOUT_INFO_KEYS = ("phi", "phi_dot", "position_error", "torque", "is_success", "target_phi")
+
+
+def evaluation_env(env_id: str, env_kwargs: dict[str, Any], **kwargs: Any) -> gym.Env:
+    """The environment a training run is evaluated or replayed in: ``gymnasium.make(env_id)``
+    with the run's ``env_kwargs`` (and ``kwargs``, e.g. ``render_mode``), and every info key.
+    A run may have trained with fewer (``info_keys``, to step faster); :func:`rollout` reads
+    the state from the info."""
+    kept = {k: v for k, v in env_kwargs.items() if k != "info_keys"}
+    return gym.make(env_id, **kept, **kwargs)
+
+
 @dataclass(frozen=True)
 class Episode:
     """One episode, step by step (arrays over the steps, t = dt, 2 dt, ...).
@@ -276,7 +290,17 @@ def rollout(env: gym.Env, policy: Policy, seed: int, render: bool = False) -> Ep
         policy: anything with ``predict(observation, deterministic=True)``.
         seed: the reset seed (the same seed gives the same start state and target).
         render: collect ``env.render()`` frames (the first before the first step).
+
+    Raises:
+        ValueError: ``env`` was made without an info key of :data:`ROLLOUT_INFO_KEYS`
+            (``info_keys``); :func:`evaluation_env` makes a run's environment with all.
     """
+    chosen = env.unwrapped.config.info_keys
+    missing = [key for key in ROLLOUT_INFO_KEYS if key not in chosen]
+    if missing:
+        raise ValueError(f"env: rollout reads the info keys {', '.join(missing)}, which env "
+                         f"was made without (info_keys={list(chosen)}); make it with every "
+                         "key (leave info_keys out) or with these added")
     obs, info = env.reset(seed=seed)
     frames = [env.render()] if render else None
     rows: list[tuple[float, ...]] = []

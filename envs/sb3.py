@@ -28,6 +28,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium.vector import AutoresetMode
 from roller_gym.episode import INFO_KEYS, vector_seeds
+from roller_gym.vector_env import BATCH_INTEGRATORS
 from stable_baselines3.common.vec_env import DummyVecEnv
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices
 
@@ -202,8 +203,9 @@ def from_env_fns(env_fns: list[Any], **vec_env_kwargs: Any) -> VecEnv:
     ``ExperimentManager.default_vec_env_cls``): for the environments of a roller-gym task,
     the native batch (:class:`RollerVecEnv` reporting episodes as ``Monitor`` does), built
     from the task ID and keyword arguments of the first environment (so training and
-    evaluation environments are of one type); ``DummyVecEnv`` for other tasks, or when the
-    environments carry wrappers of their own."""
+    evaluation environments are of one type); ``DummyVecEnv`` for other tasks, when the
+    environments carry wrappers of their own, or when their integrator is one the batch does
+    not take (``"dop853"``)."""
     if env_fns:
         probe = env_fns[0]()
         wrappers, env, monitor, probe_file = set(), probe, True, None
@@ -216,8 +218,9 @@ def from_env_fns(env_fns: list[Any], **vec_env_kwargs: Any) -> VecEnv:
             env = env.env
         spec = probe.spec  # the outermost: it carries make()'s max_episode_steps
         probe.close()
-        if wrappers <= _PLAIN_WRAPPERS and spec is not None and spec.id.startswith(
-                "roller_gym/"):
+        if (wrappers <= _PLAIN_WRAPPERS and spec is not None
+                and spec.id.startswith("roller_gym/")
+                and spec.kwargs.get("integrator", BATCH_INTEGRATORS[0]) in BATCH_INTEGRATORS):
             if probe_file is not None:  # the probe's own Monitor file: never written to
                 probe_file.unlink(missing_ok=True)
             kwargs = {k: v for k, v in spec.kwargs.items() if k != "render_mode"}

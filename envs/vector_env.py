@@ -40,6 +40,9 @@ from roller_gym.task import Task, get_task, psi_rate, wrap_rate
 
 __all__ = ["RollerVectorEnv"]
 
+#: The integrators of the batch: all but scipy's DOP853, a reference for one roller.
+BATCH_INTEGRATORS = tuple(m for m in METHODS if m != "dop853")
+
 _ROW = {name: i for i, name in enumerate(episode.OUTCOME_ROWS)}
 _FLAG = {name: i for i, name in enumerate(episode.FLAG_ROWS)}
 _CONTEXT = {name: i for i, name in enumerate(episode.CONTEXT_FIELDS)}
@@ -197,10 +200,10 @@ class RollerVectorEnv(VectorEnv):
             randomize=randomize, render_mode=render_mode,
             render_modes=self.metadata["render_modes"], info_keys=info_keys,
         )
-        if integrator == "dop853":
-            others = ", ".join(repr(m) for m in METHODS if m != "dop853")
-            raise ValueError("integrator='dop853' is a reference for the single environment; "
-                             f"the vector environment takes one of {others}")
+        if integrator not in BATCH_INTEGRATORS:
+            raise ValueError(f"integrator={integrator!r} is a reference for the single "
+                             "environment; the vector environment takes one of "
+                             f"{', '.join(map(repr, BATCH_INTEGRATORS))}")
         self.autoreset_mode = _autoreset_mode(autoreset_mode)
         self.metadata = {**type(self).metadata, "autoreset_mode": self.autoreset_mode}
         task = self.task = self.config.task

@@ -4,31 +4,39 @@ from __future__ import annotations
 
 import argparse
 import ast
+import inspect
+import os
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
-__all__ = ["at_least", "checked_env_kwargs", "key_values"]
+__all__ = ["at_least", "checked_env_kwargs", "key_values", "output_folder"]
 
 
-def key_values(items: list[str], option: str, separator: str = "=") -> dict[str, Any]:
+def key_values(items: list[str], option: str, separator: str = "=",
+               example: str = "max_torque=0.6") -> dict[str, Any]:
     """``["max_torque=0.6", "scene=floor"]`` -> ``{"max_torque": 0.6, "scene": "floor"}``:
     values are Python literals where they parse as one (``0.6``, ``(0.8, 1.2)``,
     ``{"m": (0.8, 1.2)}``, ``None``), else strings.
 
     Raises:
-        SystemExit: an item is not KEY<separator>VALUE; the message names ``option``.
+        SystemExit: an item is not KEY<separator>VALUE; the message names ``option`` and
+            gives ``example``.
     """
     out: dict[str, Any] = {}
     for item in items:
         key, sep, value = item.partition(separator)
         if not sep or not key:
-            raise SystemExit(f"{option}: {item!r} is not KEY{separator}VALUE "
-                             f"(e.g. max_torque{separator}0.6)")
+            raise SystemExit(f"{option}: {item!r} is not KEY{separator}VALUE (e.g. {example})")
         try:
             out[key] = ast.literal_eval(value)
         except (ValueError, SyntaxError):
             out[key] = value
     return out
+
+
+#: The keyword arguments gymnasium.make takes itself, besides the environment's.
+MAKE_KWARGS = ("max_episode_steps", "disable_env_checker")
 
 
 def checked_env_kwargs(env_id: str, items: list[str], option: str) -> dict[str, Any]:
@@ -42,8 +50,16 @@ def checked_env_kwargs(env_id: str, items: list[str], option: str) -> dict[str, 
             message names ``option``.
     """
     import gymnasium as gym
+    from gymnasium.envs.registration import load_env_creator
 
     kwargs = key_values(items, option)
+    spec = gym.spec(env_id)
+    params = inspect.signature(load_env_creator(spec.entry_point)).parameters
+    allowed = [name for name in (*params, *MAKE_KWARGS) if name not in spec.kwargs]
+    unknown = [key for key in kwargs if key not in allowed]
+    if unknown and all(p.kind is not p.VAR_KEYWORD for p in params.values()):
+        raise SystemExit(f"{option}: {unknown[0]!r} is not an argument of {env_id}; "
+                         f"allowed: {', '.join(allowed)}")
     try:
         gym.make(env_id, **kwargs).close()
     except (TypeError, ValueError) as exc:
@@ -67,3 +83,18 @@ def at_least(least: int, most: int | None = None) -> Callable[[str], int]:
 
     parse.__name__ = allowed
     return parse
+
+
+def output_folder(path: str | Path, option: str) -> Path:
+    """The folder ``path``, created now with its parents and checked to be writable, so that
+    a program that writes there ends at its start, naming ``option``, rather than after its
+    work."""
+    folder = Path(path)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise SystemExit(f"{option}: cannot create the folder {str(folder)!r}: "
+                         f"{exc.strerror or exc}") from None
+    if not os.access(folder, os.W_OK):
+        raise SystemExit(f"{option}: the folder {str(folder)!r} is not writable")
+    return folder

@@ -47,12 +47,13 @@ from roller_gym.agents.hyperparams import ALGOS
 from roller_gym.agents.policies import (
     BASELINES,
     baseline,
+    evaluation_env,
     find_run,
     load_policy,
     read_config,
     rollout,
 )
-from roller_gym.scripts.arguments import at_least
+from roller_gym.scripts.arguments import at_least, output_folder
 from roller_gym.task import get_task
 
 #: How the baselines are named in the tables.
@@ -213,8 +214,9 @@ def main(argv: list[str] | None = None) -> None:
     if args.notes is not None and args.report is None:
         parser.error(f"--notes {args.notes!r} needs --report: the notes are appended to it")
     matplotlib.use("Agg")  # files only, no window
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_folder(args.out, "--out")
+    if args.report is not None:
+        output_folder(Path(args.report).parent, "--report")
     if args.models and len(args.env) > 1:
         raise SystemExit("--models names runs of one task; use --runs for several tasks")
     sections = []
@@ -234,7 +236,7 @@ def main(argv: list[str] | None = None) -> None:
         env_kwargs = configs[0]["env_kwargs"] if configs else {}
         if any(c["env_kwargs"] != env_kwargs for c in configs):
             raise SystemExit(f"the runs of {env_id} differ in env_kwargs; evaluate them apart")
-        env = gym.make(env_id, **env_kwargs)
+        env = evaluation_env(env_id, env_kwargs)
         policies: list[tuple[dict[str, Any], Any]] = []
         for d, c in zip(run_dirs, configs, strict=True):
             meta = {"name": c["algo"], "label": c["algo"].upper(), "run_dir": str(d),

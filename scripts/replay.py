@@ -19,8 +19,26 @@ import gymnasium as gym
 import imageio.v2 as imageio
 import roller_gym  # registers the tasks
 from roller_gym import file_name
-from roller_gym.agents.policies import BASELINES, baseline, load_policy, read_config, rollout
-from roller_gym.scripts.arguments import at_least
+from roller_gym.agents.policies import (
+    BASELINES,
+    baseline,
+    evaluation_env,
+    load_policy,
+    read_config,
+    rollout,
+)
+from roller_gym.scripts.arguments import at_least, output_folder
+
+#: The files replay writes.
+VIDEO_SUFFIXES = (".gif", ".mp4")
+
+
+def video_file(text: str) -> Path:
+    """An argparse ``type``: a path ending in one of :data:`VIDEO_SUFFIXES`."""
+    if Path(text).suffix.lower() not in VIDEO_SUFFIXES:
+        raise argparse.ArgumentTypeError(f"{text!r} does not end in "
+                                         f"{' or '.join(VIDEO_SUFFIXES)}")
+    return Path(text)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -32,7 +50,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the task (default: the run's; required for a baseline)")
     p.add_argument("--seed", type=at_least(0), default=0,
                    help="the episode's reset seed (default 0)")
-    p.add_argument("--out", default=None,
+    p.add_argument("--out", default=None, type=video_file,
                    help="output .gif or .mp4 (default <run dir>/replay.gif, or "
                         "<policy>-<env>.gif for a baseline)")
     p.add_argument("--best", action="store_true", help="use the run's best_model.zip")
@@ -56,13 +74,13 @@ def main(argv: list[str] | None = None) -> None:
             raise SystemExit(f"policy: {exc}; or give one of: {', '.join(BASELINES)}") from None
         if args.env is not None and args.env != config["env"]:
             raise SystemExit(f"{args.policy} was trained on {config['env']}, not {args.env}")
-        env = gym.make(config["env"], render_mode="rgb_array", **config["env_kwargs"])
+        env = evaluation_env(config["env"], config["env_kwargs"], render_mode="rgb_array")
         policy = load_policy(args.policy, best=args.best)
         out = Path(args.out or Path(args.policy) / "replay.gif")
 
+    output_folder(out.parent, "--out")
     episode = rollout(env, policy, seed=args.seed, render=True)
     env.close()
-    out.parent.mkdir(parents=True, exist_ok=True)
     if out.suffix == ".gif":
         imageio.mimsave(out, episode.frames, duration=1000 / args.fps, loop=0)
     else:

@@ -39,11 +39,10 @@ import gymnasium as gym
 import matplotlib
 import numpy as np
 import roller_gym
-from roller_gym.agents import stats
 from roller_gym.agents.hyperparams import ALGOS
-from roller_gym.agents.policies import BASELINES, baseline, load_policy, read_config
+from roller_gym.agents.policies import BASELINES, baseline, evaluation_env, load_policy, read_config
 from roller_gym.bench.throughput import package_versions
-from roller_gym.scripts.arguments import at_least
+from roller_gym.scripts.arguments import at_least, output_folder
 from roller_gym.scripts.evaluate import (  # its targets, read here from the intervals
     BASELINE_LABELS,
     RETURN_TOLERANCE,
@@ -114,7 +113,7 @@ def _evaluate_job(job: tuple[str, str, str | None, int]) -> dict[str, Any]:
                                                        episodes)}
     else:
         config = read_config(run_dir)
-        env = gym.make(env_id, **config["env_kwargs"])
+        env = evaluation_env(env_id, config["env_kwargs"])
         out = {"env": env_id, "name": name, "run_dir": str(run_dir), "seed": config["seed"],
                "trained_steps": config["trained_steps"], "wall_time_s": config["wall_time_s"],
                **evaluate(env, load_policy(run_dir), episodes)}
@@ -166,6 +165,7 @@ def measure(args: argparse.Namespace) -> dict[str, Any]:
 
 def summarize(results: dict[str, Any], algos: list[str]) -> dict[str, Any]:
     """The aggregates the page shows, from the results file's contents."""
+    from roller_gym.agents import stats  # rliable: --help works without it
     tasks = list(results["tasks"])
     by = {(e["env"], e["name"]): [] for e in results["evaluations"]}
     for e in results["evaluations"]:
@@ -257,6 +257,7 @@ def _steps(summary: dict[str, Any] | None, steps: list[float]) -> str:
 def plot(results: dict[str, Any], summary: dict[str, Any], folder: Path) -> None:
     """The learning curves, the IQM intervals and the performance profiles."""
     import matplotlib.pyplot as plt
+    from roller_gym.agents import stats  # rliable: --help works without it
 
     tasks = list(summary["tasks"])
     colors = dict(zip(ALGOS, ("C0", "C1", "C2"), strict=False))
@@ -404,8 +405,11 @@ def render(results: dict[str, Any], report: Path, folder: Path, algos: list[str]
 
 def main(argv: list[str] | None = None) -> None:
     args = build_parser().parse_args(argv)
+    from roller_gym.agents import stats  # noqa: F401 (rliable: missing, say so before evaluating)
     matplotlib.use("Agg")
     path = Path(args.results)
+    output_folder(path.parent, "--results")
+    output_folder(Path(args.report).parent, "--report")
     if args.render:
         if not path.is_file():
             raise SystemExit(f"--results {str(path)!r}: no such file (run without --render to "

@@ -21,15 +21,17 @@ TensorBoard logs go to ``<log folder>/tensorboard``.
 from __future__ import annotations
 
 import argparse
+import inspect
 import math
 import shlex
 import sys
 from importlib.resources import as_file
 from pathlib import Path
+from typing import Any
 
 import roller_gym  # registers the tasks
 from roller_gym.agents.hyperparams import ALGOS, config_file, hyperparams
-from roller_gym.agents.policies import ZOO_HINT, find_run
+from roller_gym.agents.policies import ZOO_HINT, algorithm_class, find_run
 from roller_gym.scripts.arguments import at_least, checked_env_kwargs, key_values
 
 #: Algorithms that learn from whole rollouts of n_envs x n_steps environment steps.
@@ -76,10 +78,45 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+#: The entries of a hyperparameter file that rl-zoo3 reads itself (rl_zoo3.exp_manager);
+#: the others are keyword arguments of the algorithm's class.
+ZOO_KEYS = ("n_timesteps", "n_envs", "normalize", "normalize_kwargs", "env_wrapper",
+            "vec_env_wrapper", "callback", "frame_stack", "noise_type", "noise_std",
+            "monitor_kwargs", "env_kwargs")
+#: The algorithm's keyword arguments rl-zoo3 sets itself, from train's own options.
+ZOO_SETS = ("env", "tensorboard_log", "seed", "verbose", "device")
+
+
+def checked_hyperparams(algo: str, items: list[str]) -> dict[str, Any]:
+    """``--hyperparams`` (``KEY:VALUE`` items) as a dict, each key checked to be one
+    rl-zoo3 reads or a keyword argument of the algorithm's class, and ``n_envs`` and
+    ``n_timesteps`` checked to be positive integers, before rl-zoo3 starts (where a wrong one
+    ends in a traceback from its setup or the algorithm's).
+
+    Raises:
+        SystemExit: naming ``--hyperparams``, the item and what is allowed.
+    """
+    values = key_values(items, "--hyperparams", ":", example="learning_rate:3e-4")
+    accepted = [*ZOO_KEYS, *(name for name in inspect.signature(algorithm_class(algo)).parameters
+                             if name not in ZOO_SETS and not name.startswith("_"))]
+    for key, value in values.items():
+        if key in ZOO_SETS:
+            raise SystemExit(f"--hyperparams: {key!r} is set by roller-gym train from its own "
+                             "options (--seed, --verbose, --log-folder), not by --hyperparams")
+        if key not in accepted:
+            raise SystemExit(f"--hyperparams: {key!r} is not a hyperparameter of {algo}; "
+                             f"allowed: {', '.join(sorted(accepted))}")
+        if key in ("n_envs", "n_timesteps") and not (
+                isinstance(value, int | float) and value == int(value) and value >= 1):
+            raise SystemExit(f"--hyperparams: {key}:{value!r} is not allowed: it must be an "
+                             "integer >= 1")
+    return values
+
+
 def zoo_arguments(args: argparse.Namespace, conf: str) -> list[str]:
     """The arguments of ``python -m rl_zoo3.train`` for ``args``, with the hyperparameter
     file ``conf``."""
-    hp = {**hyperparams(args.algo, args.env), **key_values(args.hyperparams, "--hyperparams", ":")}
+    hp = {**hyperparams(args.algo, args.env), **checked_hyperparams(args.algo, args.hyperparams)}
     steps = int(args.steps or hp["n_timesteps"])
     if args.algo in ON_POLICY:
         # rl-zoo3's linear schedules go negative past the end: never overshoot the steps.
@@ -117,10 +154,10 @@ def main(argv: list[str] | None = None) -> Path | None:
                          f"{ZOO_HINT}") from None
     with as_file(config_file(args.algo)) as conf:
         zoo_argv = zoo_arguments(args, str(conf))
+        checked_env_kwargs(args.env, args.env_kwargs, "--env-kwargs")  # before rl-zoo3 starts
         if args.show_command:
             print(shlex.join([sys.executable, "-m", "rl_zoo3.train", *zoo_argv]))
             return None
-        checked_env_kwargs(args.env, args.env_kwargs, "--env-kwargs")  # before rl-zoo3 starts
         from rl_zoo3.exp_manager import ExperimentManager
         from roller_gym.sb3 import from_env_fns
 

@@ -39,9 +39,19 @@ from roller_gym.scripts.arguments import at_least, checked_env_kwargs
 VECTORIZE_MODES = {"sync": "sync", "async": "async", "native": "vector_entry_point"}
 
 
+class _DefaultsHelp(argparse.ArgumentDefaultsHelpFormatter):
+    """An option's help with its default, unless that is None or empty (its help says what
+    then happens)."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        if action.default is None or action.default == []:
+            return action.help
+        return super()._get_help_string(action)
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+                                formatter_class=_DefaultsHelp)
     p.add_argument("--algo", choices=["PPO", "SAC"], default="PPO", help="RLlib's algorithm")
     p.add_argument("--env", choices=ENV_IDS, default="roller_gym/RollerStabilize-v1",
                    help="the task")

@@ -120,6 +120,23 @@ def test_make_vec_env_builds_the_native_batch_with_the_same_episodes(time_limit,
     assert not isinstance(other, RollerVecEnv)
 
 
+def test_make_vec_env_of_an_integrator_the_batch_does_not_take_is_dummy_vec_env():
+    """scipy's DOP853 is a reference for the single environment, which the native batch
+    refuses: from_env_fns then gives DummyVecEnv of the single environments, as make_vec_env
+    does without it (so ``roller-gym train --env-kwargs integrator=dop853`` trains)."""
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    with pytest.raises(ValueError, match="integrator='dop853' is a reference for the single"):
+        RollerVecEnv(IDS[0], n_envs=2, integrator="dop853")
+    kwargs = {"integrator": "dop853", "max_episode_steps": 3}
+    ours = make_vec_env(IDS[0], n_envs=2, seed=1, env_kwargs=kwargs, vec_env_cls=from_env_fns)
+    ref = make_vec_env(IDS[0], n_envs=2, seed=1, env_kwargs=kwargs)
+    assert type(ours) is DummyVecEnv
+    np.testing.assert_array_equal(ours.reset(), ref.reset())
+    action = np.full((2, 1), 0.3, dtype=np.float32)
+    np.testing.assert_array_equal(ours.step(action)[0], ref.step(action)[0])
+
+
 def test_reset_options_are_each_sub_environments_own_as_in_dummy_vec_env():
     """``set_options`` with a list gives each sub-environment its own reset options (None:
     none), with one dict all of them the same: the same starts as DummyVecEnv's."""
