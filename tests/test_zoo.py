@@ -123,7 +123,8 @@ def test_rl_zoo3_builds_the_model_with_exactly_the_files_settings(algo, env_id, 
 @NEEDS_RL_ZOO3
 def test_python_m_rl_zoo3_train_uses_the_shipped_file(tmp_path):
     """The documented command, in a subprocess: rl-zoo3 reads the file from the package,
-    saves it as the run's config.yml, and saves a TD3 model with its settings that acts."""
+    saves it as the run's config.yml, and saves a TD3 model with its settings that acts; and
+    rl-zoo3's enjoy replays the run with the episode roller_gym's rollout gives."""
     from stable_baselines3 import TD3
 
     algo, env_id, env_name = "td3", "roller_gym/RollerHold-v1", "roller_gym-RollerHold-v1"
@@ -150,3 +151,12 @@ def test_python_m_rl_zoo3_train_uses_the_shipped_file(tmp_path):
     assert action.shape == (1,) and np.all(np.abs(action) <= 1.0)
     episode = rollout(env, model, seed=0)
     assert len(episode.torque) > 0 and np.all(np.isfinite(episode.torque))
+    # rl-zoo3's own replay of the run (its enjoy script, seed 0): the same episode
+    enjoyed = subprocess.run(
+        [sys.executable, "-m", "rl_zoo3.enjoy", "--algo", algo, "--env", env_id,
+         "--gym-packages", "roller_gym", "-f", str(tmp_path), "--exp-id", "1", "--no-render",
+         "--deterministic", "--device", "cpu", "-n", str(len(episode.torque))],
+        check=True, capture_output=True, text=True, cwd=tmp_path, timeout=600,
+    ).stdout
+    assert f"Episode Reward: {episode.total_return:.2f}" in enjoyed, enjoyed
+    assert f"Episode Length {len(episode.torque)}" in enjoyed, enjoyed
