@@ -107,7 +107,8 @@ def checked_hyperparams(algo: str, items: list[str]) -> dict[str, Any]:
             raise SystemExit(f"--hyperparams: {key!r} is not a hyperparameter of {algo}; "
                              f"allowed: {', '.join(sorted(accepted))}")
         if key in ("n_envs", "n_timesteps") and not (
-                isinstance(value, int | float) and value == int(value) and value >= 1):
+                isinstance(value, int | float) and not isinstance(value, bool)
+                and math.isfinite(value) and value == int(value) and value >= 1):
             raise SystemExit(f"--hyperparams: {key}:{value!r} is not allowed: it must be an "
                              "integer >= 1")
     return values

@@ -267,6 +267,8 @@ def test_train_rllib_refuses_env_kwargs_the_env_refuses_before_ray_starts(item, 
     ("sac", "n_envs:0", "--hyperparams: n_envs:0 is not allowed: it must be an integer >= 1"),
     ("sac", "n_envs:-2", "--hyperparams: n_envs:-2 is not allowed"),
     ("ppo", "n_timesteps:2.5", "--hyperparams: n_timesteps:2.5 is not allowed"),
+    ("ppo", "n_timesteps:1e400", "--hyperparams: n_timesteps:inf is not allowed"),
+    ("sac", "n_envs:True", "--hyperparams: n_envs:True is not allowed"),
     ("sac", "bogus_key:3", "--hyperparams: 'bogus_key' is not a hyperparameter of sac; allowed: "
                            ".*learning_rate"),
     ("ppo", "buffer_size:10", "'buffer_size' is not a hyperparameter of ppo"),  # SAC's, not PPO's
