@@ -116,7 +116,8 @@ def checked_hyperparams(algo: str, items: list[str]) -> dict[str, Any]:
 
 def zoo_arguments(args: argparse.Namespace, conf: str) -> list[str]:
     """The arguments of ``python -m rl_zoo3.train`` for ``args``, with the hyperparameter
-    file ``conf``."""
+    file ``conf``; ``--hyperparams`` and ``--env-kwargs`` checked first (SystemExit naming
+    the option)."""
     hp = {**hyperparams(args.algo, args.env), **checked_hyperparams(args.algo, args.hyperparams)}
     steps = int(args.steps or hp["n_timesteps"])
     if args.algo in ON_POLICY:
@@ -135,7 +136,8 @@ def zoo_arguments(args: argparse.Namespace, conf: str) -> list[str]:
     ]
     if args.steps is not None or steps != int(hp["n_timesteps"]):
         out += ["--n-timesteps", str(steps)]
-    env_kwargs = key_values(args.env_kwargs, "--env-kwargs")
+    # checked by building the environment once, before rl-zoo3 starts
+    env_kwargs = checked_env_kwargs(args.env, args.env_kwargs, "--env-kwargs")
     if env_kwargs:  # rl-zoo3 evaluates each value as Python: pass its repr
         out += ["--env-kwargs", *(f"{k}:{v!r}" for k, v in env_kwargs.items())]
     if args.hyperparams:
@@ -155,7 +157,6 @@ def main(argv: list[str] | None = None) -> Path | None:
                          f"{ZOO_HINT}") from None
     with as_file(config_file(args.algo)) as conf:
         zoo_argv = zoo_arguments(args, str(conf))
-        checked_env_kwargs(args.env, args.env_kwargs, "--env-kwargs")  # before rl-zoo3 starts
         if args.show_command:
             print(shlex.join([sys.executable, "-m", "rl_zoo3.train", *zoo_argv]))
             return None
