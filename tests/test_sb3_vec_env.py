@@ -14,7 +14,7 @@ pytest.importorskip("stable_baselines3")
 
 import roller_gym
 from roller_gym.sb3 import RollerVecEnv, from_env_fns
-from stable_baselines3 import PPO, SAC
+from stable_baselines3 import A2C, PPO, SAC
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.vec_env import (
     VecCheckNan,
@@ -85,6 +85,24 @@ def test_sb3_wrappers_and_algorithms_run_on_it():
               batch_size=32, seed=0, device="cpu")
     sac.learn(64)
     assert sac.num_timesteps == 64
+
+
+def test_a2c_learns_the_same_policy_as_on_dummy_vec_env():
+    """A2C with the same seeds, through the native batch and through DummyVecEnv of single
+    environments (episodes of 16 steps, autoresets included): the same episodes give the
+    same updates, so the trained policies' parameters are equal."""
+    import torch
+
+    params = []
+    for env in (RollerVecEnv(IDS[0], n_envs=4, seed=5, max_episode_steps=16),
+                make_vec_env(IDS[0], n_envs=4, seed=5, env_kwargs={"max_episode_steps": 16})):
+        model = A2C("MlpPolicy", env, n_steps=8, seed=0, device="cpu")
+        model.learn(256)
+        params.append(torch.nn.utils.parameters_to_vector(model.policy.parameters()).detach())
+    initial = A2C("MlpPolicy", make_vec_env(IDS[0], n_envs=4, seed=5), n_steps=8, seed=0,
+                  device="cpu").policy.parameters()
+    assert not torch.equal(params[0], torch.nn.utils.parameters_to_vector(initial).detach())
+    torch.testing.assert_close(params[0], params[1], rtol=1e-5, atol=1e-6)
 
 
 @pytest.mark.parametrize("time_limit", ["gymnasium", "rl_zoo3"])
