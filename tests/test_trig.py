@@ -222,8 +222,8 @@ def test_the_accept_loops_of_the_adaptive_kernel_run_in_simd_lanes():
     io = np.zeros((len(integ.ROWS), 4))
     io[: len(integ.SCENE_FIELDS)] = integ.scene_arrays(preset("paper"), 4)
     sch = integ.SCHEMES["rk8"]
-    cfg = np.array([0.05, 1e-8, 0, sch.halvings, sch.order, sch.constant, sch.stable_step,
-                    sch.sweep_exponent, sch.tol_share])
+    cfg = integ.Stepper(preset("paper"), method="rk8", dt=0.05, tol=1e-8)._cfg
+    assert dict(zip(integ.CFG_FIELDS, cfg, strict=True))["tol_share"] == sch.tol_share
     fn(io, 0, 4, sch.tableau, cfg)
     assert io[integ._ROW["finite"]].all()
     assert "llvm.sqrt.v" in fn.inspect_llvm(fn.signatures[0])

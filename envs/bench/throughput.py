@@ -347,7 +347,7 @@ def measure_episode_error(seconds: float = 10.0) -> float:
     rng = np.random.default_rng(1)
     phi, phi_dot, worst = 0.0, 0.0, 0.0
     for _ in range(round(seconds / base.config.dt)):
-        a = float(rng.uniform(-1, 1))
+        a = float(np.float32(rng.uniform(-1, 1)))  # the action the environment is given
         _, _, terminated, _, info = env.step(np.array([a], np.float32))
         ref = step(base.scene, phi, phi_dot, a * base.task.max_torque, base.config.dt,
                    method="dop853", tol=1e-13)

@@ -52,24 +52,27 @@ starts the controller: the error estimates decide.
 8th-order solution, so it overstates that solution's error, and by how much depends on the
 scene: 200–4500× along ``rim_mass``'s trajectory at tol 1e-8, where rk8 takes 3.1× the
 right-hand-side evaluations of the smallest fixed counts that meet tol (taylor 1.7×, rk4
-0.9×), while on some steps of the benchmark's hard sample the estimates add up to less than a
-third of the error (over that sample rk8's cost is 1.8–2.0× in the median). Its ``tol_share``
-(0.1) is what those steps need: a share of 0.3 already lets some of them end over tol, and the
-share of 3 that brings ``rim_mass`` to 2× lets 1–5 % of them end over tol, at up to 50 tol.
-Sharper estimates were measured and not adopted: step doubling (Richardson) costs 1.46× the
-evaluations and left 7 % of the hard steps over tol at 1e-6; weighting each substep's estimate
-by its propagation to the step's end overstates ``rim_mass``'s error more; a 9(8) pair
-carrying its 8th-order solution (1.5–2.0× here) misses by 150× at a share of 0.03 where J_I
-dips, since its sharp local estimates do not see the error grow along the step; and checking
-the whole step (n equal substeps against n/2) took 2.6–3.1×, because the error of a fixed
-count there falls 1000× from 16 to 32 substeps and not monotonically. Closing the gap would
-take a global error estimate (the variational equation carried along the step). Where cost
-matters most, use taylor, the default.
+0.9×), while on some steps of the tests' and the benchmark's hard samples the estimates add up
+to less than the error (over the benchmark's sample rk8's cost is 1.8–2.0× in the median). Its
+``tol_share`` (0.1) leaves room for those: a share of 0.3 (2.7× on ``rim_mass``) keeps the
+samples within tol, at up to 0.99 tol; 1 (2.3×) lets 1–3 % of their steps end over tol, at up
+to 2.5 tol, and 3 (2.0×) 1–4 %, at up to 58 tol. Sharper estimates were measured and not
+adopted: step doubling (Richardson) costs 1.46× the evaluations and left 7 % of the hard steps
+over tol at 1e-6; weighting each substep's estimate by its propagation to the step's end
+overstates ``rim_mass``'s error more; a 9(8) pair carrying its 8th-order solution (1.5–2.0×
+here) misses by 150× at a share of 0.03 where J_I dips, since its sharp local estimates do not
+see the error grow along the step; and checking the whole step (n equal substeps against n/2)
+took 2.6–3.1×, because the error of a fixed count there falls 1000× from 16 to 32 substeps and
+not monotonically. Closing the gap would take a global error estimate (the variational
+equation carried along the step). Where cost matters most, use taylor, the default.
 
 **Unreachable tolerances** are reported per step, never looped on: a substep whose error
 estimate is at the level of float64 rounding (``ROUNDOFF_FACTOR · ε · max(|φ|, |φ'|)``) is
-accepted even if that exceeds its share of ``tol`` (no smaller substep would do better), and
-after ``MAX_ADAPTIVE_SUBSTEPS`` accepted substeps the rest of the control step is taken in at
+accepted even if that exceeds its share of ``tol`` (no smaller substep would do better); a
+substep's next size aims at the larger of its share and ε · max(|φ|, |φ'|), so that through
+a spike of φ'' (J_I near zero), where the share of a substep small enough falls below
+float64's rounding of the state, the substeps do not keep shrinking. After ``MAX_SUBSTEPS``
+accepted substeps the rest of the control step is taken in at
 most as many more, each accepted. A step whose accepted substeps' estimates add up to more
 than ``tol_share · tol`` reports ``tol_met=False`` (its tolerance was not verified);
 :class:`Stepper` and :class:`BatchStepper` then warn once (not with fixed ``substeps``).
@@ -139,7 +142,8 @@ inputs :data:`INPUT_FIELDS`, what is carried :data:`CARRY_FIELDS`, the outputs
 :data:`STEP_FIELDS`), one column per roller, so a roller's numbers never depend on the other
 columns: a roller's step is bit for bit the same alone and in any batch. A batch's table and
 a chunk's scratch have rows a little longer than their rollers (:func:`row_table`), so that
-rows are not a power of two apart in memory.
+rows are not a power of two apart in memory. A stepper's settings reach the kernels as one
+float64 array, ``cfg``, in the order of :data:`CFG_FIELDS`.
 """
 
 from __future__ import annotations
@@ -263,6 +267,13 @@ _H_NEXT = _ROW["h_next"]
  _TOL_MET) = (_ROW[f] for f in STEP_FIELDS)
 _OUT = _PHI  # the outputs are the last rows, in STEP_FIELDS order
 assert ROWS[_OUT:] == STEP_FIELDS
+#: A stepper's settings, as the kernels read them from its float64 array ``cfg``: the control
+#: step [s], ``tol``, the fixed substeps (0: automatic), and its scheme's controller halvings,
+#: order, constant, stable step, sweep exponent and tol_share (:class:`Scheme`).
+CFG_FIELDS = ("dt", "tol", "substeps", "halvings", "order", "constant", "stable_step",
+              "sweep_exponent", "tol_share")
+(_CF_DT, _CF_TOL, _CF_SUBSTEPS, _CF_HALVINGS, _CF_ORDER, _CF_CONSTANT, _CF_STABLE, _CF_SWEEP,
+ _CF_SHARE) = range(len(CFG_FIELDS))
 
 
 def scene_arrays(scene: Scene, n: int | None = None) -> np.ndarray:
@@ -288,14 +299,14 @@ def scene_arrays(scene: Scene, n: int | None = None) -> np.ndarray:
 
 # -- the substep rule (the first step-size guess of the adaptive schemes) ------------------------
 
-#: The most substeps one control step may take (the smallest substep is dt / MAX_SUBSTEPS).
+#: The most substeps one control step may take: the fixed-substep schemes' (the smallest
+#: substep is dt / MAX_SUBSTEPS), and the error-controlled schemes' budget (after this many
+#: accepted substeps, the rest of the control step is taken in at most as many more, accepted
+#: whatever their estimates).
 MAX_SUBSTEPS = 200_000
 #: A substep whose error estimate is below ROUNDOFF_FACTOR · ε · max(|φ|, |φ'|) (float64
 #: rounding) is accepted even above its share of tol: no smaller substep would do better.
 ROUNDOFF_FACTOR = 8.0
-#: The error-controlled schemes' budget: after this many accepted substeps, the rest of the
-#: control step is taken in at most as many more, accepted whatever their estimates.
-MAX_ADAPTIVE_SUBSTEPS = 50_000
 _EPS = float(np.finfo(float).eps)
 #: ``"taylor"``: the share of ``tol`` float64 rounding may take: where its substeps'
 #: rounding (TAYLOR_ROUNDING ε max(|φ|, |φ'|) each) adds up to more, the tolerance is
@@ -549,8 +560,8 @@ def _first_size(io, col, phi_dot, dt, tol, nfixed, cfg):
     if io[_H_NEXT, col] > 0.0:
         return dt / math.ceil(dt / io[_H_NEXT, col] * (1.0 - 1e-9))
     guess = _substeps(abs(phi_dot), io[_M, col], io[_RR, col], io[_KAPPA, col], io[_E, col],
-                      io[_K, col], io[_G, col], io[_C, col], dt, tol, cfg[4], cfg[5], cfg[6],
-                      cfg[7])
+                      io[_K, col], io[_G, col], io[_C, col], dt, tol, cfg[_CF_ORDER],
+                      cfg[_CF_CONSTANT], cfg[_CF_STABLE], cfg[_CF_SWEEP])
     return dt / guess
 
 
@@ -577,13 +588,16 @@ def _judge(h, e5p, e5w, e3p, e3w, phi, w, phin, wn, a_new, count, hforce, t, hde
     errw = h * e5w * e5w / math.sqrt(trig.select(dw > 0.0, dw, 1.0))
     err = max(errp, errw)
     fin = _finite(phin) & _finite(wn) & _finite(a_new) & _finite(err)
-    # past MAX_ADAPTIVE_SUBSTEPS accepted substeps, the rest in as many more
-    start = (count == MAX_ADAPTIVE_SUBSTEPS) & (hforce == 0.0)
-    hforce = trig.select(start, (dt - t) / MAX_ADAPTIVE_SUBSTEPS, hforce)
+    # past MAX_SUBSTEPS accepted substeps, the rest in as many more
+    start = (count == MAX_SUBSTEPS) & (hforce == 0.0)
+    hforce = trig.select(start, (dt - t) / MAX_SUBSTEPS, hforce)
     floor = max(1e-12 * dt, hforce)
-    ratio = trig.select(h > 0.0, err * dt / (share * h), 0.0)
-    # an estimate at the level of float64 rounding: no smaller substep can do better
+    # the error a substep aims at: its share of tol, or float64's rounding of the state if
+    # that is larger (a smaller substep would only add rounding)
     big = max(max(abs(phi), abs(w)), max(abs(phin), abs(wn)))
+    aim = max(share * h / dt, _EPS * big)
+    ratio = trig.select(aim > 0.0, err / trig.select(aim > 0.0, aim, 1.0), 0.0)
+    # an estimate at the level of float64 rounding is accepted: no smaller substep does better
     forced = (h <= floor) | (err <= ROUNDOFF_FACTOR * _EPS * big)
     accept = trig.select(fixed, fin, fin & ((ratio <= 1.0) | forced))
     fail = (not fin) & (fixed | forced)
@@ -615,14 +629,14 @@ def _tick(accept, last, t, h, count, err_sum, err, hwant, h_new, carry, dt):
 def _rk_chunk(io, lo, hi, tab, cfg):
     """Advance rollers (columns) lo..hi−1 of ``io`` over one control step.
 
-    ``tab``: the pair (see :func:`_tableau`); ``cfg``: ``(dt, tol, fixed substeps or 0,
-    halvings of the controller's root, order, constant, stable step, sweep exponent,
-    tol share)``.
+    ``tab``: the pair (see :func:`_tableau`); ``cfg``: the stepper's settings
+    (:data:`CFG_FIELDS`).
     """
     n = hi - lo
     s = tab.shape[0] - 3
-    dt, tol, nfixed, halvings = cfg[0], cfg[1], int(cfg[2]), int(cfg[3])
-    share = tol * cfg[8]  # the error the accepted substeps' estimates may add up to
+    dt, tol = cfg[_CF_DT], cfg[_CF_TOL]
+    nfixed, halvings = int(cfg[_CF_SUBSTEPS]), int(cfg[_CF_HALVINGS])
+    share = tol * cfg[_CF_SHARE]  # the error the accepted substeps' estimates may add up to
     fixed = nfixed > 0
     # one scratch block: the stages, then one row per per-roller quantity
     nf = len(SCENE_FIELDS)
@@ -739,8 +753,9 @@ def _rk_one(io, tab, cfg):
     in the same order, without its lanes (bit for bit the same result, at a fraction of the
     latency). What :class:`Stepper` runs."""
     s = tab.shape[0] - 3
-    dt, tol, nfixed, halvings = cfg[0], cfg[1], int(cfg[2]), int(cfg[3])
-    share = tol * cfg[8]
+    dt, tol = cfg[_CF_DT], cfg[_CF_TOL]
+    nfixed, halvings = int(cfg[_CF_SUBSTEPS]), int(cfg[_CF_HALVINGS])
+    share = tol * cfg[_CF_SHARE]
     fixed = nfixed > 0
     m, r, kappa, e = io[_M, 0], io[_RR, 0], io[_KAPPA, 0], io[_E, 0]
     k, g, c, mu = io[_K, 0], io[_G, 0], io[_C, 0], io[_MU, 0]
@@ -907,9 +922,9 @@ def _taylor_tick(fin, last, rounding, count, nfixed, t, h, err_sum, err, hforce,
     status = trig.select(ends, 1.0, trig.select(fin, status, 2.0))
     t = trig.select(ends, dt, t + h)
     count = count + trig.select(fin, 1.0, 0.0)
-    # past MAX_ADAPTIVE_SUBSTEPS substeps, the rest in at most as many more
-    start = (count == MAX_ADAPTIVE_SUBSTEPS) & (hforce == 0.0)
-    hforce = trig.select(start, (dt - t) / MAX_ADAPTIVE_SUBSTEPS, hforce)
+    # past MAX_SUBSTEPS substeps, the rest in at most as many more
+    start = (count == MAX_SUBSTEPS) & (hforce == 0.0)
+    hforce = trig.select(start, (dt - t) / MAX_SUBSTEPS, hforce)
     return status, t, count, err_sum + err, hforce, round_sum + rounding
 
 
@@ -919,8 +934,8 @@ def _taylor_chunk(io, lo, hi, tab, cfg):
     (``cfg`` as for :func:`_rk_chunk`; ``tab`` unused): the running rollers in lanes
     0..na−1, as there."""
     n = hi - lo
-    dt, tol, nfixed = cfg[0], cfg[1], cfg[2]
-    share = tol * cfg[8]
+    dt, tol, nfixed = cfg[_CF_DT], cfg[_CF_TOL], cfg[_CF_SUBSTEPS]
+    share = tol * cfg[_CF_SHARE]
     hfixed = dt / nfixed if nfixed > 0 else 0.0
     nf = len(SCENE_FIELDS)
     x = np.empty((nf + len(_T_IN), n + _PAD))  # what the substep loop reads
@@ -984,8 +999,8 @@ def _taylor_chunk(io, lo, hi, tab, cfg):
 def _taylor_one(io, tab, cfg):
     """One roller (column 0 of ``io``) with ``"taylor"``: :func:`_taylor_chunk`'s arithmetic
     without lanes (bit for bit the same result)."""
-    dt, tol, nfixed = cfg[0], cfg[1], cfg[2]
-    share = tol * cfg[8]
+    dt, tol, nfixed = cfg[_CF_DT], cfg[_CF_TOL], cfg[_CF_SUBSTEPS]
+    share = tol * cfg[_CF_SHARE]
     hfixed = dt / nfixed if nfixed > 0 else 0.0
     m, r, kappa, e = io[_M, 0], io[_RR, 0], io[_KAPPA, 0], io[_E, 0]
     k, g, c, mu = io[_K, 0], io[_G, 0], io[_C, 0], io[_MU, 0]
@@ -1026,13 +1041,14 @@ def _taylor_parallel(io, tab, cfg):
 def _fixed_steps(io, cfg, substep):
     """The loop of a fixed-substep scheme around its ``substep`` function: each roller on its
     own, n equal substeps."""
-    dt, tol, nfixed = cfg[0], cfg[1], int(cfg[2])
+    dt, tol, nfixed = cfg[_CF_DT], cfg[_CF_TOL], int(cfg[_CF_SUBSTEPS])
     for col in range(io.shape[1]):
         m, r, kappa, e = io[_M, col], io[_RR, col], io[_KAPPA, col], io[_E, col]
         k, g, c, mu = io[_K, col], io[_G, col], io[_C, col], io[_MU, col]
         phi0, w0, tau = io[_PHI_IN, col], io[_W_IN, col], io[_TAU, col]
         n = nfixed if nfixed > 0 else _substeps(abs(w0), m, r, kappa, e, k, g, c, dt, tol,
-                                               cfg[4], cfg[5], cfg[6], cfg[7])
+                                               cfg[_CF_ORDER], cfg[_CF_CONSTANT],
+                                               cfg[_CF_STABLE], cfg[_CF_SWEEP])
         phi, w, needed = phi0, w0, n
         lift, slip = np.inf, np.inf
         for _attempt in range(20):
@@ -1050,8 +1066,9 @@ def _fixed_steps(io, cfg, substep):
             finite = math.isfinite(phi) and math.isfinite(w)
             if nfixed > 0 or (not finite and n >= MAX_SUBSTEPS):
                 break
-            needed = (_substeps(top, m, r, kappa, e, k, g, c, dt, tol, cfg[4], cfg[5],
-                                cfg[6], cfg[7]) if finite else 2 * n)
+            needed = (_substeps(top, m, r, kappa, e, k, g, c, dt, tol, cfg[_CF_ORDER],
+                                cfg[_CF_CONSTANT], cfg[_CF_STABLE], cfg[_CF_SWEEP])
+                      if finite else 2 * n)
             if needed <= n:
                 break
             n = min(needed, MAX_SUBSTEPS)
@@ -1079,7 +1096,7 @@ def _midpoint_kernel(io, tab, cfg):
 
 def _dop853_kernel(io: np.ndarray, tab: None, cfg: np.ndarray) -> None:
     """scipy's DOP853 on the whole batch as one system (margins at the start and the end)."""
-    dt, tol = float(cfg[0]), float(cfg[1])
+    dt, tol = float(cfg[_CF_DT]), float(cfg[_CF_TOL])
     n = io.shape[1]
     m, r, kappa, e, k, g, c, mu = (io[_ROW[f]] for f in SCENE_FIELDS)
     phi, w, tau = io[_PHI_IN], io[_W_IN], io[_TAU]
@@ -1253,8 +1270,10 @@ class _Base:
         tab = self.scheme.pair(substeps is not None)
         self._tab = tab if tab is not None else np.zeros((1, 1))
         sch = self.scheme
-        self._cfg = np.array([dt, tol, substeps or 0, sch.halvings, sch.order, sch.constant,
-                              sch.stable_step, sch.sweep_exponent, sch.tol_share], dtype=float)
+        settings = {"dt": dt, "tol": tol, "substeps": substeps or 0, "halvings": sch.halvings,
+                    "order": sch.order, "constant": sch.constant, "stable_step": sch.stable_step,
+                    "sweep_exponent": sch.sweep_exponent, "tol_share": sch.tol_share}
+        self._cfg = np.array([settings[name] for name in CFG_FIELDS], dtype=float)
         self._io = self._new_io(num)
         self._warned = False
 
