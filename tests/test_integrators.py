@@ -1035,14 +1035,12 @@ def test_pickled_batch_stepper_keeps_its_padded_rows_and_its_steps():
     np.testing.assert_array_equal(copy.run(phi, w, 0.2 * phi), stepper.run(phi, w, 0.2 * phi))
 
 
-def test_taylor_stays_within_tol_through_the_dip_of_j_i():
-    """600 random steps of "rim_mass" (dt 0.02 s, |φ'| up to 60 rad/s, |τ| up to m g r;
-    references whose 1e-12 and 1e-13 runs differ by more than tol/10 skipped): many run
+@pytest.fixture(scope="module")
+def rim_mass_dip():
+    """600 random steps of "rim_mass" (dt 0.02 s, |φ'| up to 60 rad/s, |τ| up to m g r), many
     through the dip of J_I, where the end state is up to 1e5 times as sensitive to an error
-    early in the step. taylor's estimates cannot see that growth; its tol_share (0.01)
-    leaves room for it: every step that reports tol_met is within tol at 1e-5, 1e-7 and
-    1e-9 (measured at most 0.53 tol; at tol_share 0.3 it was 13 tol. rk8 misses here by up
-    to 2.8×)."""
+    early in the step, and their references (DOP853 at 1e-13, and how far its 1e-12 run
+    ends from it)."""
     scene = preset("rim_mass")
     rng = np.random.default_rng(5)
     n, dt = 600, 0.02
@@ -1053,12 +1051,43 @@ def test_taylor_stays_within_tol_through_the_dip_of_j_i():
         ref = step(scene, phi, w, tau, dt, method="dop853", tol=1e-13)
         ref12 = step(scene, phi, w, tau, dt, method="dop853", tol=1e-12)
     uncertainty = np.maximum(np.abs(ref.phi - ref12.phi), np.abs(ref.phi_dot - ref12.phi_dot))
+    return scene, (phi, w, tau, dt), ref, uncertainty
+
+
+def _dip_errors(rim_mass_dip, method, tol):
+    """(error [rad or rad/s] of each step, steps whose reference resolves tol, the steps)."""
+    scene, (phi, w, tau, dt), ref, uncertainty = rim_mass_dip
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        out = step(scene, phi, w, tau, dt, method=method, tol=tol)
+    err = np.maximum(np.abs(out.phi - ref.phi), np.abs(out.phi_dot - ref.phi_dot))
+    return err, uncertainty <= tol / 10, out
+
+
+def test_taylor_stays_within_tol_through_the_dip_of_j_i(rim_mass_dip):
+    """On the dip's 600 steps (references that do not resolve tol/10 skipped), taylor's
+    estimates cannot see the error's growth; its tol_share (0.01) leaves room for it: every
+    step is within tol at 1e-5, 1e-7 and 1e-9, and reports tol_met (measured at most 0.53
+    tol; at tol_share 0.3 it was 13 tol)."""
     for tol in (1e-5, 1e-7, 1e-9):
-        out = step(scene, phi, w, tau, dt, method="taylor", tol=tol)
-        checked = out.tol_met & (uncertainty <= tol / 10)
+        err, checked, out = _dip_errors(rim_mass_dip, "taylor", tol)
         assert checked.sum() >= 450, (tol, checked.sum())
-        err = np.maximum(np.abs(out.phi - ref.phi), np.abs(out.phi_dot - ref.phi_dot))
+        assert out.tol_met[checked].all()
         assert err[checked].max() <= tol, (tol, err[checked].max() / tol)
+
+
+@pytest.mark.parametrize("method", ["rk8", "rk4"])
+def test_the_pairs_through_the_dip_of_j_i_miss_rarely(rim_mass_dip, method):
+    """The Runge–Kutta pairs on the dip's steps, a known limit of their estimates (README):
+    every step finite, at least 99.5 % within tol and none past 10 tol, at 1e-5, 1e-7 and
+    1e-9 (measured: rk8 one step at 2.8 tol and one at 1.3; rk4 two at up to 6.3 tol and
+    one at 1.4; all others within tol)."""
+    for tol in (1e-5, 1e-7, 1e-9):
+        err, checked, out = _dip_errors(rim_mass_dip, method, tol)
+        assert out.finite.all()
+        ratio = err[checked] / tol
+        assert np.mean(ratio <= 1) >= 0.995, (tol, np.sort(ratio)[-4:])
+        assert ratio.max() <= 10, (tol, ratio.max())
 
 
 @pytest.mark.parametrize("method", ["taylor", "rk8", "rk4"])
