@@ -714,9 +714,10 @@ def test_adversarial_steps_stay_within_tol(method, adversarial):
         assert np.mean(~out.tol_met[checked]) <= 0.01, np.flatnonzero(checked & ~out.tol_met)
 
 
-#: Steps through a spike of φ'' (J_I near zero at |φ'| ~ 50 rad/s) whose substeps' shares of
-#: tol fall below float64's rounding of the state: one of the test sample's (seed 2024, step
-#: 428) and one of the benchmark's (seed 1, step 135), each at a tol its reference resolves.
+#: Steps through a spike of φ'' (J_I near zero, passed at speed: φ' reached about 5,000 rad/s
+#: in the first) whose substeps' shares of tol fall below float64's rounding of the state: one
+#: of the test sample's (seed 2024, step 428) and one of the benchmark's (seed 1, step 135),
+#: each at a tol its reference resolves.
 SPIKES = {
     "seed 2024 step 428": (Scene(m=1.119179323603518, r=0.1477803870661366,
                                  R=0.15483102592879014, e=0.1452382818113869,
