@@ -1,4 +1,4 @@
-"""integrators.py: accuracy per control step, order, substeps, batches, long horizons, hard cases.
+"""The integrators: accuracy per control step, order, substeps, batches, long horizons, hard cases.
 
 The reference is scipy's DOP853 at rtol = atol = 1e-13 (and at most dt/50 per step) on
 ``equations.accel`` — the equation checked against Lagrange and Newton–Euler in
@@ -788,8 +788,8 @@ def test_tiny_k_rim_scene_takes_about_as_few_substeps_as_needed(method):
 #: rk8 the 99th-percentile ceiling of the benchmark's cost target (4×), as for the tiny-k step
 #: above. Measured: taylor 1.66×, rk4 0.90×, rk8 3.1× (per step 2.8-3.9×). rk8's error is
 #: 1e-3 tol there: DOP853's blended estimate overstates its 8th-order solution's error
-#: 200-4500× on this scene, and the alternatives measured (module docstring of
-#: ``roller_gym.physics.integrators``, "Cost of rk8's error control") either kept 2.6× or more
+#: 200-4500× on this scene, and the alternatives measured (``docs/INTEGRATORS.md``, "What
+#: rk8's error control costs") either kept 2.6× or more
 #: here or let steps of the adversarial sample exceed tol.
 RIM_MASS_COST_BOUND = {"taylor": 2.0, "rk4": 2.0, "rk8": 4.0}
 

@@ -25,7 +25,7 @@ def imported_modules(path: Path) -> set[str]:
     return names
 
 
-@pytest.mark.parametrize("path", sorted((ROOT / "envs" / "physics").glob("*.py")), ids=str)
+@pytest.mark.parametrize("path", sorted((ROOT / "envs" / "physics").rglob("*.py")), ids=str)
 def test_physics_knows_nothing_of_gymnasium_or_pygame(path: Path) -> None:
     assert not imported_modules(path) & {"gymnasium", "gym", "pygame"}
 
@@ -56,3 +56,21 @@ def test_readme_commands_are_make_targets_and_ci_runs_the_test_command() -> None
         assert re.search(rf"^{target}:", makefile, re.M), f"Makefile lacks '{target}:'"
     ci = (ROOT / ".ci" / "run").read_text()
     assert re.search(r"^make test$", ci, re.M), ".ci/run must call the README's test command"
+
+
+def test_every_package_folder_is_installed() -> None:
+    """A folder with an ``__init__.py`` under a mapped folder is in ``[tool.setuptools]
+    packages``: a wheel would leave out one that is not (e.g. a module split into a package)."""
+    import tomllib
+
+    setup = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    listed = set(setup["packages"])
+    found = set()
+    for name, folder in setup["package-dir"].items():
+        for init in (ROOT / folder).rglob("__init__.py"):
+            rel = init.parent.relative_to(ROOT / folder).parts
+            if rel and any(".venv" in p or p.startswith("_") for p in rel):
+                continue
+            found.add(".".join((name, *rel)))
+    assert "roller_gym.physics.integrators" in found
+    assert found <= listed, f"not in [tool.setuptools] packages: {sorted(found - listed)}"

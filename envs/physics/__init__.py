@@ -8,9 +8,10 @@ module                 what it holds
 ``trig``               sine and cosine without branches, so compiled loops over rollers vectorize
 ``forms``              the paper's forms of the theorem (Eqs. 15, 18, 24, 30), as references
 ``analysis``           kinematics, contact forces, energy, equilibria, linearization
-``integrators``        one control step at constant torque: the table of schemes (taylor, the
-                       default, rk8 and rk4 error-controlled; semi-implicit Euler and implicit
-                       midpoint at fixed substeps; scipy's DOP853), the steppers
+``integrators``        one control step at constant torque (a package): the table of schemes
+                       (taylor, the default, rk8 and rk4 error-controlled; semi-implicit Euler
+                       and implicit midpoint at fixed substeps; scipy's DOP853), their compiled
+                       kernels, the steppers (``docs/INTEGRATORS.md``)
 ``taylor``             the Taylor series of the motion, written out by a generator into
                        ``_taylor_series`` (what the ``taylor`` scheme expands)
 =====================  ================================================================

@@ -1,0 +1,159 @@
+"""The table of schemes, :data:`SCHEMES` (one :class:`Scheme` row each; the ``method``
+argument is its key), the default :data:`DEFAULT_METHOD`, each scheme's compiled kernels,
+and the check of a step's arguments (dt, tol, substeps).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from roller_gym.physics import _taylor_series as series
+from roller_gym.physics.integrators.fixed import (
+    _euler_kernel,
+    _euler_substep,
+    _midpoint_kernel,
+    _midpoint_substep,
+)
+from roller_gym.physics.integrators.reference import _dop853_kernel
+from roller_gym.physics.integrators.rk import (
+    _BS5,
+    _DOP853,
+    _RK4,
+    _rk_chunk,
+    _rk_parallel,
+    _rk_serial,
+)
+from roller_gym.physics.integrators.rules import MAX_SUBSTEPS
+from roller_gym.physics.integrators.taylor_kernel import (
+    _taylor_chunk,
+    _taylor_parallel,
+    _taylor_serial,
+    _taylor_substep,
+)
+
+
+@dataclass(frozen=True)
+class Scheme:
+    """One integration scheme: a row of :data:`SCHEMES`.
+
+    Attributes:
+        name: its name, the ``method`` argument.
+        order: its order of accuracy.
+        stable_step: the largest λh per substep (λ the fastest rate), inside its stability
+            region with room to spare (``math.inf``: A-stable).
+        adaptive: True if its substeps follow an error estimate (``docs/INTEGRATORS.md``).
+        substep: its substep function (for the Runge–Kutta pairs, the shared pair kernel).
+        kernel: for a fixed-substep scheme, its compiled kernel: ``_fixed_steps`` around
+            ``substep``, written as a function of its own (two lines) so that numba caches it;
+            for ``"taylor"``, its serial kernel.
+        parallel: the kernel for large batches, where it is not ``kernel``.
+        chunk: for a scheme whose batch kernels advance chunks of rollers in lanes, that
+            function, ``chunk(io, lo, hi, tableau, cfg)`` (rollers lo..hi−1): what a caller
+            fusing more work into the same pass over chunks calls (:meth:`BatchStepper.run`).
+        tableau: for an explicit Runge–Kutta pair, its coefficients (see ``_tableau``).
+        fixed_tableau: the coefficients its fixed substeps (``substeps=n``) take, where they
+            differ from ``tableau`` (rk4: classical RK4; under error control,
+            Bogacki–Shampine 5(4)).
+        constant: C of the substep prediction n = (C (λ dt)^(p+1) / tol)^(1/p), calibrated
+            on the presets (for the adaptive schemes only the first step-size guess).
+        sweep_exponent: the exponent of re/(k² + (r − e)²) in the prediction's sweep rate.
+        halvings: the adaptive controller takes the 2^halvings-th root of the error ratio
+            (2 or 3: the kernel takes it as square roots, which vectorize).
+        tol_share: the share of ``tol`` the accepted substeps' error estimates may add up to
+            (below 1: room for what the estimates miss, measured in the tests; each row's
+            value and what it was measured against: ``docs/INTEGRATORS.md``).
+    """
+
+    name: str
+    order: int
+    stable_step: float
+    adaptive: bool
+    substep: Callable | None
+    tableau: np.ndarray | None = None
+    fixed_tableau: np.ndarray | None = None
+    kernel: Callable | None = None
+    parallel: Callable | None = None
+    chunk: Callable | None = None
+    constant: float = 0.0
+    sweep_exponent: float = 0.5
+    halvings: int = 0
+    tol_share: float = 1.0
+
+    def kernels(self) -> tuple[Callable, Callable]:
+        """(serial, parallel) kernels ``f(io, tableau, cfg)`` of this scheme."""
+        return _kernels(self)
+
+    def __reduce__(self) -> tuple[Callable, tuple[str]]:
+        """Pickled by name: unpickled, it is the row of :data:`SCHEMES` (its compiled
+        functions those of this process)."""
+        return scheme, (self.name,)
+
+    def pair(self, fixed: bool) -> np.ndarray | None:
+        """The coefficients its kernel takes: under error control, or with ``fixed`` substeps."""
+        return self.fixed_tableau if fixed and self.fixed_tableau is not None else self.tableau
+
+    def evaluations(self, fixed: bool) -> int:
+        """Right-hand-side evaluations per substep of a Runge–Kutta pair (the first stage is
+        the last substep's end, evaluated once): under error control, or with ``fixed``
+        substeps. A substep of ``"taylor"`` is one expansion, counted as one."""
+        pair = self.pair(fixed)
+        return 1 if pair is None else pair.shape[0] - 3
+
+
+_SCHEME_LIST = (
+    Scheme("rk8", 8, 1.0, True, _rk_chunk, _DOP853, chunk=_rk_chunk, constant=1e-6,
+           sweep_exponent=0.75, halvings=3, tol_share=0.1),
+    Scheme("rk4", 4, 1.0, True, _rk_chunk, _BS5, fixed_tableau=_RK4, chunk=_rk_chunk,
+           constant=0.02, halvings=2, tol_share=0.12),
+    Scheme("euler", 1, 0.5, False, _euler_substep, kernel=_euler_kernel, constant=2.0),
+    Scheme("midpoint", 2, math.inf, False, _midpoint_substep, kernel=_midpoint_kernel,
+           constant=0.3),
+    Scheme("taylor", series.ORDER, 1.0, True, _taylor_substep, kernel=_taylor_serial,
+           parallel=_taylor_parallel, chunk=_taylor_chunk, constant=1e-6, tol_share=0.01),
+    Scheme("dop853", 8, math.inf, True, None),
+)
+#: The schemes by name.
+SCHEMES: dict[str, Scheme] = {s.name: s for s in _SCHEME_LIST}
+#: The schemes by name (the ``method`` arguments are its keys).
+METHODS = SCHEMES
+DEFAULT_METHOD = "taylor"
+
+_KERNELS: dict[str, tuple[Callable, Callable]] = {}
+
+
+def _kernels(scheme: Scheme) -> tuple[Callable, Callable]:
+    """The factory: one compiled kernel per scheme (serial, parallel), made once."""
+    if scheme.name not in _KERNELS:
+        if scheme.substep is None:
+            pair = (_dop853_kernel, _dop853_kernel)
+        elif scheme.tableau is not None:
+            pair = (_rk_serial, _rk_parallel)
+        else:
+            pair = (scheme.kernel, scheme.parallel or scheme.kernel)
+        _KERNELS[scheme.name] = pair
+    return _KERNELS[scheme.name]
+
+
+def scheme(method: str) -> Scheme:
+    """The row of :data:`SCHEMES` called ``method``."""
+    try:
+        return SCHEMES[method]
+    except (KeyError, TypeError):
+        raise ValueError(f"unknown integrator {method!r}; allowed: {', '.join(METHODS)}") from None
+
+
+def _check_step_args(dt: float, tol: float, substeps: int | None) -> None:
+    if not (isinstance(dt, int | float | np.floating) and math.isfinite(dt) and dt > 0):
+        raise ValueError(f"dt={dt!r} [s] must be finite and > 0")
+    if not (isinstance(tol, int | float | np.floating) and math.isfinite(tol) and tol > 0):
+        raise ValueError(f"tol={tol!r} must be finite and > 0")
+    if substeps is not None and not (
+        isinstance(substeps, int | np.integer) and 1 <= substeps <= MAX_SUBSTEPS
+    ):
+        raise ValueError(
+            f"substeps={substeps!r} must be None (automatic) or an integer in [1, {MAX_SUBSTEPS}]"
+        )
+
