@@ -30,7 +30,9 @@ task runs in the same two environments, :class:`roller_gym.roller_env.RollerEnv`
 import importlib
 
 from gymnasium.envs.registration import register, registry
+from roller_gym import kernel_cache  # noqa: F401  (first: before any kernel is defined)
 from roller_gym.physics import PRESETS, Scene, preset
+from roller_gym.registration import TaskEntry
 from roller_gym.task import NAMESPACE, TASKS
 
 #: The modules of the tasks, in the order they are listed; importing one registers its task.
@@ -48,11 +50,10 @@ for _task in TASKS.values():
     if _task.env_id() not in registry:
         register(
             id=_task.env_id(),
-            entry_point="roller_gym.roller_env:RollerEnv",
-            vector_entry_point="roller_gym.vector_env:RollerVectorEnv",
+            entry_point=TaskEntry(_task.name),
+            vector_entry_point=TaskEntry(_task.name, vector=True),
             max_episode_steps=_task.max_episode_steps,
             reward_threshold=_task.reward_threshold,
-            kwargs={"task": _task.name},
         )
 
 def file_name(env_id: str) -> str:

@@ -18,14 +18,14 @@ import numpy as np
 from gymnasium import spaces
 from roller_gym import episode, validation
 from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig
-from roller_gym.episode import CONTEXT_FIELDS, INFO_KEYS, INFO_ROW, OutcomeKernel
+from roller_gym.episode import INFO_KEYS, INFO_ROW, OutcomeKernel
+from roller_gym.episode.record import C
 from roller_gym.physics import Scene
 from roller_gym.physics.integrators import DEFAULT_METHOD, Stepper
 from roller_gym.task import Task, get_task, psi_rate, wrap_rate
 
 __all__ = ["RollerEnv"]
 
-_CONTEXT = {name: i for i, name in enumerate(CONTEXT_FIELDS)}
 
 
 class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
@@ -105,15 +105,15 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         self._q = wrap_rate(scene)
         self._psi_rate = psi_rate(scene)
         context = self._outcome.context
-        context[_CONTEXT["wrap_rate"], 0] = self._q
-        context[_CONTEXT["psi_rate"], 0] = self._psi_rate
+        context[C.wrap_rate, 0], context[C.psi_rate, 0] = self._q, self._psi_rate
 
     def _set_target(self, target: float, rate: float) -> None:
         self.target, self.target_rate = target, rate
-        self.target_torque = float(episode.target_torque(self.scene, target))
         context = self._outcome.context
-        context[_CONTEXT["target_phi"], 0], context[_CONTEXT["target_phi_dot"], 0] = target, rate
-        context[_CONTEXT["target_torque"], 0] = self.target_torque
+        context[C.target_phi, 0], context[C.target_phi_dot, 0] = target, rate
+        for name, value in episode.target_terms(self.scene, target).items():
+            context[getattr(C, name), 0] = value
+        self.target_torque = float(context[C.target_torque, 0])
 
     # -- Gymnasium API -----------------------------------------------------------------
     def reset(
@@ -141,7 +141,7 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         self.phi, self.phi_dot, self.torque = float(start.phi[0]), float(start.phi_dot[0]), 0.0
         self._stepper.forget()  # a new episode does not continue the last one's substeps
         at_start = episode.at_start(start.scene, start.phi, start.phi_dot)
-        self._outcome.context[_CONTEXT["torque"], 0] = 0.0  # none yet; the rest is set above
+        self._outcome.context[C.torque, 0] = 0.0  # none yet; the rest is set above
         self._outcome.run(episode.result_table(at_start, (1,)))
         if self.render_mode == "human":
             self.render()

@@ -24,10 +24,16 @@ so the contact point is r·|error| metres of rolling away from its target.
 declared once in :data:`OBSERVATION_FIELDS`; a task lists the ones it observes, in order,
 in ``Task.observation``, and agents read them by name (:meth:`Task.index`).
 
-**The reward** (:func:`step_reward`) is a product of bounded terms (:mod:`roller_gym.rewards`),
-in [0, 1] per step, the same formula for every task with each task's weights; a new term is
-a function there, a weighted factor in :func:`step_reward` and its weight's name in
-:data:`TASK_CONSTANTS` (README, "Adding a task"):
+**The objective** is the task's own: ``reward(s, k)`` in [0, 1] per step and
+``success(s, k)``, static methods of the task compiled by numba (``@objective``), functions
+of the step's named quantities ``s`` (a :class:`roller_gym.episode.Step`: position error,
+speeds, torque and holding torque, energy and the target's, contact forces and margins) and
+of the task's numbers ``k`` (``k.<name>`` for each name of the task's :attr:`Task.parameters`,
+its class variables and ``max_torque``), built from the reward vocabulary
+(:mod:`roller_gym.rewards`). The environments compile their per-step kernel for each task
+from these functions; :meth:`Task.step_reward` and :meth:`Task.step_success` run the same
+source in Python. The default, shared by Stabilize, Hold, Balance and Track, is
+:func:`step_reward`:
 
     reward = position(ε)
              · (1 − w_v + w_v · near(φ' − φ*', speed_margin))
@@ -39,30 +45,36 @@ with ε the position error, φ*' the target's rate (0 for a rest position), τ* 
 that holds the roller at rest at the target (``info["target_torque"]``), ``band`` the
 success band, w_v = 0.5 (moving with the target), w_u = 0.2 (no torque beyond holding) and
 w_p = 0.6 (precision). ``tolerance`` is 1 inside the band; outside it decays as ``near``
-of the distance to the band. So at rest the reward is largest inside the success band, and
-resting one band-width outside it costs about 14 % of the step's reward (the narrow term),
-while the wide term still guides from far away.
+of the distance to the band. Success: |ε| <= band and |φ' − φ*'| <= success_speed.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import math
-from collections.abc import Mapping, Sequence
+from collections import namedtuple
+from collections.abc import Sequence
 from typing import Any, ClassVar
 
-import numba
 import numpy as np
 from numba.extending import register_jitable
 from roller_gym import rewards
-from roller_gym.physics import Scene, equations, equilibria, trig
-from roller_gym.physics.integrators import SCENE_FIELDS, contact_state, scene_arrays
+from roller_gym.physics import Scene, equations, trig
+from roller_gym.physics.integrators import contact_state, scene_arrays
+from roller_gym.rest import (  # the scene's rates and rest positions, importable from here too
+    hold_range,
+    hold_ranges,
+    per_scene,
+    psi_rate,
+    unstable_rest_positions,
+    wrap_rate,
+)
 
 __all__ = ["NAMESPACE", "OBSERVATION_FIELDS", "SPEED_SCALE", "TASKS", "TASK_CONSTANTS", "Task",
-           "get_task", "hold_range", "hold_ranges", "observation_values", "per_scene",
-           "position_error", "psi_rate", "register", "state_observation", "step_reward",
-           "step_success", "target_observation", "unstable_rest_positions", "wrap_rate"]
+           "get_task", "hold_range", "hold_ranges", "objective", "observation_values",
+           "per_scene", "position_error", "psi_rate", "register", "state_observation",
+           "step_reward", "step_success", "target_observation", "unstable_rest_positions",
+           "wrap_rate"]
 
 #: The Gymnasium namespace of every task: ``roller_gym/<Task>-v<version>``.
 NAMESPACE = "roller_gym"
@@ -103,15 +115,36 @@ def register(cls: type[Task]) -> type[Task]:
     if compiled:
         raise ValueError(
             f"{cls.name} overrides {', '.join(compiled)}: the environments compute these in "
-            "one compiled kernel from the task's class variables (TASK_CONSTANTS); set those, "
-            "or change the formula itself (step_reward, step_success, position_error)")
+            "their compiled kernel for every task (position_error, observation_values); a "
+            "task states its objective in reward(s, k) and success(s, k)")
+    for name in ("reward", "success"):
+        if not isinstance(cls.__dict__.get(name, Task.__dict__[name]), staticmethod):
+            raise ValueError(f"{cls.name}.{name} must be a static method (@staticmethod over "
+                             f"@objective) of (s, k), as Task.{name}")
+    missing = [name for name in _KERNEL_PARAMETERS if name not in cls.parameters]
+    if missing:
+        raise ValueError(f"{cls.name}.parameters lacks {missing}: the kernel reads them")
+    constants = namedtuple("Constants", cls.parameters)
+    constants.__qualname__ = f"{cls.__qualname__}.Constants"  # pickled by reference: the
+    constants.__module__ = cls.__module__  # on-disk cache keys a kernel on it
+    cls.Constants = constants
     TASKS[cls.name] = cls
     return cls
 
 
 #: The per-step methods the environments do not call (their compiled kernel runs the same
-#: formulas), so a task may not override them.
-_COMPILED = ("error", "observation_dict", "observation_terms", "reward", "success")
+#: formulas for every task), so a task may not override them.
+_COMPILED = ("error", "observation_dict", "observation_terms")
+#: The task's numbers the shared part of the kernel reads (``k.<name>``).
+_KERNEL_PARAMETERS = ("max_torque", "symmetric_target", "observes_target")
+
+
+def objective(function: Any) -> Any:
+    """Decorator of a task's ``reward(s, k)`` or ``success(s, k)``: compiled into the
+    environments' per-step kernel (inlined, numba's ``register_jitable``); in Python the
+    function itself, for floats and arrays alike. Write it from NumPy's ufuncs,
+    :mod:`roller_gym.rewards` and :mod:`roller_gym.physics.trig`."""
+    return register_jitable(inline="always")(function)
 
 
 def get_task(task: str | type[Task]) -> type[Task]:
@@ -123,23 +156,6 @@ def get_task(task: str | type[Task]) -> type[Task]:
         raise ValueError(f"task={task!r} is not a registered task; allowed: "
                          f"{', '.join(TASKS)}")
     return TASKS[name]
-
-
-def psi_rate(scene: Scene) -> float | np.ndarray:
-    """dψ/dφ = rκ/(1 − rκ) [-]: ψ = psi_rate · φ (0 on the floor, where ψ stays 0); a float
-    for a scalar scene, an array for a batch."""
-    kappa = np.asarray(scene.kappa, dtype=float)
-    rate = scene.r * kappa / (1.0 - scene.r * kappa)
-    return float(rate) if np.ndim(rate) == 0 else rate
-
-
-def wrap_rate(scene: Scene) -> float | np.ndarray:
-    """The rate q by which errors are wrapped (see the module docs): :func:`psi_rate`, except
-    on the floor, where ψ stays 0 and φ itself is wrapped (q = 1)."""
-    rate = psi_rate(scene)
-    if np.ndim(rate) == 0:
-        return rate if rate != 0.0 else 1.0
-    return np.where(rate == 0.0, 1.0, rate)
 
 
 class Task:
@@ -176,6 +192,15 @@ class Task:
     #: Success: |error| <= success_band [rad] and |φ'| <= success_speed [rad/s].
     success_band: ClassVar[float] = 0.05
     success_speed: ClassVar[float] = 0.1
+    #: The names of the numbers the objective reads (``k.<name>``): class variables, and
+    #: ``max_torque``, the instance's. A task with numbers of its own extends the tuple.
+    parameters: ClassVar[tuple[str, ...]] = ("success_band", "position_margin",
+                                             "precision_weight", "speed_margin",
+                                             "speed_weight", "control_weight",
+                                             "success_speed", "max_torque",
+                                             "symmetric_target", "observes_target")
+    #: The named tuple of :attr:`parameters`, made by :func:`register`.
+    Constants: ClassVar[type]
 
     def __init__(self, max_torque: float | None = None) -> None:
         self.max_torque = float(self.default_max_torque if max_torque is None else max_torque)
@@ -324,11 +349,37 @@ class Task:
         """The target used when none is drawn (for rendering before reset)."""
         return 0.0
 
-    # -- per step (the formulas are the module's compiled functions, see below) -------
+    # -- per step: the objective is the task's (compiled), the rest the module's ----------
     @functools.cached_property
-    def constants(self) -> np.ndarray:
-        """The task's numbers the per-step formulas take, in :data:`TASK_CONSTANTS` order."""
-        return np.array([float(getattr(self, name)) for name in TASK_CONSTANTS])
+    def constants(self) -> Any:
+        """The task's numbers its objective reads, a :attr:`Constants` of :attr:`parameters`."""
+        return self.Constants(*(float(getattr(self, name)) for name in self.parameters))
+
+    @staticmethod
+    @objective
+    def reward(s, k):
+        """The reward in [0, 1] of a step's quantities ``s`` (a Step) for the task's numbers
+        ``k``: :func:`step_reward` (the formula in the module docs)."""
+        return step_reward(s.position_error, s.phi_dot - s.target_phi_dot,
+                           (s.torque - s.target_torque) / k.max_torque, k.success_band,
+                           k.position_margin, k.precision_weight, k.speed_margin,
+                           k.speed_weight, k.control_weight)
+
+    @staticmethod
+    @objective
+    def success(s, k):
+        """Inside the success band, moving with the target (:func:`step_success`)."""
+        return step_success(s.position_error, s.phi_dot - s.target_phi_dot, k.success_band,
+                            k.success_speed)
+
+    def step_reward(self, step: Any) -> Any:
+        """:meth:`reward` in Python, of a Step or of a mapping of its quantities (e.g. a
+        step's info; a quantity it lacks is NaN)."""
+        return self.reward(_as_step(step), self.constants)
+
+    def step_success(self, step: Any) -> Any:
+        """:meth:`success` in Python, as :meth:`step_reward`."""
+        return self.success(_as_step(step), self.constants)
 
     def error(self, phi, target, q):
         """The task's position error [rad of φ] (:func:`position_error`)."""
@@ -352,32 +403,20 @@ class Task:
                         observation_values(phi, phi_dot, target, rate, target_rate),
                         strict=True))
 
-    def reward(self, step: Mapping[str, Any]):
-        """The reward in [0, 1] (:func:`step_reward`) from the step's named physics: the
-        info's keys (``position_error``, ``phi_dot``, ``target_phi_dot``, ``torque``,
-        ``target_torque``)."""
-        return step_reward(step["position_error"], step["phi_dot"] - step["target_phi_dot"],
-                           (step["torque"] - step["target_torque"]) / self.max_torque,
-                           self.success_band, self.position_margin, self.precision_weight,
-                           self.speed_margin, self.speed_weight, self.control_weight)
 
-    def success(self, step: Mapping[str, Any]):
-        """Inside the success band, moving with the target (:func:`step_success`)."""
-        return step_success(step["position_error"], step["phi_dot"] - step["target_phi_dot"],
-                            self.success_band, self.success_speed)
+def _as_step(step: Any) -> Any:
+    from roller_gym.episode.record import Step, step_record
+
+    return step if isinstance(step, Step) else step_record(step)
 
 
 # -- the per-step formulas, written once -------------------------------------------------------
 # Plain arithmetic on NumPy's ufuncs and :mod:`roller_gym.physics.trig`: the same source serves
 # floats and arrays from Python and, compiled, the environments' per-step kernel
-# (:func:`roller_gym.episode.outcome`), which takes a task's numbers as :data:`TASK_CONSTANTS`.
+# (:mod:`roller_gym.episode.outcome`).
 
-#: The task's class variables the per-step formulas take: the order of :meth:`Task.constants`,
-#: the numbers the compiled kernel takes. The kernel finds each by its name's place here
-#: (``TASK_CONSTANTS.index``), so a new name may go anywhere.
-TASK_CONSTANTS = ("success_band", "position_margin", "precision_weight", "speed_margin",
-                  "speed_weight", "control_weight", "success_speed", "max_torque",
-                  "symmetric_target", "observes_target")
+#: The numbers the default objective reads (:attr:`Task.parameters` of the base class).
+TASK_CONSTANTS = Task.parameters
 
 
 @register_jitable(inline="always")
@@ -434,157 +473,3 @@ def observation_values(phi, phi_dot, target, rate, target_rate):
     return (*state_observation(phi, phi_dot, rate),
             *target_observation(target, rate, target_rate))
 
-
-def per_scene(function, scene: Scene) -> np.ndarray:
-    """``function(scalar scene)`` for each roller of a batch scene, computed once per
-    distinct scene (float results, as an array of the batch's size; of 1 for a scalar
-    scene)."""
-    if scene.batch_size is None:
-        return np.array([function(scene)], dtype=float)
-    n = scene.batch_size
-    rows = np.stack([np.broadcast_to(np.asarray(getattr(scene, f.name), float), (n,))
-                     for f in dataclasses.fields(Scene)], axis=1)
-    unique, inverse = np.unique(rows, axis=0, return_inverse=True)
-    names = [f.name for f in dataclasses.fields(Scene)]
-    values = np.array([function(Scene(**dict(zip(names, row, strict=True))))
-                       for row in unique], dtype=float)
-    return values[np.asarray(inverse).reshape(-1)]
-
-
-def _cached_per_scene(function):
-    """Memoize ``function(scene, *args)`` on the scene's values (resets call it per episode)."""
-
-    @functools.lru_cache(maxsize=1024)
-    def cached(values: tuple[tuple[str, float], ...], *args):
-        return function(Scene(**dict(values)), *args)
-
-    @functools.wraps(function)
-    def wrapper(scene: Scene, *args):
-        return cached(tuple(scene.as_dict().items()), *args)
-
-    return wrapper
-
-
-def hold_ranges(scene: Scene, max_torque: float, torque_share: float = 0.8,
-                friction_share: float = 0.9, points: int = 2001) -> tuple[np.ndarray, np.ndarray]:
-    """The intervals [low, high] of rest positions φ [rad] around 0 that can be held at rest,
-    one per roller of the batch ``scene`` (arrays of the batch's size; of 1 for a scalar
-    scene), in one compiled call whatever the batch's size.
-
-    Contiguous around φ = 0, within ψ = ±π (|φ| <= π/|q|, q from :func:`wrap_rate`), where
-    the holding torque is at most ``torque_share``·max_torque [N·m] and the contact holds
-    with margin: N > 0 and |F| <= ``friction_share``·μN (at rest N = m g cos ψ,
-    F = m g sin ψ). Each side is a grid of ``points`` values of φ from 0 to ±π/|q| (those of
-    ``np.linspace``, bit for bit), walked outward from φ = 0: the bound is the last grid
-    point before the first one that fails (φ = 0 if that one fails, ±π/|q| if none does), so
-    the cost is proportional to the range's width, not to ``points``.
-    """
-    if points < 1:
-        raise ValueError(f"points={points!r} must be >= 1")
-    if not all(isinstance(getattr(scene, f.name), float | np.ndarray)
-               for f in dataclasses.fields(Scene)):  # e.g. an int or float32 number
-        scene = Scene(**{f.name: np.asarray(getattr(scene, f.name), float)[()]
-                         for f in dataclasses.fields(Scene)})  # float64, as hold_range's floats
-    rows = dict(zip(SCENE_FIELDS, scene_arrays(scene), strict=True))  # each of n rollers
-    numbers = [rows[name] for name in ("m", "r", "kappa", "e", "k", "g", "damping", "mu")]
-    half = np.empty_like(numbers[0])
-    half[...] = np.reshape(math.pi / np.abs(wrap_rate(scene)), -1)  # q < 0 on a drum
-    low, high = np.empty_like(half), np.empty_like(half)
-    _hold_bounds(*numbers, half, float(torque_share * max_torque), float(friction_share),
-                 int(points), low, high)
-    return low, high
-
-
-@_cached_per_scene
-def hold_range(scene: Scene, max_torque: float, torque_share: float = 0.8,
-               friction_share: float = 0.9, points: int = 2001) -> tuple[float, float]:
-    """The interval (low, high) of rest positions φ [rad] around 0 that can be held at rest
-    in the scalar ``scene``: :func:`hold_ranges` of it (the same compiled walk), memoized."""
-    low, high = hold_ranges(scene, max_torque, torque_share, friction_share, points)
-    return float(low[0]), float(high[0])
-
-
-@register_jitable(inline="always")
-def _holds(phi, m, r, kappa, e, k, g, c, mu, torque_limit, friction_share):
-    """Whether the roller can be held at rest at φ [rad] (:func:`hold_ranges`' condition): its
-    holding torque τ = dV/dφ [N·m] within ``torque_limit``, and under τ at rest N > 0 and
-    |F| <= ``friction_share``·μN."""
-    tau = equations.dpotential(phi, m, r, kappa, e, g)
-    phi_ddot = equations.accel(phi, 0.0, tau, m, r, kappa, e, k, g, c)
-    normal, friction = equations.contact_forces(phi, 0.0, phi_ddot, m, r, kappa, e, g)
-    return ((abs(tau) <= torque_limit) & (normal > 0)
-            & (abs(friction) <= friction_share * mu * normal))
-
-
-@register_jitable(inline="always")
-def _linspace_at(i, div, step, stop):
-    """Point i of ``np.linspace(0.0, stop, div + 1)``, bit for bit, as NumPy computes it:
-    i·step + 0.0 with step = (stop − 0.0)/div (where step underflows to 0,
-    (i/div)·(stop − 0.0) + 0.0), and ``stop`` itself at i = div > 0."""
-    delta = stop - 0.0
-    if div == 0:
-        return 0.0 * delta + 0.0
-    if i == div:
-        return stop
-    if step == 0.0:
-        return i / div * delta + 0.0
-    return i * step + 0.0
-
-
-#: How many grid points :func:`_hold_bounds` checks at once (a loop in SIMD lanes): the walk
-#: overshoots the first failure by fewer than this many points.
-_HOLD_BLOCK = 16
-
-
-@numba.njit(cache=True, nogil=True, error_model="numpy")
-def _hold_bounds(m, r, kappa, e, k, g, c, mu, half, torque_limit, friction_share, points,
-                 low, high):
-    """low[j], high[j] of :func:`hold_ranges` for roller j (scene numbers as rows, ``half``
-    π/|q| [rad]): each side's grid walked outward from φ = 0, a block of
-    :data:`_HOLD_BLOCK` points at a time, up to the first point that fails :func:`_holds`."""
-    div = points - 1
-    phi = np.empty(_HOLD_BLOCK)
-    ok = np.empty(_HOLD_BLOCK, dtype=np.bool_)
-    for j in range(m.size):
-        stop = half[j]
-        step = (stop - 0.0) / div if div > 0 else np.nan  # NumPy's (stop − start)/div
-        for side in range(2):
-            sign = 1.0 if side == 0 else -1.0
-            bound = sign * _linspace_at(0, div, step, stop)
-            start = 0
-            while start < points:
-                count = min(_HOLD_BLOCK, points - start)
-                for b in range(count):  # a loop without exits: SIMD lanes
-                    phi[b] = sign * _linspace_at(start + b, div, step, stop)
-                    ok[b] = _holds(phi[b], m[j], r[j], kappa[j], e[j], k[j], g[j], c[j], mu[j],
-                                   torque_limit, friction_share)
-                failed = False
-                for b in range(count):
-                    if not ok[b]:
-                        failed = True
-                        break
-                    bound = phi[b]
-                if failed:
-                    break
-                start += count
-            if side == 0:
-                high[j] = bound
-            else:
-                low[j] = bound
-
-
-@_cached_per_scene
-def unstable_rest_positions(scene: Scene) -> tuple[float, ...]:
-    """The unstable rest positions φ [rad] at zero torque nearest to φ = 0 on each side
-    (d²V/dφ² < 0: neutral ones, as everywhere for a uniform disc on the floor, do not count)."""
-    m, r, kappa, e, _, g, _ = scene.params
-    unstable = [p.phi for p in equilibria(scene, 0.0)
-                if not p.stable and equations.d2potential(p.phi, m, r, kappa, e, g) < 0]
-    out = []
-    positive = [p for p in unstable if p > 0]
-    negative = [p for p in unstable if p <= 0]
-    if positive:
-        out.append(min(positive))
-    if negative:
-        out.append(max(negative))
-    return tuple(out)

@@ -168,6 +168,7 @@ class RollerVectorEnv(VectorEnv):
     target = _context_row("target_phi", "each sub-environment's target φ* [rad]")
     target_rate = _context_row("target_phi_dot", "how fast each target moves, φ*' [rad/s]")
     target_torque = _context_row("target_torque", "τ* [N·m] that holds each roller at φ*")
+    target_energy = _context_row("target_energy", "E* [J] of each roller at rest at φ*")
     _q = _context_row("wrap_rate", "the rate q errors are wrapped by [-]")
     _psi_rate = _context_row("psi_rate", "dψ/dφ [-]")
 
@@ -240,7 +241,7 @@ class RollerVectorEnv(VectorEnv):
         self.phi = np.zeros(num_envs)
         self.phi_dot = np.zeros(num_envs)
         self.target[:] = episode.per_scene_target(task, self._scene, num_envs)
-        self.target_torque[:] = episode.target_torque(self._scene, self.target)
+        self._set_target_terms()
         self._target_params = np.repeat(self.target[:, None], task.target_size, axis=1)
         self.steps = np.zeros(num_envs, dtype=np.int64)
         self._done = np.zeros(num_envs, dtype=bool)
@@ -279,6 +280,11 @@ class RollerVectorEnv(VectorEnv):
             return [self._scene] * self.num_envs
         return [self._scene.item(i) for i in range(self.num_envs)]
 
+    def _set_target_terms(self) -> None:
+        """The context's rows that follow from the targets (episode.target_terms)."""
+        for name, row in episode.target_terms(self._scene, self.target).items():
+            self._outcome.context[_CONTEXT[name]] = row
+
     # -- episode starts ------------------------------------------------------------------
     def _draw(self, idx: np.ndarray, episodes: np.ndarray,
               options: Mapping[str, Any] | None) -> _Starts:
@@ -286,18 +292,14 @@ class RollerVectorEnv(VectorEnv):
         base = self._base if self._base.batch_size is None else episode.take(
             self._base, idx, self.num_envs)
         start = episode.start_episodes(self.config, base, self._seeds[idx], episodes, options)
+        c = {"torque": 0.0, "target_phi": start.target, "target_phi_dot": start.target_rate,
+             **episode.target_terms(start.scene, start.target),
+             "wrap_rate": wrap_rate(start.scene), "psi_rate": psi_rate(start.scene)}
         context = np.empty((idx.size, len(episode.CONTEXT_FIELDS)))
-        for name, row in (("torque", 0.0), ("target_phi", start.target),
-                          ("target_phi_dot", start.target_rate),
-                          ("target_torque", episode.target_torque(start.scene, start.target)),
-                          ("wrap_rate", wrap_rate(start.scene)),
-                          ("psi_rate", psi_rate(start.scene))):
+        for name, row in c.items():
             context[:, _CONTEXT[name]] = row
-        c = {name: context[:, i] for i, name in enumerate(episode.CONTEXT_FIELDS)}
-        out = episode.outcome(
-            self.task, episode.at_start(start.scene, start.phi, start.phi_dot),
-            target=c["target_phi"], q=c["wrap_rate"], psi_rate=c["psi_rate"], tau=0.0,
-            target_rate=c["target_phi_dot"], target_torque=c["target_torque"])
+        out = episode.outcome(self.task, episode.at_start(start.scene, start.phi, start.phi_dot),
+                              c)
         return _Starts(start.scene, start.target_params, context,
                        np.ascontiguousarray(out.table.T), np.ascontiguousarray(out.flags.T),
                        out.observation)
@@ -391,7 +393,7 @@ class RollerVectorEnv(VectorEnv):
         if self.task.moving_target:
             self.target[:], self.target_rate[:] = self.task.target_at(
                 self._target_params, self.steps * self.config.dt)
-            self.target_torque[:] = episode.target_torque(self._scene, self.target)
+            self._set_target_terms()
         # the physics and the outcome; a new table: its rows are handed out as they are
         table = self._outcome.step(self._stepper, self.phi, self.phi_dot, tau)
         flags, self._obs = self._outcome.flags, self._outcome.observation  # new: returned

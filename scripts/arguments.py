@@ -54,7 +54,9 @@ def checked_env_kwargs(env_id: str, items: list[str], option: str) -> dict[str, 
 
     kwargs = key_values(items, option)
     spec = gym.spec(env_id)
-    params = inspect.signature(load_env_creator(spec.entry_point)).parameters
+    creator = spec.entry_point
+    params = inspect.signature(
+        creator if callable(creator) else load_env_creator(creator)).parameters
     allowed = [name for name in (*params, *MAKE_KWARGS) if name not in spec.kwargs]
     unknown = [key for key in kwargs if key not in allowed]
     if unknown and all(p.kind is not p.VAR_KEYWORD for p in params.values()):

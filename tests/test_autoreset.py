@@ -223,7 +223,9 @@ def test_a_failed_step_is_not_reported_as_lift_off_or_slip():
     task = roller_gym.stabilize.StabilizeTask()
     nan = float("nan")
     failed = episode.RestState(0.3, 0.1, nan, 12, False, nan, nan, nan, nan, nan, nan, False)
-    out = episode.outcome(task, failed, 0.0, 0.25, 0.25, 0.25)
+    context = {"torque": 0.25, "target_phi": 0.0, "target_phi_dot": 0.0, "target_torque": 0.0,
+               "target_energy": 0.0, "wrap_rate": 0.25, "psi_rate": 0.25}
+    out = episode.outcome(task, failed, context)
     assert out.reward == 0.0 and out.terminated
     assert out.info["nonfinite"] and not out.info["lifting"] and not out.info["slipping"]
     n = 3
@@ -232,8 +234,7 @@ def test_a_failed_step_is_not_reported_as_lift_off_or_slip():
     finite = np.array([True, False, True])
     batch = episode.RestState(batch.phi, batch.phi_dot, batch.phi_ddot, batch.substeps, finite,
                               *(np.where(finite, 0.5, nan) for _ in range(5)))
-    out = episode.outcome(task, batch, np.zeros(n), np.full(n, 0.25),
-                          np.full(n, 0.25), np.zeros(n))
+    out = episode.outcome(task, batch, {**context, "torque": 0.0, "target_phi": np.zeros(n)})
     np.testing.assert_array_equal(out.terminated, [False, True, False])
     assert out.reward[1] == 0.0 and out.reward[0] > 0
     np.testing.assert_array_equal(out.info["lifting"], [False, False, False])

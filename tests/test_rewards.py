@@ -41,7 +41,7 @@ def rest_rewards(task, scene, target, rate=0.0):
             "action": tau / task.max_torque}
     reachable = np.abs(tau) <= task.max_torque
     assert r_over > 0
-    return np.where(reachable, task.reward(step), -np.inf), error
+    return np.where(reachable, task.step_reward(step), -np.inf), error
 
 
 @pytest.mark.parametrize("env_id", IDS)
@@ -137,12 +137,22 @@ def test_the_environments_pay_the_documented_reward(env_id):
         assert vreward[i] == pytest.approx(documented_reward(task, row), rel=1e-12, abs=1e-15)
 
 
-def test_a_task_may_not_override_what_the_kernel_computes():
-    """The environments compute error, reward, success and observation in one compiled
-    kernel from the task's class variables: a task overriding one of them is refused at
-    registration, naming the method, instead of being silently ignored."""
+def test_a_task_may_not_override_what_the_kernel_computes_for_every_task():
+    """The environments compute the position error and the observation in their compiled
+    kernel for every task: a task overriding one of them is refused at registration, naming
+    the method, instead of being silently ignored; an objective that is not a static method
+    of (s, k) is refused too."""
     from roller_gym.stabilize import StabilizeTask
     from roller_gym.task import TASKS, register
+
+    class Wrong(StabilizeTask):
+        name = "RollerWrongTest"
+
+        def error(self, phi, target, q):
+            return 0.0
+
+    with pytest.raises(ValueError, match=r"RollerWrongTest overrides error: "):
+        register(Wrong)
 
     class Greedy(StabilizeTask):
         name = "RollerGreedyTest"
@@ -150,9 +160,9 @@ def test_a_task_may_not_override_what_the_kernel_computes():
         def reward(self, step):
             return 1.0
 
-    with pytest.raises(ValueError, match=r"RollerGreedyTest overrides reward: .*TASK_CONSTANTS"):
+    with pytest.raises(ValueError, match=r"RollerGreedyTest.reward must be a static method"):
         register(Greedy)
-    assert "RollerGreedyTest" not in TASKS
+    assert "RollerGreedyTest" not in TASKS and "RollerWrongTest" not in TASKS
 
 
 @pytest.mark.parametrize("size", ["serial", "parallel"])
@@ -207,15 +217,16 @@ def test_a_step_and_its_outcome_in_one_call_are_the_two_calls(method):
             else:
                 stepper = integ.BatchStepper(n, method=method, dt=0.05, tol=tol)
                 stepper.set_scenes(scene)
-            kernel.context[:] = np.linspace(0.1, 0.6, 6)[:, None]
-            kernel.context[episode.CONTEXT_FIELDS.index("torque")] = tau  # as the bound writes
+            context = np.linspace(0.1, 0.6, len(episode.CONTEXT_FIELDS))[:, None]
+            kernel.context[:] = context
+            kernel.context[list(episode.CONTEXT_FIELDS).index("torque")] = tau  # as bound
             args = (phi[0], phi_dot[0], tau[0]) if n == 1 else (phi, phi_dot, tau)
             if way == "fused":
                 kernel.step(stepper, *args)
             elif way == "two calls":
                 kernel.run(stepper.run(*args))
             elif n == 1:
-                kernel.context[:] = np.linspace(0.1, 0.6, 6)[:, None]  # τ not yet in it
+                kernel.context[:] = context  # τ not yet in it
                 read = kernel.bind(stepper)(*args)  # writes τ into the context itself
                 rows = {name: kernel.table[episode.OUTCOME_ROWS.index(name), 0]
                         for name in ("phi", "phi_dot", "reward")}
@@ -225,7 +236,7 @@ def test_a_step_and_its_outcome_in_one_call_are_the_two_calls(method):
             else:
                 continue
             runs.append((kernel.table.copy(), kernel.flags.copy(), kernel.observation.copy()))
-        fused = episode._FUSED.get(stepper.kernel)
+        fused = kernel.kernels.fused.get(stepper.kernel)
         assert (fused is not None) == (method in ("taylor", "rk8", "rk4"))
         for other in runs[1:]:
             for a, b in zip(runs[0], other, strict=True):
@@ -237,13 +248,13 @@ def test_streaming_stores_write_the_values_and_are_fenced():
     them: compiled afresh here, a stream of rows writes exactly the values NumPy copies,
     into rows at any offset, and its code carries the non-temporal hint and the fence."""
     import numba
-    from roller_gym import episode
+    from roller_gym.episode import outcome
 
     @numba.njit(nogil=True)
     def stream(dst, src, start, m):
         for r in range(src.shape[0]):
-            episode._stream(dst[r], start, src[r], start, m)
-        episode._fence()
+            outcome._stream(dst[r], start, src[r], start, m)
+        outcome._fence()
 
     rng = np.random.default_rng(5)
     src = rng.normal(size=(3, 300))

@@ -20,6 +20,7 @@ import mpmath
 import numba
 import numpy as np
 import pytest
+import roller_gym
 from roller_gym.physics import integrators as integ
 from roller_gym.physics import preset, trig
 
@@ -186,16 +187,23 @@ def test_exp_and_tanh_compiled_give_the_bits_of_their_numpy_evaluation():
     assert "vector.body" in both.inspect_llvm(both.signatures[0])
 
 
-def test_the_outcome_of_a_block_of_rollers_runs_in_simd_lanes():
-    """The step's outcome (reward, flags, info and observation values: exp, tanh and sines
-    included) is computed in one loop that LLVM runs in SIMD lanes."""
+@pytest.mark.parametrize("task_id", roller_gym.ENV_IDS)
+def test_the_outcome_of_a_block_of_rollers_runs_in_simd_lanes(task_id):
+    """The step's outcome (the task's reward and success, flags, info and observation
+    values: exp, tanh and sines included) is computed in one loop that LLVM runs in SIMD
+    lanes, for every task's own objective."""
     import gymnasium as gym
-    from roller_gym import episode
+    from roller_gym.episode import outcome
 
-    fn = numba.njit(error_model="numpy", nogil=True)(episode._outcome_block)
-    constants = gym.make("roller_gym/RollerHold-v1").unwrapped.task.constants
-    fn(np.zeros(episode._B_ROWS * episode._B), 16, constants)
-    assert "vector.body" in fn.inspect_llvm(fn.signatures[0])
+    task = gym.spec(task_id).make().unwrapped.task
+    reward, success, k = type(task).reward, type(task).success, task.constants
+
+    @numba.njit(error_model="numpy", nogil=True)
+    def block(b, m):
+        outcome._outcome_block(reward, success, k, b, m)
+
+    block(np.zeros(outcome.SCRATCH_SIZE), 16)
+    assert "vector.body" in block.inspect_llvm(block.signatures[0])
 
 
 @pytest.mark.parametrize("lanes", ["_accel_lanes", "_margin_lanes", "_end_lanes"])

@@ -1,0 +1,403 @@
+"""The compiled outcome of a task, alone and fused with the physics: one room that knows both.
+
+:func:`task_kernels` compiles, per task class, the kernels that run
+:mod:`roller_gym.episode.outcome` with the task's own ``reward`` and ``success`` and its
+numbers (``Task.constants``): over every roller on one core or on all, and fused with a
+scheme's physics kernel into one compiled call per step (a chunk's physics, then its
+outcome while the results are in cache). numba caches each per task on disk
+(:mod:`roller_gym.kernel_cache` keys it on every source it inlines).
+:class:`OutcomeKernel` holds the buffers both environments step with; :func:`outcome` is the
+same kernel for floats and arrays.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numba
+import numpy as np
+from numba.core import types
+from numba.extending import overload, register_jitable
+from numba.np.unsafe.ndarray import to_fixed_tuple
+from roller_gym.episode.outcome import (
+    SCRATCH_SIZE,
+    observe,
+    outcome_one,
+    outcome_range,
+)
+from roller_gym.episode.record import (
+    CONTEXT_FIELDS,
+    FLAG_ROWS,
+    INFO_KEYS,
+    INFO_ROW,
+    OUTCOME_ROWS,
+    STEP_FIELDS,
+    C,
+    F,
+    O,
+)
+from roller_gym.physics.integrators import (
+    CHUNK,
+    PARALLEL_THRESHOLD,
+    ROWS,
+    SCHEMES,
+    BatchStepper,
+    Stepper,
+    missed,
+    put_inputs,
+    row_table,
+)
+from roller_gym.physics.packed import unpack
+from roller_gym.task import OBSERVATION_FIELDS
+
+__all__ = ["Outcome", "OutcomeKernel", "TaskKernels", "flag_table", "info_rows", "outcome",
+           "result_table", "task_kernels"]
+
+_FIELD_NUMBER = {name: i for i, name in enumerate(OBSERVATION_FIELDS)}
+
+
+def _numbers(constants, n):
+    """The first n numbers of the array ``constants`` as a tuple (compiled: a tuple of a
+    size known when compiling, ``n`` a constant)."""
+    return tuple(constants[:n])
+
+
+@overload(_numbers)
+def _numbers_overload(constants, n):
+    if isinstance(n, types.IntegerLiteral):
+        size = n.literal_value
+        return lambda constants, n: to_fixed_tuple(constants, size)
+    return None
+
+
+@register_jitable(inline="always")
+def _advance_and_outcome(io, tab, cfg, result, chunk, reward, success, k, context, observed,
+                         out, flags, obs):
+    """A scheme's ``chunk`` (the physics, :attr:`~roller_gym.physics.integrators.Scheme.chunk`)
+    and then the outcome (:func:`~roller_gym.episode.outcome.outcome_range`) of each chunk of
+    rollers in turn, chunks on all cores: the outcome reads the chunk's results while they
+    are still in cache, and a step is one parallel pass instead of two."""
+    n = io.shape[1]
+    for c in numba.prange((n + CHUNK - 1) // CHUNK):
+        lo, hi = c * CHUNK, min(n, (c + 1) * CHUNK)
+        chunk(io, lo, hi, tab, cfg)
+        outcome_range(reward, success, k, lo, hi, result, context, observed, out, flags, obs,
+                      np.empty(SCRATCH_SIZE))
+
+
+@register_jitable(inline="always")
+def _outcome_all(reward, success, k, result, context, observed, out, flags, obs, scratch):
+    """Every roller's outcome on one core, in ``scratch``; a batch of one by
+    :func:`~roller_gym.episode.outcome.outcome_one`."""
+    if result.shape[1] == 1:
+        outcome_one(reward, success, k, result, context, observed, out, flags, obs)
+    else:
+        outcome_range(reward, success, k, 0, result.shape[1], result, context, observed, out,
+                      flags, obs, scratch)
+
+
+_STEP_ROWS = ROWS.index(STEP_FIELDS[0])  # a stepper's io: its result is the last rows
+#: What a single environment's step unpacks, in order (the stepper's io, tableau and cfg,
+#: then OutcomeKernel._buffers()): the dtype and dimensions of each, checked when bound.
+_ONE_ARRAYS = ((np.float64, 2), (np.float64, 2), (np.float64, 1), (np.float64, 2),
+               (np.float64, 1), (np.int64, 1), (np.float64, 2), (np.bool_, 2), (np.float32, 2),
+               (np.float64, 1))
+_ONE_DTYPES = tuple(dtype for dtype, _ in _ONE_ARRAYS)
+
+
+@register_jitable(inline="always")
+def _unpack_one(packed):
+    """The single environment's buffers from ``packed`` (see :data:`_ONE_ARRAYS`): the
+    stepper's io, tableau and cfg, then the context, the task's numbers, the observed fields,
+    the outcome's table, flags and observation."""
+    d = _ONE_DTYPES  # a 1-D array is its table's row 0
+    return (unpack(packed, 0, d[0]), unpack(packed, 1, d[1]), unpack(packed, 2, d[2])[0],
+            unpack(packed, 3, d[3]), unpack(packed, 4, d[4])[0], unpack(packed, 5, d[5])[0],
+            unpack(packed, 6, d[6]), unpack(packed, 7, d[7]), unpack(packed, 8, d[8]))
+
+
+@register_jitable(inline="always")
+def _one_roller(phi, phi_dot, tau, kernel, reward, success, k, io, tab, cfg, context, observed,
+                out, flags, obs):
+    """The single environment's step: its roller's inputs and torque written, the physics
+    (the scheme's serial ``kernel``) and the outcome, and what the environment reads back,
+    as :meth:`~roller_gym.physics.integrators.Stepper.bind` takes it: (missed, φ [rad],
+    φ' [rad/s], reward, terminated)."""
+    flat = io[:, 0]
+    put_inputs(flat, phi, phi_dot, tau)
+    context[C.torque, 0] = tau
+    kernel(io, tab, cfg)
+    outcome_one(reward, success, k, io[_STEP_ROWS:], context, observed, out, flags, obs)
+    return (missed(flat), out[O.phi, 0], out[O.phi_dot, 0], out[O.reward, 0],
+            flags[F.terminated, 0])
+
+
+# The schemes whose kernels have fused ones: module globals, as numba keys a cached kernel
+# on its closure's contents but not on the globals it calls.
+_TAYLOR, _RK = SCHEMES["taylor"], SCHEMES["rk8"]
+_TAYLOR_CHUNK, _RK_CHUNK = _TAYLOR.chunk, _RK.chunk
+_TAYLOR_SERIAL, _RK_SERIAL = _TAYLOR.kernels()[0], _RK.kernels()[0]
+
+
+@dataclass(frozen=True)
+class TaskKernels:
+    """A task's compiled kernels (each compiled at its first call, then cached on disk).
+
+    ``loop`` and ``parallel``: the outcome of every roller on one core or on all, as
+    ``(result, context, constants, observed, out, flags, obs, scratch)``; ``fused``: the
+    physics and the outcome in one call, by the stepper's kernel they run in place of;
+    ``one``: the single environment's step, by the stepper's serial kernel."""
+
+    loop: Callable
+    parallel: Callable
+    fused: dict[Callable, Callable]
+    one: dict[Callable, Callable]
+
+
+@functools.cache
+def task_kernels(task: type) -> TaskKernels:
+    """The kernels of a task class, specialised to its ``reward``, ``success`` and
+    ``Constants`` (see :class:`TaskKernels`)."""
+    reward, success, K = task.reward, task.success, task.Constants
+    n = len(K._fields)
+    jit = functools.partial(numba.njit, cache=True, nogil=True, error_model="numpy")
+
+    @jit
+    def loop(result, context, constants, observed, out, flags, obs, scratch):
+        _outcome_all(reward, success, K(*_numbers(constants, n)), result, context,
+                     observed, out, flags, obs, scratch)
+
+    @jit(parallel=True)
+    def parallel(result, context, constants, observed, out, flags, obs, scratch):
+        k = K(*_numbers(constants, n))
+        rollers = result.shape[1]
+        for chunk in numba.prange((rollers + CHUNK - 1) // CHUNK):
+            outcome_range(reward, success, k, chunk * CHUNK, min(rollers, (chunk + 1) * CHUNK),
+                          result, context, observed, out, flags, obs, np.empty(SCRATCH_SIZE))
+
+    @jit(parallel=True)
+    def taylor_and_outcome(io, tab, cfg, result, context, constants, observed, out, flags,
+                           obs, scratch):
+        _advance_and_outcome(io, tab, cfg, result, _TAYLOR_CHUNK, reward, success,
+                             K(*_numbers(constants, n)), context, observed, out, flags,
+                             obs)
+
+    @jit(parallel=True)
+    def rk_and_outcome(io, tab, cfg, result, context, constants, observed, out, flags, obs,
+                       scratch):
+        _advance_and_outcome(io, tab, cfg, result, _RK_CHUNK, reward, success,
+                             K(*_numbers(constants, n)), context, observed, out, flags,
+                             obs)
+
+    @jit
+    def taylor_then_outcome(io, tab, cfg, result, context, constants, observed, out, flags,
+                            obs, scratch):
+        _TAYLOR_SERIAL(io, tab, cfg)
+        _outcome_all(reward, success, K(*_numbers(constants, n)), result, context,
+                     observed, out, flags, obs, scratch)
+
+    @jit
+    def rk_then_outcome(io, tab, cfg, result, context, constants, observed, out, flags, obs,
+                        scratch):
+        _RK_SERIAL(io, tab, cfg)
+        _outcome_all(reward, success, K(*_numbers(constants, n)), result, context,
+                     observed, out, flags, obs, scratch)
+
+    @jit
+    def taylor_one(phi, phi_dot, tau, packed):
+        io, tab, cfg, context, constants, observed, out, flags, obs = _unpack_one(packed)
+        return _one_roller(phi, phi_dot, tau, _TAYLOR_SERIAL, reward, success,
+                           K(*_numbers(constants, n)), io, tab, cfg, context, observed, out,
+                           flags, obs)
+
+    @jit
+    def rk_one(phi, phi_dot, tau, packed):
+        io, tab, cfg, context, constants, observed, out, flags, obs = _unpack_one(packed)
+        return _one_roller(phi, phi_dot, tau, _RK_SERIAL, reward, success,
+                           K(*_numbers(constants, n)), io, tab, cfg, context, observed, out,
+                           flags, obs)
+
+    # the parallel fused kernels leave ``scratch`` unused (a chunk's is its own), as
+    # ``parallel`` does
+    fused = {_TAYLOR.kernels()[1]: taylor_and_outcome, _RK.kernels()[1]: rk_and_outcome,
+             _TAYLOR_SERIAL: taylor_then_outcome, _RK_SERIAL: rk_then_outcome}
+    return TaskKernels(loop, parallel, fused, {_TAYLOR_SERIAL: taylor_one, _RK_SERIAL: rk_one})
+
+
+@dataclass
+class Outcome:
+    """Reward, flags, info and observation of a step (arrays of rollers, or scalars where
+    every input was a scalar)."""
+
+    reward: Any
+    terminated: Any
+    info: dict[str, Any]
+    observation: np.ndarray
+    #: all of it as the kernel's table (OUTCOME_ROWS × rollers, float64; rollers flattened)
+    table: np.ndarray
+    #: and its flags (FLAG_ROWS × rollers, bool; rollers flattened)
+    flags: np.ndarray
+
+
+class OutcomeKernel:
+    """The step's outcome for a fixed set of rollers, into buffers of its own: what both
+    environments call once per step (and per reset).
+
+    ``table`` (``OUTCOME_ROWS`` × rollers, float64), ``flags`` (``FLAG_ROWS`` × rollers,
+    bool), ``observation`` (rollers × the task's observation size, float32) and ``context``
+    (``CONTEXT_FIELDS`` × rollers, for the caller to fill) are its buffers; :meth:`run`
+    overwrites the first three. With ``fresh``, every run writes a new ``table``, ``flags``
+    and ``observation`` instead, which the caller may then hand out (see :func:`info_rows`).
+    """
+
+    def __init__(self, task: Any, num: int, fresh: bool = False) -> None:
+        self.kernels = task_kernels(type(task))
+        self.constants = np.array(task.constants, dtype=float)
+        self.observed = np.array([_FIELD_NUMBER[f] for f in task.observation],
+                                 dtype=np.int64)
+        self.context = row_table(len(CONTEXT_FIELDS), num)
+        self.table = row_table(len(OUTCOME_ROWS), num)
+        self.flags = flag_table(num)
+        self.observation = np.empty((num, self.observed.size), dtype=np.float32)
+        self.fresh = fresh
+        parallel = num >= PARALLEL_THRESHOLD
+        self._kernel = self.kernels.parallel if parallel else self.kernels.loop
+        self._scratch = np.empty(0 if parallel else SCRATCH_SIZE)
+
+    def run(self, result: np.ndarray) -> np.ndarray:
+        """The outcome of the rollers' ``result`` (STEP_FIELDS rows × rollers, float64) under
+        the context in :attr:`context`; returns :attr:`table`."""
+        self._renew()
+        self._kernel(result, *self._buffers())
+        return self.table
+
+    def step(self, stepper: Stepper | BatchStepper, phi: Any, phi_dot: Any,
+             tau: Any) -> np.ndarray:
+        """A control step of the rollers (``stepper``'s, a Stepper or a BatchStepper, from φ
+        [rad] and φ' [rad/s] under τ [N·m]) and its outcome, as :meth:`run` on
+        ``stepper.run``'s result; in one compiled call where the stepper's kernel has a fused
+        kernel (on all cores: one pass over chunks of rollers). Returns :attr:`table`."""
+        fused = self.kernels.fused.get(stepper.kernel)
+        if fused is None:
+            return self.run(stepper.run(phi, phi_dot, tau))
+        self._renew()
+        stepper.run(phi, phi_dot, tau, fused, *self._buffers())
+        return self.table
+
+    def observe(self, phi: np.ndarray, phi_dot: np.ndarray, rows: np.ndarray,
+                obs: np.ndarray) -> None:
+        """Write into ``obs`` (rollers × fields, float32) the observation of rollers ``rows``
+        at φ [rad], φ' [rad/s] under :attr:`context`, as a step ending there gives it."""
+        observe(rows, phi, phi_dot, self.context, self.observed, obs)
+
+    def bind(self, stepper: Stepper) -> Callable[[float, float, float], tuple]:
+        """:meth:`step` for one Stepper, with the kernels and buffers looked up once: a
+        function ``step(φ [rad], φ' [rad/s], τ [N·m])`` for the single environment, which
+        also writes τ into :attr:`context` and returns what the environment reads back:
+        (φ [rad], φ' [rad/s], reward, terminated) as Python float and bool. One compiled call
+        where the stepper's kernel has one (:attr:`TaskKernels.one`; not with ``NUMBA_DISABLE_JIT``,
+        where nothing is compiled to unpack its arrays). Not for ``fresh`` buffers, which
+        every step renews."""
+        if self.fresh:
+            raise ValueError("a fresh OutcomeKernel renews its buffers every step: use step()")
+        one = self.kernels.one.get(stepper.kernel)
+        if one is not None and not numba.config.DISABLE_JIT:  # (interpreted: two calls)
+            step = stepper.bind(one, *self._buffers())
+            kinds = tuple((a.dtype.type, a.ndim) for a in step.arrays)
+            assert kinds == _ONE_ARRAYS, f"_one_roller would misread {kinds}"
+            return step
+        advance, torque = stepper.bind(), self.context[C.torque]
+        table, flags = self.table[:, 0], self.flags[:, 0]
+
+        def step(phi: float, phi_dot: float, tau: float) -> tuple:
+            torque[0] = tau
+            self.run(advance(phi, phi_dot, tau))
+            row = table.tolist()
+            return row[O.phi], row[O.phi_dot], row[O.reward], bool(flags[F.terminated])
+
+        return step
+
+    def _buffers(self) -> tuple[np.ndarray, ...]:
+        """What the kernels take after the step's result: the context, the task's numbers, the
+        outcome's buffers and the scratch."""
+        return (self.context, self.constants, self.observed, self.table, self.flags,
+                self.observation, self._scratch)
+
+    def _renew(self) -> None:
+        if self.fresh:
+            self.table = row_table(*self.table.shape, zeroed=False)
+            self.flags = flag_table(self.flags.shape[1])
+            self.observation = np.empty_like(self.observation)
+
+
+def outcome(task: Any, result: Any, context: Mapping[str, Any]) -> Outcome:
+    """What a step means for the task: the termination rule, the reward, the info and the
+    observation (the environments run the same kernel through :class:`OutcomeKernel`).
+
+    ``result`` is the integrator's StepResult (floats or arrays); ``context`` the step's
+    context by name (every name of :data:`~roller_gym.episode.record.CONTEXT_FIELDS`: the
+    torque, the target and what follows from it, :func:`~roller_gym.episode.starts.target_terms`,
+    the rates of :mod:`roller_gym.task`). The step terminates on lift-off, slip or a step that
+    could not stay finite, each flagged in the info; a failed step earns no reward.
+    """
+    values = [getattr(result, f) for f in STEP_FIELDS]
+    missing = set(CONTEXT_FIELDS) - set(context)
+    if missing:
+        raise ValueError(f"context lacks {sorted(missing)}; it takes {', '.join(CONTEXT_FIELDS)}")
+    context = [context[name] for name in CONTEXT_FIELDS]
+    shape = np.broadcast(*values, *context).shape
+    n = math.prod(shape)
+    kernel = OutcomeKernel(task, n)
+    table = result_table(result, shape)
+    context_rows = kernel.context.reshape(len(context), *shape)
+    for row, value in enumerate(context):  # broadcast as they are written
+        context_rows[row] = value
+    kernel.run(table.reshape(len(STEP_FIELDS), n))
+    rows = info_rows(kernel.table, kernel.flags, tuple(INFO_KEYS), views=True)  # this call's
+    scalar = shape == ()
+    info = {k: v[0] if scalar else v if v.shape == shape else v.reshape(shape)
+            for k, v in rows.items()}
+    reward, terminated = kernel.table[O.reward], kernel.flags[F.terminated]
+    if scalar:
+        return Outcome(reward[0], terminated[0], info, kernel.observation[0], kernel.table,
+                       kernel.flags)
+    return Outcome(reward.reshape(shape), terminated.reshape(shape), info,
+                   kernel.observation.reshape(*shape, -1), kernel.table, kernel.flags)
+
+
+def result_table(result: Any, shape: tuple[int, ...] = ()) -> np.ndarray:
+    """``result`` (a StepResult or a :class:`RestState`, of floats or arrays broadcast to
+    ``shape``) as a stepper's result table: STEP_FIELDS rows of ``shape``, float64."""
+    table = np.empty((len(STEP_FIELDS), *shape))
+    for row, field in enumerate(STEP_FIELDS):
+        table[row] = getattr(result, field)  # broadcast as it is written
+    return table
+
+
+def flag_table(n: int) -> np.ndarray:
+    """A boolean table of FLAG_ROWS rows of ``n`` rollers (zeroed), rows a cache line more
+    than ``n`` apart (as :func:`~roller_gym.physics.integrators.row_table`)."""
+    return np.zeros((len(FLAG_ROWS), n + 64), dtype=bool)[:, :n]
+
+
+def info_rows(table: np.ndarray, flags: np.ndarray, keys: tuple[str, ...],
+              views: bool = False, only: np.ndarray | None = None) -> dict[str, np.ndarray]:
+    """The info arrays of ``keys`` from an outcome's ``table`` and ``flags``, each of its
+    INFO_KEYS type: new arrays, or with ``views`` the float and boolean rows themselves (for
+    tables never written again); with ``only`` (column indices), new arrays of those columns'
+    values and 0 (False) in the others, as Gymnasium's vector infos leave unmasked entries."""
+    info = {}
+    for key in keys:
+        kind = INFO_KEYS[key][0]
+        row = (flags if kind is bool else table)[INFO_ROW[key]]
+        if only is not None:
+            info[key] = np.zeros(row.shape, dtype=kind)
+            info[key][only] = row[only]
+        else:
+            info[key] = row if views and kind is not int else row.astype(kind)
+    return info
+

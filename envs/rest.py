@@ -1,0 +1,193 @@
+"""The scene's rates (ψ = qφ, :func:`psi_rate`, :func:`wrap_rate`) and the rest positions a
+task may target: the holdable range around the bottom (:func:`hold_ranges`, one compiled
+call for a batch of scenes) and the unstable rest positions
+(:func:`unstable_rest_positions`); :func:`per_scene` evaluates a function of a scalar scene
+once per distinct scene of a batch.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+
+import numba
+import numpy as np
+from numba.extending import register_jitable
+from roller_gym.physics import Scene, equations, equilibria
+from roller_gym.physics.integrators import SCENE_FIELDS, scene_arrays
+
+__all__ = ["hold_range", "hold_ranges", "per_scene", "psi_rate", "unstable_rest_positions",
+           "wrap_rate"]
+
+
+def psi_rate(scene: Scene) -> float | np.ndarray:
+    """dψ/dφ = rκ/(1 − rκ) [-]: ψ = psi_rate · φ (0 on the floor, where ψ stays 0); a float
+    for a scalar scene, an array for a batch."""
+    kappa = np.asarray(scene.kappa, dtype=float)
+    rate = scene.r * kappa / (1.0 - scene.r * kappa)
+    return float(rate) if np.ndim(rate) == 0 else rate
+
+
+def wrap_rate(scene: Scene) -> float | np.ndarray:
+    """The rate q by which errors are wrapped (see the module docs): :func:`psi_rate`, except
+    on the floor, where ψ stays 0 and φ itself is wrapped (q = 1)."""
+    rate = psi_rate(scene)
+    if np.ndim(rate) == 0:
+        return rate if rate != 0.0 else 1.0
+    return np.where(rate == 0.0, 1.0, rate)
+
+
+def per_scene(function, scene: Scene) -> np.ndarray:
+    """``function(scalar scene)`` for each roller of a batch scene, computed once per
+    distinct scene (float results, as an array of the batch's size; of 1 for a scalar
+    scene)."""
+    if scene.batch_size is None:
+        return np.array([function(scene)], dtype=float)
+    n = scene.batch_size
+    rows = np.stack([np.broadcast_to(np.asarray(getattr(scene, f.name), float), (n,))
+                     for f in dataclasses.fields(Scene)], axis=1)
+    unique, inverse = np.unique(rows, axis=0, return_inverse=True)
+    names = [f.name for f in dataclasses.fields(Scene)]
+    values = np.array([function(Scene(**dict(zip(names, row, strict=True))))
+                       for row in unique], dtype=float)
+    return values[np.asarray(inverse).reshape(-1)]
+
+
+def _cached_per_scene(function):
+    """Memoize ``function(scene, *args)`` on the scene's values (resets call it per episode)."""
+
+    @functools.lru_cache(maxsize=1024)
+    def cached(values: tuple[tuple[str, float], ...], *args):
+        return function(Scene(**dict(values)), *args)
+
+    @functools.wraps(function)
+    def wrapper(scene: Scene, *args):
+        return cached(tuple(scene.as_dict().items()), *args)
+
+    return wrapper
+
+
+def hold_ranges(scene: Scene, max_torque: float, torque_share: float = 0.8,
+                friction_share: float = 0.9, points: int = 2001) -> tuple[np.ndarray, np.ndarray]:
+    """The intervals [low, high] of rest positions φ [rad] around 0 that can be held at rest,
+    one per roller of the batch ``scene`` (arrays of the batch's size; of 1 for a scalar
+    scene), in one compiled call whatever the batch's size.
+
+    Contiguous around φ = 0, within ψ = ±π (|φ| <= π/|q|, q from :func:`wrap_rate`), where
+    the holding torque is at most ``torque_share``·max_torque [N·m] and the contact holds
+    with margin: N > 0 and |F| <= ``friction_share``·μN (at rest N = m g cos ψ,
+    F = m g sin ψ). Each side is a grid of ``points`` values of φ from 0 to ±π/|q| (those of
+    ``np.linspace``, bit for bit), walked outward from φ = 0: the bound is the last grid
+    point before the first one that fails (φ = 0 if that one fails, ±π/|q| if none does), so
+    the cost is proportional to the range's width, not to ``points``.
+    """
+    if points < 1:
+        raise ValueError(f"points={points!r} must be >= 1")
+    if not all(isinstance(getattr(scene, f.name), float | np.ndarray)
+               for f in dataclasses.fields(Scene)):  # e.g. an int or float32 number
+        scene = Scene(**{f.name: np.asarray(getattr(scene, f.name), float)[()]
+                         for f in dataclasses.fields(Scene)})  # float64, as hold_range's floats
+    rows = dict(zip(SCENE_FIELDS, scene_arrays(scene), strict=True))  # each of n rollers
+    numbers = [rows[name] for name in ("m", "r", "kappa", "e", "k", "g", "damping", "mu")]
+    half = np.empty_like(numbers[0])
+    half[...] = np.reshape(math.pi / np.abs(wrap_rate(scene)), -1)  # q < 0 on a drum
+    low, high = np.empty_like(half), np.empty_like(half)
+    _hold_bounds(*numbers, half, float(torque_share * max_torque), float(friction_share),
+                 int(points), low, high)
+    return low, high
+
+
+@_cached_per_scene
+def hold_range(scene: Scene, max_torque: float, torque_share: float = 0.8,
+               friction_share: float = 0.9, points: int = 2001) -> tuple[float, float]:
+    """The interval (low, high) of rest positions φ [rad] around 0 that can be held at rest
+    in the scalar ``scene``: :func:`hold_ranges` of it (the same compiled walk), memoized."""
+    low, high = hold_ranges(scene, max_torque, torque_share, friction_share, points)
+    return float(low[0]), float(high[0])
+
+
+@register_jitable(inline="always")
+def _holds(phi, m, r, kappa, e, k, g, c, mu, torque_limit, friction_share):
+    """Whether the roller can be held at rest at φ [rad] (:func:`hold_ranges`' condition): its
+    holding torque τ = dV/dφ [N·m] within ``torque_limit``, and under τ at rest N > 0 and
+    |F| <= ``friction_share``·μN."""
+    tau = equations.dpotential(phi, m, r, kappa, e, g)
+    phi_ddot = equations.accel(phi, 0.0, tau, m, r, kappa, e, k, g, c)
+    normal, friction = equations.contact_forces(phi, 0.0, phi_ddot, m, r, kappa, e, g)
+    return ((abs(tau) <= torque_limit) & (normal > 0)
+            & (abs(friction) <= friction_share * mu * normal))
+
+
+@register_jitable(inline="always")
+def _linspace_at(i, div, step, stop):
+    """Point i of ``np.linspace(0.0, stop, div + 1)``, bit for bit, as NumPy computes it:
+    i·step + 0.0 with step = (stop − 0.0)/div (where step underflows to 0,
+    (i/div)·(stop − 0.0) + 0.0), and ``stop`` itself at i = div > 0."""
+    delta = stop - 0.0
+    if div == 0:
+        return 0.0 * delta + 0.0
+    if i == div:
+        return stop
+    if step == 0.0:
+        return i / div * delta + 0.0
+    return i * step + 0.0
+
+
+#: How many grid points :func:`_hold_bounds` checks at once (a loop in SIMD lanes): the walk
+#: overshoots the first failure by fewer than this many points.
+_HOLD_BLOCK = 16
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _hold_bounds(m, r, kappa, e, k, g, c, mu, half, torque_limit, friction_share, points,
+                 low, high):
+    """low[j], high[j] of :func:`hold_ranges` for roller j (scene numbers as rows, ``half``
+    π/|q| [rad]): each side's grid walked outward from φ = 0, a block of
+    :data:`_HOLD_BLOCK` points at a time, up to the first point that fails :func:`_holds`."""
+    div = points - 1
+    phi = np.empty(_HOLD_BLOCK)
+    ok = np.empty(_HOLD_BLOCK, dtype=np.bool_)
+    for j in range(m.size):
+        stop = half[j]
+        step = (stop - 0.0) / div if div > 0 else np.nan  # NumPy's (stop − start)/div
+        for side in range(2):
+            sign = 1.0 if side == 0 else -1.0
+            bound = sign * _linspace_at(0, div, step, stop)
+            start = 0
+            while start < points:
+                count = min(_HOLD_BLOCK, points - start)
+                for b in range(count):  # a loop without exits: SIMD lanes
+                    phi[b] = sign * _linspace_at(start + b, div, step, stop)
+                    ok[b] = _holds(phi[b], m[j], r[j], kappa[j], e[j], k[j], g[j], c[j], mu[j],
+                                   torque_limit, friction_share)
+                failed = False
+                for b in range(count):
+                    if not ok[b]:
+                        failed = True
+                        break
+                    bound = phi[b]
+                if failed:
+                    break
+                start += count
+            if side == 0:
+                high[j] = bound
+            else:
+                low[j] = bound
+
+
+@_cached_per_scene
+def unstable_rest_positions(scene: Scene) -> tuple[float, ...]:
+    """The unstable rest positions φ [rad] at zero torque nearest to φ = 0 on each side
+    (d²V/dφ² < 0: neutral ones, as everywhere for a uniform disc on the floor, do not count)."""
+    m, r, kappa, e, _, g, _ = scene.params
+    unstable = [p.phi for p in equilibria(scene, 0.0)
+                if not p.stable and equations.d2potential(p.phi, m, r, kappa, e, g) < 0]
+    out = []
+    positive = [p for p in unstable if p > 0]
+    negative = [p for p in unstable if p <= 0]
+    if positive:
+        out.append(min(positive))
+    if negative:
+        out.append(max(negative))
+    return tuple(out)
