@@ -4,6 +4,7 @@
   holding torque as feedforward (RollerStabilize, RollerHold).
 * :class:`EnergySwingUp`: pumps the energy up to that of the unstable rest position, then
   hands over to an LQR there (RollerBalance).
+* :class:`EnergyPump`: pumps the energy toward that of a target swing (RollerSwing).
 * :class:`ZeroTorque` and :class:`RandomPolicy`: the floor of the results table.
 
 Each acts from the observation only (the state is decoded by
@@ -23,8 +24,8 @@ from roller_gym.physics import Scene, energy, holding_torque, linearize
 from roller_gym.task import Task, wrap_rate
 from scipy.linalg import expm, solve_discrete_are
 
-__all__ = ["CONTROLLERS", "LQR", "Controller", "EnergySwingUp", "RandomPolicy", "ZeroTorque",
-           "controller_for"]
+__all__ = ["CONTROLLERS", "LQR", "Controller", "EnergyPump", "EnergySwingUp", "RandomPolicy",
+           "ZeroTorque", "controller_for"]
 
 
 class Controller:
@@ -262,11 +263,47 @@ class EnergySwingUp(Controller):
         return np.clip(tau / self.max_torque, -1.0, 1.0)[:, None]
 
 
+class EnergyPump(Controller):
+    """Energy shaping toward a target swing (RollerSwing): with E = ½ J_I φ'² + V(φ) and
+    dE/dt = τ φ', the torque τ = max_torque · clip(energy_gain · (E* − E), ±1) · sgn(φ')
+    (sgn 0 = +1, so that it starts from rest) only ever moves E toward E* = V(φ*), the
+    energy of a swing that turns back at the observed amplitude φ*. Designed on the nominal
+    scene, from the observation alone.
+
+    Args:
+        task: the task (its observation carries the target).
+        scene: the scalar scene.
+        max_torque: the torque [N·m] of an action of ±1.
+        energy_gain: the pump's gain [1/J].
+    """
+
+    def __init__(self, task: Task, scene: Scene, max_torque: float,
+                 energy_gain: float = 20.0) -> None:
+        self.task, self.scene, self.max_torque = task, scene, float(max_torque)
+        self.energy_gain = float(energy_gain)
+
+    @classmethod
+    def from_env(cls, env: gym.Env | Any, **kwargs: float) -> EnergyPump:
+        """The pump for a RollerSwing environment (wrappers allowed)."""
+        scene, max_torque, _ = _task_settings(env)
+        return cls(env.unwrapped.task, scene, max_torque, **kwargs)
+
+    def act(self, observation: np.ndarray) -> np.ndarray:
+        s = decode_observation(observation, self.scene, self.task)
+        if s.target_phi is None:
+            raise ValueError("EnergyPump needs observations that carry the target")
+        target_energy = energy(self.scene, s.target_phi, 0.0)
+        push = np.clip(self.energy_gain * (target_energy - energy(self.scene, s.phi, s.phi_dot)),
+                       -1.0, 1.0)
+        return (push * np.where(s.phi_dot >= 0.0, 1.0, -1.0))[:, None]
+
+
 #: The classical controllers by the name a task gives in ``Task.classical``, with the
 #: label the results tables use.
 CONTROLLERS: dict[str, tuple[type[Controller], str]] = {
     "lqr": (LQR, "LQR"),
     "swing_up": (EnergySwingUp, "energy swing-up + LQR"),
+    "energy_pump": (EnergyPump, "energy pump"),
 }
 
 

@@ -13,6 +13,7 @@ ID                                task                                        st
 ``roller_gym/RollerHold-v1``       hold it at rest at a target on the wall     200 (0.05 s)
 ``roller_gym/RollerBalance-v1``    swing the mass center up and balance it     400 (0.05 s)
 ``roller_gym/RollerTrack-v0``      follow a target moving along the wall       400 (0.05 s)
+``roller_gym/RollerSwing-v0``      keep it swinging at a given amplitude       400 (0.05 s)
 ================================  ==========================================  ==============
 
 A change to a task's dynamics, reward, observation or spaces registers it under the next
@@ -36,7 +37,7 @@ from roller_gym.registration import TaskEntry
 from roller_gym.task import NAMESPACE, TASKS
 
 #: The modules of the tasks, in the order they are listed; importing one registers its task.
-TASK_MODULES = ("stabilize", "hold", "balance", "track")
+TASK_MODULES = ("stabilize", "hold", "balance", "track", "swing")
 for _module in TASK_MODULES:
     importlib.import_module(f"roller_gym.{_module}")
 

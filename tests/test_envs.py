@@ -41,6 +41,9 @@ DOCUMENTED = {
                                     "band": 0.1, "margin": 3.0},
     "roller_gym/RollerTrack-v0": {"steps": 400, "max_torque": 1.0, "obs": 10, "scene": "paper",
                                   "band": 0.05, "margin": 1.0},
+    # an objective of its own: the relative energy error's band and margin
+    "roller_gym/RollerSwing-v0": {"steps": 400, "max_torque": 0.1, "obs": 9, "scene": "paper",
+                                  "energy_band": 0.1, "energy_margin": 0.4},
 }
 IDS = list(roller_gym.ENV_IDS)
 
@@ -100,10 +103,17 @@ def wrap(x: float) -> float:
 def documented_reward(env_id: str, scene: Scene, info: dict) -> float:
     """The reward of the task docstrings: (0.4 tolerance(ε, b, m) + 0.6 tolerance(ε, b, 3b))
     (0.5 + 0.5 near(φ' − φ*', 5)) (0.8 + 0.2 near((τ − τ*)/max_torque, 1)), ε one turn of ψ
-    either way (in rad of φ; Balance: to the nearer of ±φ_b), τ* = m g (r sin ψ* + e sin φ*)."""
+    either way (in rad of φ; Balance: to the nearer of ±φ_b), τ* = m g (r sin ψ* + e sin φ*).
+    Swing's own: near(E/E* − 1, margin) (0.8 + 0.2 near(τ/max_torque, 1)), E* = V(φ*) of
+    PHYSICS.md, m g ((R − r)(1 − cos ψ*) + e (1 − cos φ*))."""
     doc = DOCUMENTED[env_id]
     q = psi_rate(scene) or 1.0
     target = info["target_phi"]
+    if "energy_margin" in doc:
+        m, r, R, e, g = (float(getattr(scene, name)) for name in ("m", "r", "R", "e", "g"))
+        e_star = m * g * ((R - r) * (1 - math.cos(q * target)) + e * (1 - math.cos(target)))
+        return (near(info["energy"] / e_star - 1.0, doc["energy_margin"])
+                * (0.8 + 0.2 * near(info["torque"] / doc["max_torque"], 1.0)))
 
     def error(t):
         return wrap(q * (info["phi"] - t)) / q

@@ -1,0 +1,131 @@
+"""roller_gym/RollerSwing-v0: keep the roller swinging at a given amplitude.
+
+A roller rolls without slipping inside a fixed cylinder (the preset ``"paper"``). It starts
+at rest near the bottom. Each episode draws an amplitude ψ* on the wall; the agent must
+pump the roller up until it swings between ±ψ*, and keep it swinging there: neither at rest
+nor spinning over the top. What counts is the roller's energy E against E* = V(φ*), the
+energy of a swing that turns back at φ* (the potential energy there; V = 0 at the bottom):
+a swing of that amplitude has that energy at every point of it.
+
+## Action space
+
+``Box(-1, 1, (1,), float32)``: the torque τ = action · ``max_torque`` [N·m] (default
+0.1 N·m: a few pumps reach the target swing), positive in the sense of φ. Out-of-range actions are clipped; NaN or inf raise
+``ValueError``.
+
+## Observation space
+
+``Box(-1, 1, (9,), float32)``:
+
+=====  ======================  ==================================================
+index  field                   meaning
+=====  ======================  ==================================================
+0      ``cos_psi``             cos ψ: where the roller is on the surface (ψ = 0 at the bottom)
+1      ``sin_psi``             sin ψ
+2      ``cos_phi``             cos φ: how the roller is turned
+3      ``sin_phi``             sin φ
+4      ``speed``               tanh(φ' / 10 rad/s): the angular speed
+5      ``cos_psi_target``      cos ψ*: the amplitude on the wall
+6      ``sin_psi_target``      sin ψ*
+7      ``cos_phi_target``      cos φ*: the roller's rotation at the amplitude
+8      ``sin_phi_target``      sin φ*
+=====  ======================  ==================================================
+
+## Reward
+
+In [0, 1] per step, with ε_E = E/E* − 1 the relative energy error (−1 at rest at the
+bottom, 0 on the target swing):
+``near(ε_E, 0.4) · (0.8 + 0.2 near(τ/max_torque, 1))``,
+``near(x, m) = exp(ln(0.1) (x/m)²)``. The reward falls strictly as |ε_E| grows: at the
+success band's edge (|ε_E| = 0.1) it is 0.87 of the reward on the target, at twice the
+band 0.56; resting at the bottom earns nothing. Coasting on the target swing (τ = 0) pays
+most: no torque is needed to keep a swing of the target's energy.
+
+## Starting state
+
+At rest, ψ uniform in ±5° (redrawn until the roller rolls there under every torque of the
+limit); the amplitude φ* uniform in [45 %, 85 %] of the range where friction can hold the
+roller at rest (|F| <= 0.9 μN, :func:`roller_gym.task.hold_ranges` without a torque limit),
+on either side.
+
+## Episode end
+
+* Terminated: the roller slips (|F| > μN) or leaves the wall (N <= 0) during a step, or a
+  step could not stay finite (``info["nonfinite"]``).
+* Truncated: 400 steps (20 s at the default dt = 0.05 s).
+* ``info["is_success"]``: |ε_E| <= 0.1, the roller swings with the energy of the target
+  amplitude within 10 %.
+
+## Arguments
+
+``gymnasium.make("roller_gym/RollerSwing-v0", scene=..., dt=..., max_torque=...,
+tolerance=..., integrator=..., substeps=..., randomize=..., render_mode=...)``: see
+:class:`roller_gym.roller_env.RollerEnv`.
+
+## Version History
+
+* v0: the first version.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from roller_gym import rewards
+from roller_gym.physics import Scene
+from roller_gym.task import Task, hold_ranges, objective, register, wrap_rate
+
+__all__ = ["SwingTask"]
+
+
+@register
+class SwingTask(Task):
+    name = "RollerSwing"
+    version = 0
+    observation = ("cos_psi", "sin_psi", "cos_phi", "sin_phi", "speed", "cos_psi_target",
+                   "sin_psi_target", "cos_phi_target", "sin_phi_target")
+    classical = "energy_pump"
+    symmetric_target = True  # ±φ*: the swing turns back at both
+    max_episode_steps = 400
+    default_max_torque = 0.1
+    reward_threshold = 270.0  # the energy pump's mean return on seeds 0–99, less 5 %
+    #: Success: |E/E* − 1| <= energy_band; the reward's width is energy_margin.
+    energy_band = 0.1
+    energy_margin = 0.4
+    control_weight = 0.2
+    #: The amplitude's range, as shares of the range friction holds on its side.
+    amplitude_shares = (0.45, 0.85)
+    start_rule = "at rest, ψ within ±5°"
+    parameters = ("energy_band", "energy_margin", "control_weight", "max_torque",
+                  "symmetric_target", "observes_target")
+
+    @staticmethod
+    @objective
+    def reward(s, k):
+        """near(E/E* − 1, energy_margin), less up to control_weight for torque."""
+        error = s.energy / s.target_energy - 1.0
+        return (rewards.near(error, k.energy_margin)
+                * rewards.blend(rewards.near(s.torque / k.max_torque, 1.0), k.control_weight))
+
+    @staticmethod
+    @objective
+    def success(s, k):
+        """The energy within energy_band of the target swing's, relative to it."""
+        return np.abs(s.energy / s.target_energy - 1.0) <= k.energy_band
+
+    def sample_targets(self, u: np.ndarray, scene: Scene) -> np.ndarray:
+        low, high = hold_ranges(scene, math.inf)
+        lo, hi = self.amplitude_shares
+        share = lo + (hi - lo) * np.abs(2.0 * u - 1.0)  # the side from u's half
+        return np.where(u < 0.5, share * low, share * high)
+
+    def default_target(self, scene: Scene) -> float:
+        return float(hold_ranges(scene, math.inf)[1][0]) * sum(self.amplitude_shares) / 2
+
+    def start_candidates(
+        self, u_phi: np.ndarray, u_dot: np.ndarray, scene: Scene
+    ) -> tuple[np.ndarray, np.ndarray]:
+        q = np.abs(wrap_rate(scene))
+        limit = (math.radians(5.0) / np.asarray(q, float)).reshape(-1, 1)
+        return limit * (2.0 * u_phi - 1.0), 0.0 * u_dot
