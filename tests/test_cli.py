@@ -423,3 +423,50 @@ def test_results_help_works_without_rliable_and_running_says_what_to_install(tmp
         assert result.returncode == code, result.stderr
         assert text in getattr(result, stream)
         assert "Traceback" not in result.stderr
+
+
+def _stages(stderr: str, command: str) -> list[str]:
+    prefix = f"roller-gym {command}: "
+    return [line.removeprefix(prefix) for line in stderr.splitlines() if line.startswith(prefix)]
+
+
+def test_evaluate_prints_a_line_per_stage_on_stderr(tmp_path):
+    pytest.importorskip("matplotlib")
+    result = roller_gym("evaluate", "--baselines", "zero", "random", "--episodes", "1",
+                        "--out", str(tmp_path / "out"), cwd=tmp_path)
+    stages = _stages(result.stderr, "evaluate")
+    env_id = "roller_gym/RollerStabilize-v1"
+    assert stages[0].startswith(f"{env_id}: making the environment")
+    assert stages[1:] == [f"{env_id}: zero torque on 1 episodes", f"{env_id}: random on 1 episodes",
+                          f"{env_id}: writing the table and plots into {tmp_path / 'out'}/"]
+    assert "roller-gym evaluate:" not in result.stdout
+
+
+def test_results_says_it_found_no_runs_before_evaluating_anything(tmp_path):
+    pytest.importorskip("rliable")
+    result = roller_gym("results", "--runs", str(tmp_path), "--results",
+                        str(tmp_path / "r" / "results.json"), "--report",
+                        str(tmp_path / "RESULTS.md"), check=False)
+    assert result.returncode == 1 and "Traceback" not in result.stderr
+    assert _stages(result.stderr, "results") == [f"finding the runs under {tmp_path}"]
+    assert f"--runs {str(tmp_path)!r}: no trained runs found" in result.stderr
+    assert not (tmp_path / "r" / "results.json").exists()
+
+
+def test_results_render_prints_its_stage(tmp_path):
+    pytest.importorskip("rliable")
+    source = Path(__file__).resolve().parents[1] / "docs" / "results" / "results.json"
+    results = json.loads(source.read_text())  # one task and SAC: rliable's bootstraps take time
+    task = next(iter(results["tasks"]))
+    results["tasks"] = {task: results["tasks"][task]}
+    results["evaluations"] = [e for e in results["evaluations"]
+                              if e["env"] == task and e["name"] in ("sac", "classical", "zero",
+                                                                    "random")]
+    (tmp_path / "r").mkdir()
+    (tmp_path / "r" / "results.json").write_text(json.dumps(results))
+    report = tmp_path / "RESULTS.md"
+    result = roller_gym("results", "--render", "--results", str(tmp_path / "r" / "results.json"),
+                        "--report", str(report), "--algos", "sac")
+    assert _stages(result.stderr, "results") == [
+        f"rendering {report} and its plots (rliable's bootstrap intervals)"]
+    assert report.read_text().startswith("# Results")
