@@ -8,8 +8,9 @@ long description away from the repository, where README.md's relative links
   the repository's files are browsable, e.g. ``https://github.com/ORG/roller-gym/blob/v0.1.0/``;
   ``image-base-url`` for images, e.g. ``.../raw/v0.1.0/``, defaults to it), into an
   absolute link to that file;
-* otherwise into plain text naming the file, and a closing note says that the source
-  distribution contains those files (MANIFEST.in ships ``docs/``).
+* otherwise into plain text naming the file, and a closing note says where those files are:
+  the repository and the source distribution (MANIFEST.in ships ``docs/``), and how to make
+  one while roller-gym is not on PyPI.
 
 Links with a scheme (``https:``), anchors (``#...``) and code are left as they are.
 """
@@ -36,8 +37,10 @@ _TOKEN = re.compile(
 _SCHEME = re.compile(r"^[a-zA-Z][a-zA-Z0-9+.-]*:|^#|^//")
 #: Appended when links became file names: where those files are.
 NOTE = (
-    "*The files named above ({files}) are part of roller-gym's source distribution: "
-    "`pip download --no-deps --no-binary :all: roller-gym`.*"
+    "*The files named above ({files}) are in roller-gym's repository and in its source "
+    "distribution, which `python -m build --sdist` makes in a clone (`pip install build` "
+    "first). Once roller-gym is published on PyPI, `pip download --no-deps --no-binary :all: "
+    "roller-gym` will fetch it.*"
 )
 
 

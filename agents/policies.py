@@ -35,6 +35,7 @@ import gymnasium as gym
 import numpy as np
 from roller_gym.agents.classical import Controller, RandomPolicy, ZeroTorque, controller_for
 from roller_gym.agents.hyperparams import CLASSICAL
+from roller_gym.extras import install_line, missing
 
 __all__ = [
     "BASELINES",
@@ -57,7 +58,7 @@ Policy = Any  # anything with predict(observation, deterministic=True) -> (actio
 
 
 #: How to get the packages that train and read training runs.
-ZOO_HINT = 'pip install "roller-gym[zoo]"'
+ZOO_HINT = install_line("zoo") + " (in a clone of the repository)"
 
 # Reading a run needs PyYAML and stable-baselines3, not rl-zoo3 itself: importing rl_zoo3
 # replaces Gymnasium's TimeLimit wrapper for the whole process (rl_zoo3.gym_patches), which a
@@ -90,7 +91,7 @@ def _read_yaml(path: Path) -> Any:
     try:
         import yaml
     except ImportError:
-        raise ImportError(f"reading training runs needs PyYAML: {ZOO_HINT}") from None
+        raise missing("yaml", "zoo", "reading training runs") from None
     with path.open() as f:
         return yaml.load(f, Loader=yaml.UnsafeLoader)
 

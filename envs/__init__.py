@@ -29,6 +29,7 @@ task runs in the same two environments, :class:`roller_gym.roller_env.RollerEnv`
 """
 
 import importlib
+import importlib.metadata
 
 from gymnasium.envs.registration import register, registry
 from roller_gym import kernel_cache  # noqa: F401  (first: before any kernel is defined)
@@ -41,8 +42,13 @@ TASK_MODULES = ("stabilize", "hold", "balance", "track", "swing")
 for _module in TASK_MODULES:
     importlib.import_module(f"roller_gym.{_module}")
 
-__all__ = ["ENV_IDS", "NAMESPACE", "PRESETS", "TASKS", "TASK_MODULES", "Scene", "file_name",
-           "preset"]
+try:  # one source: pyproject.toml's version, as pip installed it
+    __version__ = importlib.metadata.version("roller-gym")
+except importlib.metadata.PackageNotFoundError:  # imported from a source tree, not installed
+    __version__ = "0+unknown"
+
+__all__ = ["ENV_IDS", "NAMESPACE", "PRESETS", "TASKS", "TASK_MODULES", "Scene", "__version__",
+           "file_name", "preset"]
 
 #: The registered task IDs, one per task of the registry.
 ENV_IDS = tuple(cls.env_id() for cls in TASKS.values())

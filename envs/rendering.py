@@ -34,9 +34,9 @@ class Renderer:
             import pygame
             from pygame import gfxdraw
         except ImportError as exc:  # pragma: no cover - depends on the install
-            raise ImportError(
-                "rendering needs pygame: pip install 'roller-gym[render]'"
-            ) from exc
+            from roller_gym.extras import missing
+
+            raise missing("pygame", "render", "rendering") from exc
         self.pg, self.gfx = pygame, gfxdraw
         self.mode, self.fps = mode, fps
         if mode == "human":

@@ -32,7 +32,7 @@ from gymnasium import spaces
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
-from roller_gym import episode, validation
+from roller_gym import clients, episode, validation
 from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig, resolve_scene
 from roller_gym.physics import Scene
 from roller_gym.physics.integrators import DEFAULT_METHOD, METHODS, BatchStepper
@@ -342,6 +342,7 @@ class RollerVectorEnv(VectorEnv):
         Only the reset sub-environments take their seeds. ``options`` as in
         :meth:`roller_gym.roller_env.RollerEnv.reset`, for every reset sub-environment.
         """
+        clients.check_caller(self, self.autoreset_mode)  # a client that miscounts this mode
         n = self.num_envs
         options = episode.reset_options(options)
         mask = episode.reset_mask(options.pop("reset_mask", None), n)

@@ -6,11 +6,32 @@ import argparse
 import ast
 import inspect
 import os
+import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-__all__ = ["at_least", "checked_env_kwargs", "key_values", "output_folder"]
+__all__ = ["at_least", "checked_env_kwargs", "key_values", "output_folder", "program_parser",
+           "stage"]
+
+
+def program_parser(command: str, doc: str, **kwargs: Any) -> argparse.ArgumentParser:
+    """The parser of ``roller-gym COMMAND``: its description the first paragraph of ``doc``
+    (the program's docstring), its epilog the rest, then the extra the command needs and how
+    to install it (so that ``--help``, which works without the extra, says so)."""
+    from roller_gym.scripts.cli import extra_note
+
+    description, _, rest = doc.strip().partition("\n\n")
+    epilog = "\n\n".join(part for part in (rest.rstrip(), extra_note(command)) if part)
+    return argparse.ArgumentParser(description=description, epilog=epilog,
+                                   **{"formatter_class": argparse.RawDescriptionHelpFormatter,
+                                      **kwargs})
+
+
+def stage(command: str, message: str) -> None:
+    """One line of progress on stderr (``roller-gym evaluate: ...``), printed at once, for the
+    stages of a program that runs longer than a few seconds."""
+    print(f"roller-gym {command}: {message}", file=sys.stderr, flush=True)
 
 
 def key_values(items: list[str], option: str, separator: str = "=",

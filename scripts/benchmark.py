@@ -14,12 +14,12 @@ from pathlib import Path
 
 from roller_gym.bench import report
 from roller_gym.bench.verdicts import VERDICTS
+from roller_gym.scripts.arguments import program_parser
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(description="Speed against error: every integrator against "
-                                "a DOP853 reference, MuJoCo and Gymnasium's environments, "
-                                "measured in one run.")
+    p = program_parser("benchmark", "Speed against error: every integrator against a DOP853 "
+                       "reference, MuJoCo and Gymnasium's environments, measured in one run.")
     p.add_argument("--quick", action="store_true", help="a smoke run of every part, in minutes")
     p.add_argument("--render", action="store_true",
                    help="measure nothing: render the page and plots from the results file")

@@ -6,12 +6,15 @@
     roller-gym benchmark [options]    speed against accuracy, peers in the same run (--render:
                                       the page again from its results file)
     roller-gym train-rllib [options]  PPO or SAC on Ray RLlib
-    roller-gym COMMAND --help         the options of a command
+    roller-gym COMMAND --help         the options of a command, and the extra it needs
+    roller-gym --version              the installed version
 
 Each subcommand runs ``roller_gym.scripts.<program>.main`` with the remaining arguments, so
 ``roller-gym train --algo td3`` and ``python -m roller_gym.scripts.train --algo td3`` are
-the same. A program is imported only when its command runs: a command whose extra is not
-installed says which one to install.
+the same. A program is imported only when its command runs, and imports the packages of its
+extra only after parsing its arguments: every ``--help`` works with the base install and
+names the extra (:func:`extra_note`), and a command whose extra is not installed says in one
+line which one to install.
 """
 
 from __future__ import annotations
@@ -21,6 +24,8 @@ import importlib
 import sys
 from collections.abc import Sequence
 from typing import NamedTuple
+
+from roller_gym import extras
 
 
 class Command(NamedTuple):
@@ -48,16 +53,33 @@ COMMANDS: dict[str, Command] = {
 }
 
 
+def extra_note(name: str) -> str:
+    """The lines a command's ``--help`` ends with: the extra it needs, how to install it and
+    what it adds."""
+    extra = COMMANDS[name].extra
+    packages = extras.packages(extra)
+    adds = f"\n  (it adds {', '.join(packages)})" if packages else ""
+    return (f"roller-gym {name} needs the extra [{extra}]; in a clone of the repository: "
+            f"{extras.install_line(extra)}{adds}")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The top-level parser: the command's name only (its options are the program's)."""
-    width = max(map(len, COMMANDS))
-    listing = "\n".join(f"  {name:{width}s}  {c.summary}" for name, c in COMMANDS.items())
+    from roller_gym import __version__
+
+    width, extra_width = max(map(len, COMMANDS)), max(len(c.extra) for c in COMMANDS.values())
+    listing = "\n".join(f"  {name:{width}s}  {f'[{c.extra}]':{extra_width + 2}s}  {c.summary}"
+                        for name, c in COMMANDS.items())
     p = argparse.ArgumentParser(
         prog="roller-gym",
         description="roller-gym's programs: training, evaluation, replay, benchmark.",
-        epilog=f"commands:\n{listing}\n\n`roller-gym COMMAND --help` lists a command's options.",
+        epilog=f"commands (and the extra each needs):\n{listing}\n\n"
+               "`roller-gym COMMAND --help` lists a command's options "
+               f"(it works without the command's extra); in a clone of the repository, "
+               f"{extras.install_line('EXTRA')} installs an extra.",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
+    p.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     p.add_argument("command", choices=list(COMMANDS), metavar="COMMAND",
                    help=f"one of: {', '.join(COMMANDS)}")
     return p
@@ -80,9 +102,9 @@ def main(argv: Sequence[str] | None = None) -> None:
     except ImportError as exc:  # a package of an extra that is not installed
         if exc.name is None or exc.name.split(".")[0] == "roller_gym":
             raise
-        extras = f"roller-gym[{command.extra}]"
         raise SystemExit(f"roller-gym {name} needs {exc.name!r}, which is not installed: "
-                         f'pip install "{extras}"') from None
+                         f"{extras.install_line(command.extra)} (in a clone of the "
+                         "repository)") from None
     finally:
         sys.argv[0] = saved
 

@@ -37,8 +37,6 @@ from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
-import matplotlib
-import matplotlib.pyplot as plt
 import numpy as np
 import roller_gym  # registers the tasks
 from roller_gym import file_name
@@ -53,7 +51,7 @@ from roller_gym.agents.policies import (
     read_config,
     rollout,
 )
-from roller_gym.scripts.arguments import at_least, output_folder
+from roller_gym.scripts.arguments import at_least, output_folder, program_parser, stage
 from roller_gym.task import get_task
 
 #: How the baselines are named in the tables.
@@ -65,8 +63,7 @@ SUCCESS_TARGET = 0.9
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], epilog=__doc__[
-        __doc__.index("\n\n") + 2:], formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = program_parser("evaluate", __doc__)
     p.add_argument("--env", nargs="+", default=["roller_gym/RollerStabilize-v1"],
                    choices=roller_gym.ENV_IDS,
                    help="the task(s) (default roller_gym/RollerStabilize-v1)")
@@ -158,6 +155,8 @@ def target_check(env_id: str, rows: list[dict[str, Any]]) -> tuple[str, bool | N
 
 
 def plot_learning_curves(env_id: str, rows: list[dict[str, Any]], path: Path) -> None:
+    import matplotlib.pyplot as plt
+
     fig, ax = plt.subplots(figsize=(7, 4))
     for r in rows:
         if r.get("run_dir") and (Path(r["run_dir"]) / "evaluations.npz").is_file():
@@ -178,6 +177,8 @@ def plot_learning_curves(env_id: str, rows: list[dict[str, Any]], path: Path) ->
 
 
 def plot_trajectories(env_id: str, rows: list[dict[str, Any]], path: Path) -> None:
+    import matplotlib.pyplot as plt
+
     quantities = [("phi", "φ [rad] (dashed: target)"), ("phi_dot", "φ' [rad/s]"),
                   ("torque", "τ [N·m]")]
     targets = [1.0, -1.0] if get_task(env_id).symmetric_target else [1.0]  # ±φ* both count
@@ -213,6 +214,8 @@ def main(argv: list[str] | None = None) -> None:
                      "file (or leave --notes out for a report without notes)")
     if args.notes is not None and args.report is None:
         parser.error(f"--notes {args.notes!r} needs --report: the notes are appended to it")
+    import matplotlib  # the plots extra: missing, say so before evaluating
+
     matplotlib.use("Agg")  # files only, no window
     out = output_folder(args.out, "--out")
     if args.report is not None:
@@ -236,7 +239,11 @@ def main(argv: list[str] | None = None) -> None:
         env_kwargs = configs[0]["env_kwargs"] if configs else {}
         if any(c["env_kwargs"] != env_kwargs for c in configs):
             raise SystemExit(f"the runs of {env_id} differ in env_kwargs; evaluate them apart")
+        stage("evaluate", f"{env_id}: making the environment (the first use after installing "
+                          "compiles the physics: a minute or two)")
         env = evaluation_env(env_id, env_kwargs)
+        if run_dirs:
+            stage("evaluate", f"{env_id}: loading {len(run_dirs)} trained model(s)")
         policies: list[tuple[dict[str, Any], Any]] = []
         for d, c in zip(run_dirs, configs, strict=True):
             meta = {"name": c["algo"], "label": c["algo"].upper(), "run_dir": str(d),
@@ -257,6 +264,7 @@ def main(argv: list[str] | None = None) -> None:
         # -- the same seeded episodes for every policy ----------------------------------
         rows = []
         for meta, policy in policies:
+            stage("evaluate", f"{env_id}: {meta['label']} on {args.episodes} episodes")
             start = time.perf_counter()
             row = {**meta, **evaluate(env, policy, args.episodes)}
             rows.append(row)
@@ -266,6 +274,7 @@ def main(argv: list[str] | None = None) -> None:
         env.close()
 
         # -- table, numbers and plots ---------------------------------------------------
+        stage("evaluate", f"{env_id}: writing the table and plots into {out}/")
         table = markdown_table(rows)
         check, _ = target_check(env_id, rows)
         print(f"\n{table}\n\n{check}\n")

@@ -16,7 +16,6 @@ import argparse
 from pathlib import Path
 
 import gymnasium as gym
-import imageio.v2 as imageio
 import roller_gym  # registers the tasks
 from roller_gym import file_name
 from roller_gym.agents.policies import (
@@ -27,7 +26,7 @@ from roller_gym.agents.policies import (
     read_config,
     rollout,
 )
-from roller_gym.scripts.arguments import at_least, output_folder
+from roller_gym.scripts.arguments import at_least, output_folder, program_parser
 
 #: The files replay writes.
 VIDEO_SUFFIXES = (".gif", ".mp4")
@@ -42,8 +41,7 @@ def video_file(text: str) -> Path:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], epilog=__doc__[
-        __doc__.index("\n\n") + 2:], formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = program_parser("replay", __doc__)
     p.add_argument("policy", help="an experiment folder of roller-gym train, or one of: "
                                   f"{', '.join(BASELINES)}")
     p.add_argument("--env", default=None, choices=roller_gym.ENV_IDS,
@@ -61,6 +59,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> None:
     args = build_parser().parse_args(argv)
+    import imageio.v2 as imageio  # the render extra: missing, say so before the episode
+    import pygame  # noqa: F401
+
     if args.policy in BASELINES:
         if args.env is None:
             raise SystemExit(f"--env is needed to replay the baseline {args.policy!r}")

@@ -36,13 +36,12 @@ from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
-import matplotlib
 import numpy as np
 import roller_gym
 from roller_gym.agents.hyperparams import ALGOS
 from roller_gym.agents.policies import BASELINES, baseline, evaluation_env, load_policy, read_config
 from roller_gym.bench.throughput import package_versions
-from roller_gym.scripts.arguments import at_least, output_folder
+from roller_gym.scripts.arguments import at_least, output_folder, program_parser, stage
 from roller_gym.scripts.evaluate import (  # its targets, read here from the intervals
     BASELINE_LABELS,
     RETURN_TOLERANCE,
@@ -54,8 +53,7 @@ from roller_gym.task import get_task
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], epilog=__doc__[
-        __doc__.index("\n\n") + 2:], formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = program_parser("results", __doc__)
     p.add_argument("--runs", default="runs/results", metavar="LOG_FOLDER",
                    help="where the training runs are (searched at any depth for rl-zoo3 "
                         "experiments <algo>/<env name>_<N>; default runs/results)")
@@ -133,15 +131,22 @@ def _evaluate_job(job: tuple[str, str, str | None, int]) -> dict[str, Any]:
 
 def measure(args: argparse.Namespace) -> dict[str, Any]:
     """Evaluate every run and baseline; the contents of the results file."""
-    jobs = []
+    stage("results", f"finding the runs under {args.runs}")
+    baselines, runs = [], []
     for env_id in args.env:
-        jobs += [(env_id, name, None, args.episodes) for name in BASELINES]
+        baselines += [(env_id, name, None, args.episodes) for name in BASELINES]
         for algo in args.algos:
-            jobs += [(env_id, algo, str(d), args.episodes) for d in find_runs(args.runs, algo,
+            runs += [(env_id, algo, str(d), args.episodes) for d in find_runs(args.runs, algo,
                                                                               env_id)]
+    if not runs:
+        raise SystemExit(f"--runs {args.runs!r}: no trained runs found (train with "
+                         "roller-gym train --log-folder ...)")
+    stage("results", f"evaluating {len(runs)} runs and {len(baselines)} baselines on "
+                     f"{args.episodes} episodes each, {args.workers} processes at a time (a "
+                     "line per agent as it finishes)")
     start = time.perf_counter()
     with multiprocessing.get_context("spawn").Pool(args.workers) as pool:
-        evaluations = pool.map(_evaluate_job, jobs, chunksize=1)
+        evaluations = pool.map(_evaluate_job, baselines + runs, chunksize=1)
     versions = package_versions(("roller-gym", "gymnasium", "stable-baselines3", "rl_zoo3",
                                  "torch", "rliable", "numpy"))
     return {
@@ -405,7 +410,9 @@ def render(results: dict[str, Any], report: Path, folder: Path, algos: list[str]
 
 def main(argv: list[str] | None = None) -> None:
     args = build_parser().parse_args(argv)
-    from roller_gym.agents import stats  # noqa: F401 (rliable: missing, say so before evaluating)
+    import matplotlib  # the extra's packages: missing, say so before evaluating
+    from roller_gym.agents import stats  # noqa: F401 (rliable)
+
     matplotlib.use("Agg")
     path = Path(args.results)
     output_folder(path.parent, "--results")
@@ -417,12 +424,10 @@ def main(argv: list[str] | None = None) -> None:
         results = json.loads(path.read_text())
     else:
         results = measure(args)
-        if not any(e["name"] in args.algos for e in results["evaluations"]):
-            raise SystemExit(f"--runs {args.runs!r}: no trained runs found (train with "
-                             "roller-gym train --log-folder ...)")
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(json.dumps(results, indent=1) + "\n")
         print(f"wrote {path}")
+    stage("results", f"rendering {args.report} and its plots (rliable's bootstrap intervals)")
     render(results, Path(args.report), path.parent, args.algos)
     print(f"wrote {args.report} and the plots in {path.parent}/")
 

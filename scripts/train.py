@@ -4,10 +4,11 @@
     roller-gym train --algo ppo --env roller_gym/RollerHold-v1
     roller-gym train --algo td3 --env roller_gym/RollerBalance-v1 --steps 50000 --seed 1
     roller-gym train --env-kwargs max_torque=0.6 scene=solid_disc
-    roller-gym train --show-command             # the rl_zoo3 command it runs, and stop
+    roller-gym train --show-command             # the command it runs, and stop
     roller-gym train --algo td3 -- --save-replay-buffer   # after --: rl_zoo3.train's options
 
-A thin front over rl-baselines3-zoo (``python -m rl_zoo3.train``): it passes the
+A thin front over rl-baselines3-zoo (``python -m rl_zoo3.train``, run on the native batch by
+``python -m roller_gym.scripts.zoo_train``, which ``--show-command`` prints): it passes the
 hyperparameter file of the algorithm (``roller_gym/agents/hyperparams/<algo>.yml``, default
 steps included), ``--gym-packages roller_gym``, a fixed seed, periodic evaluations,
 checkpoints, one torch thread and the CPU. rl-zoo3 builds the environments, the callbacks,
@@ -32,15 +33,15 @@ from typing import Any
 import roller_gym  # registers the tasks
 from roller_gym.agents.hyperparams import ALGOS, config_file, hyperparams
 from roller_gym.agents.policies import ZOO_HINT, algorithm_class, find_run
-from roller_gym.scripts.arguments import at_least, checked_env_kwargs, key_values
+from roller_gym.scripts import zoo_train
+from roller_gym.scripts.arguments import at_least, checked_env_kwargs, key_values, program_parser
 
 #: Algorithms that learn from whole rollouts of n_envs x n_steps environment steps.
 ON_POLICY = ("ppo",)
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], epilog=__doc__[
-        __doc__.index("\n\n") + 2:], formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = program_parser("train", __doc__)
     p.add_argument("--algo", default="sac", choices=ALGOS, help="the algorithm (default sac)")
     p.add_argument("--env", default="roller_gym/RollerStabilize-v1", choices=roller_gym.ENV_IDS,
                    help="the task (default roller_gym/RollerStabilize-v1)")
@@ -71,7 +72,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "tables, default; 2: debug)")
     p.add_argument("--progress", action="store_true", help="show a progress bar")
     p.add_argument("--show-command", action="store_true",
-                   help="print the python -m rl_zoo3.train command this would run, and stop")
+                   help="print the command this would run, and stop: python -m "
+                        "roller_gym.scripts.zoo_train with rl_zoo3.train's options (python -m "
+                        "rl_zoo3.train with the same options steps single environments through "
+                        "DummyVecEnv instead of the native batch)")
     p.add_argument("zoo_args", nargs="*", metavar="-- OPTION",
                    help="after --: further options of python -m rl_zoo3.train, passed as they "
                         "are (python -m rl_zoo3.train --help lists them)")
@@ -151,26 +155,16 @@ def main(argv: list[str] | None = None) -> Path | None:
     """Train with rl-zoo3; return the experiment folder (None with ``--show-command``)."""
     args = build_parser().parse_args(argv)
     try:
-        from rl_zoo3.train import train
+        import rl_zoo3.train  # noqa: F401
     except ImportError:
         raise SystemExit(f"roller-gym train runs rl-zoo3, which is not installed: "
                          f"{ZOO_HINT}") from None
     with as_file(config_file(args.algo)) as conf:
         zoo_argv = zoo_arguments(args, str(conf))
         if args.show_command:
-            print(shlex.join([sys.executable, "-m", "rl_zoo3.train", *zoo_argv]))
+            print(shlex.join([sys.executable, "-m", zoo_train.MODULE, *zoo_argv]))
             return None
-        from rl_zoo3.exp_manager import ExperimentManager
-        from roller_gym.sb3 import from_env_fns
-
-        saved = sys.argv, ExperimentManager.default_vec_env_cls
-        sys.argv = ["rl_zoo3.train", *zoo_argv]  # rl-zoo3 parses sys.argv
-        # rl-zoo3's hook for a vector env of one's own: the environments are the native batch.
-        ExperimentManager.default_vec_env_cls = staticmethod(from_env_fns)
-        try:
-            train()
-        finally:
-            sys.argv, ExperimentManager.default_vec_env_cls = saved
+        zoo_train.train(zoo_argv)
     run_dir = find_run(args.log_folder, args.algo, args.env)
     print(f"\nrun saved in {run_dir}; evaluate it against the baselines with\n"
           f"  roller-gym evaluate --env {args.env} --models {run_dir}")

@@ -34,7 +34,8 @@ from typing import Any
 
 import gymnasium as gym
 from roller_gym import ENV_IDS
-from roller_gym.scripts.arguments import at_least, checked_env_kwargs
+from roller_gym.extras import install_line
+from roller_gym.scripts.arguments import at_least, checked_env_kwargs, program_parser
 
 VECTORIZE_MODES = {"sync": "sync", "async": "async", "native": "vector_entry_point"}
 
@@ -50,8 +51,7 @@ class _DefaultsHelp(argparse.ArgumentDefaultsHelpFormatter):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                formatter_class=_DefaultsHelp)
+    p = program_parser("train-rllib", __doc__.split("\n\n")[0], formatter_class=_DefaultsHelp)
     p.add_argument("--algo", choices=["PPO", "SAC"], default="PPO", help="RLlib's algorithm")
     p.add_argument("--env", choices=ENV_IDS, default="roller_gym/RollerStabilize-v1",
                    help="the task")
@@ -199,7 +199,7 @@ def main(argv: list[str] | None = None) -> None:
         import torch
     except ImportError as e:
         raise SystemExit(f"{e}: the rllib extra is not installed; it needs its own "
-                         'environment (see README): pip install "roller-gym[rllib]"') from None
+                         f"environment (see README): {install_line('rllib')}") from None
 
     torch.set_num_threads(args.torch_threads)  # the env runners get 1 each from Ray
     # Start (no --address) or join (--address) Ray. "local" forces a new local instance

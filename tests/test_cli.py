@@ -12,6 +12,8 @@ import sys
 from pathlib import Path
 
 import pytest
+from base_install import extra_only_modules, pyproject_extra, pyproject_version, run_cli
+from packaging.version import Version
 from roller_gym.scripts.cli import COMMANDS
 from zoo import NEEDS_RL_ZOO3
 
@@ -113,20 +115,70 @@ def test_evaluate_with_nothing_to_evaluate_says_so(tmp_path):
         main(["--runs", str(tmp_path), "--baselines", "--out", str(tmp_path / "out")])
 
 
-@pytest.mark.parametrize(("command", "missing", "extra"), [
-    ("train", "rl_zoo3", "roller-gym[zoo]"),
-    ("evaluate", "matplotlib", "roller-gym[zoo,plots]"),
-    ("benchmark", "mujoco", "roller-gym[bench,plots]"),  # imported once it measures
+def test_version_is_pyprojects_from_the_command_and_the_package():
+    import roller_gym as package
+
+    version = pyproject_version()
+    assert package.__version__ == version
+    assert roller_gym("--version").stdout.strip() == f"roller-gym {version}"
+
+
+def test_version_without_installed_metadata_is_a_valid_unknown_version():
+    code = ("import importlib.metadata as md\n"
+            "def missing(name):\n    raise md.PackageNotFoundError(name)\n"
+            "md.version = missing\n"
+            "import roller_gym; print(roller_gym.__version__)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, timeout=300).stdout.strip()
+    assert out == "0+unknown"
+    assert Version(out) < Version(pyproject_version())  # PEP 440, below any release
+
+
+@pytest.mark.parametrize("command", list(COMMANDS))
+def test_every_help_works_with_the_base_install_and_names_its_extra(command):
+    """With only the base install's packages importable, ``--help`` prints the command's
+    usage and ends naming its extra, the pip line that installs it from a clone and the
+    packages it adds (as pyproject.toml lists them)."""
+    assert "matplotlib" in extra_only_modules() and "numba" not in extra_only_modules()
+    result = run_cli([command, "--help"])
+    assert result.returncode == 0, result.stderr
+    out = " ".join(result.stdout.split())
+    assert out.startswith(f"usage: roller-gym {command} ")
+    extra = COMMANDS[command].extra
+    assert f'roller-gym {command} needs the extra [{extra}]' in out
+    assert f'pip install ".[{extra}]"' in out
+    for package in pyproject_extra(extra):
+        assert package in out, f"{command} --help does not name {package}"
+
+
+@pytest.mark.parametrize(("argv", "missing"), [
+    (["train", "--steps", "10"], "rl_zoo3"),
+    (["evaluate", "--baselines", "zero", "--episodes", "1", "--out", "{tmp}"], "matplotlib"),
+    (["results", "--runs", "{tmp}"], "matplotlib"),
+    (["replay", "zero", "--env", "roller_gym/RollerStabilize-v1", "--out", "{tmp}/x.gif"],
+     "imageio"),
+    (["benchmark", "--quick", "--out", "{tmp}"], None),
+    (["train-rllib", "--iterations", "1"], "ray"),
 ])
-def test_a_command_without_its_extra_says_what_to_install(command, missing, extra):
-    code = (f"import sys; sys.modules[{missing!r}] = None\n"
-            "from roller_gym.scripts.cli import main\n"
-            f"main([{command!r}])")
-    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                            timeout=300)
-    assert result.returncode == 1
-    assert f'pip install "{extra}"' in result.stderr
+def test_every_command_without_its_extra_says_in_one_line_what_to_install(argv, missing,
+                                                                          tmp_path):
+    result = run_cli([a.replace("{tmp}", str(tmp_path)) for a in argv])
+    extra = COMMANDS[argv[0]].extra
+    assert result.returncode == 1, result.stderr
     assert "Traceback" not in result.stderr
+    (line,) = result.stderr.strip().splitlines()
+    assert f'pip install ".[{extra}]"' in line
+    if missing is not None:  # named, as a module or a distribution
+        assert missing.replace("_", "-") in line.replace("_", "-")
+
+
+def test_replay_without_pygame_says_in_one_line_what_to_install(tmp_path):
+    """pygame is imported only to draw: its absence is reported as one line too."""
+    result = run_cli(["replay", "zero", "--env", "roller_gym/RollerStabilize-v1", "--out",
+                      str(tmp_path / "x.gif")], blocked=("pygame",))
+    assert result.returncode == 1 and "Traceback" not in result.stderr
+    (line,) = result.stderr.strip().splitlines()
+    assert "'pygame'" in line and 'pip install ".[zoo,render]"' in line
 
 
 @NEEDS_RL_ZOO3
@@ -135,11 +187,26 @@ def test_train_show_command_is_rl_zoo3_with_the_shipped_file():
 
     out = roller_gym("train", "--algo", "ppo", "--steps", "3000", "--show-command").stdout
     words = out.split()
-    assert words[1:3] == ["-m", "rl_zoo3.train"]
+    assert words[1:3] == ["-m", "roller_gym.scripts.zoo_train"]
     assert words[words.index("-conf") + 1] == str(config_file("ppo"))
     assert words[words.index("--gym-packages") + 1] == "roller_gym"
     # PPO's 3,000 steps become whole rollouts of 8 x 256: 4,096.
     assert words[words.index("--n-timesteps") + 1] == "4096"
+
+
+@NEEDS_RL_ZOO3
+def test_train_show_command_run_as_printed_trains_on_the_native_batch(tmp_path):
+    """The printed command, run as it is in a shell, trains through the native batch as
+    ``roller-gym train`` does: the batch's episode monitor is written, and no monitor of
+    single environments under DummyVecEnv (``0.monitor.csv``, ``1.monitor.csv``)."""
+    shown = roller_gym("train", "--steps", "300", "--eval-freq", "150", "--eval-episodes", "1",
+                       "--verbose", "0", "--hyperparams", "n_envs:2", "--show-command",
+                       cwd=tmp_path).stdout
+    subprocess.run(shown, shell=True, check=True, cwd=tmp_path, capture_output=True,
+                   timeout=900)
+    (run_dir,) = (tmp_path / "runs" / "sac").iterdir()
+    assert (run_dir / "batch.monitor.csv").is_file()
+    assert not list(run_dir.glob("[0-9]*.monitor.csv"))
 
 
 @NEEDS_RL_ZOO3
@@ -348,15 +415,58 @@ def test_replay_refuses_an_output_that_is_not_a_gif_or_mp4(monkeypatch, capsys):
     assert parser.parse_args(["zero", "--out", "x.GIF"]).out == Path("x.GIF")
 
 
-def test_results_help_works_without_rliable_and_running_says_what_to_install():
+def test_results_help_works_without_rliable_and_running_says_what_to_install(tmp_path):
     for argv, code, stream, text in ((["results", "--help"], 0, "stdout", "usage: roller-gym "
-                                      "results"), (["results"], 1, "stderr",
-                                                   'pip install "roller-gym[results]"')):
-        program = ("import sys; sys.modules['rliable'] = None\n"
-                   "from roller_gym.scripts.cli import main\n"
-                   f"main({argv!r})")
-        result = subprocess.run([sys.executable, "-c", program], capture_output=True,
-                                text=True, timeout=300)
+                                      "results"), (["results", "--runs", str(tmp_path)], 1,
+                                                   "stderr", 'pip install ".[results]"')):
+        result = run_cli(argv, blocked=("rliable",))
         assert result.returncode == code, result.stderr
         assert text in getattr(result, stream)
         assert "Traceback" not in result.stderr
+
+
+def _stages(stderr: str, command: str) -> list[str]:
+    prefix = f"roller-gym {command}: "
+    return [line.removeprefix(prefix) for line in stderr.splitlines() if line.startswith(prefix)]
+
+
+def test_evaluate_prints_a_line_per_stage_on_stderr(tmp_path):
+    pytest.importorskip("matplotlib")
+    result = roller_gym("evaluate", "--baselines", "zero", "random", "--episodes", "1",
+                        "--out", str(tmp_path / "out"), cwd=tmp_path)
+    stages = _stages(result.stderr, "evaluate")
+    env_id = "roller_gym/RollerStabilize-v1"
+    assert stages[0].startswith(f"{env_id}: making the environment")
+    assert stages[1:] == [f"{env_id}: zero torque on 1 episodes", f"{env_id}: random on 1 episodes",
+                          f"{env_id}: writing the table and plots into {tmp_path / 'out'}/"]
+    assert "roller-gym evaluate:" not in result.stdout
+
+
+def test_results_says_it_found_no_runs_before_evaluating_anything(tmp_path):
+    pytest.importorskip("rliable")
+    result = roller_gym("results", "--runs", str(tmp_path), "--results",
+                        str(tmp_path / "r" / "results.json"), "--report",
+                        str(tmp_path / "RESULTS.md"), check=False)
+    assert result.returncode == 1 and "Traceback" not in result.stderr
+    assert _stages(result.stderr, "results") == [f"finding the runs under {tmp_path}"]
+    assert f"--runs {str(tmp_path)!r}: no trained runs found" in result.stderr
+    assert not (tmp_path / "r" / "results.json").exists()
+
+
+def test_results_render_prints_its_stage(tmp_path):
+    pytest.importorskip("rliable")
+    source = Path(__file__).resolve().parents[1] / "docs" / "results" / "results.json"
+    results = json.loads(source.read_text())  # one task and SAC: rliable's bootstraps take time
+    task = next(iter(results["tasks"]))
+    results["tasks"] = {task: results["tasks"][task]}
+    results["evaluations"] = [e for e in results["evaluations"]
+                              if e["env"] == task and e["name"] in ("sac", "classical", "zero",
+                                                                    "random")]
+    (tmp_path / "r").mkdir()
+    (tmp_path / "r" / "results.json").write_text(json.dumps(results))
+    report = tmp_path / "RESULTS.md"
+    result = roller_gym("results", "--render", "--results", str(tmp_path / "r" / "results.json"),
+                        "--report", str(report), "--algos", "sac")
+    assert _stages(result.stderr, "results") == [
+        f"rendering {report} and its plots (rliable's bootstrap intervals)"]
+    assert report.read_text().startswith("# Results")

@@ -220,3 +220,75 @@ def test_long_description_links_are_absolute_under_the_configured_base_url(tmp_p
     assert _relative(links(description)) == []
     assert [t for t in links(description) if t.startswith("https://example.org/")] == expected
     assert "`[not a link](docs/PHYSICS.md)`" in description
+
+
+# -- what the README tells a newcomer to run -----------------------------------------------
+
+#: A pip command that fetches roller-gym by name from a package index.
+_FROM_INDEX = re.compile(r"""pip (?:install|download)[^`\n]*?(?<![\w./-])["']?roller-gym\b""")
+CPU_INDEX = "--extra-index-url https://download.pytorch.org/whl/cpu"
+
+
+def _readme_section(title: str) -> str:
+    text = (ROOT / "README.md").read_text()
+    start = text.index(f"\n## {title}\n")
+    end = text.find("\n## ", start + 1)
+    return text[start:end if end >= 0 else None]
+
+
+def _long_description_note() -> str:
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("roller_gym_setup", ROOT / "setup.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.NOTE
+
+
+@pytest.mark.parametrize("source", ["README.md", "setup.py NOTE"])
+def test_installing_by_name_is_offered_only_for_once_the_package_is_published(source):
+    """roller-gym is not on PyPI: every pip command that fetches it by name sits in a
+    paragraph that says it works once the package is published, and the README's first pip
+    command installs from the clone."""
+    text = (ROOT / "README.md").read_text() if source == "README.md" else _long_description_note()
+    paragraphs = re.split(r"\n\s*\n", text)
+    by_name = [p for p in paragraphs if _FROM_INDEX.search(p)]
+    assert by_name, f"{source}: no pip command by name found (the check is vacuous)"
+    for paragraph in by_name:
+        assert "once roller-gym is published" in " ".join(paragraph.split()).lower(), paragraph
+    if source == "README.md":
+        first = re.search(r"pip install[^\n`#]*", text).group(0).strip()
+        assert first == "pip install .", first
+
+
+def test_the_checker_of_install_lines_tells_a_name_from_a_path():
+    assert _FROM_INDEX.search('pip install "roller-gym[zoo]"')
+    assert _FROM_INDEX.search("pip download --no-deps --no-binary :all: roller-gym")
+    assert not _FROM_INDEX.search('pip install ".[zoo]"')
+    assert not _FROM_INDEX.search("pip install /work/roller-gym")
+
+
+def test_every_install_command_that_brings_torch_names_the_cpu_index():
+    """Each command of the install section's code that installs an extra with torch (as
+    pyproject.toml's extras say) carries the index of torch's CPU build."""
+    from base_install import pyproject_extra
+
+    code = "\n".join(re.findall(r"^```bash\n(.*?)^```", _readme_section("Install"),
+                                re.M | re.S))
+    commands = re.findall(r"""pip install [^#\n]*""", code)
+    with_torch = [c for c in commands
+                  if (m := re.search(r"""\.\[([\w,]+)\]""", c)) and "torch" in pyproject_extra(
+                      m.group(1))]
+    assert with_torch, "no install command with torch in the install section"
+    for command in with_torch:
+        assert CPU_INDEX in command, command
+
+
+def test_readme_client_table_is_roller_gym_clients():
+    """The README's table of clients and their autoreset modes is roller_gym.clients.CLIENTS."""
+    from roller_gym.clients import CLIENTS
+
+    rows = re.findall(r"^\| (\w+) \| `\"(\w+)\"`[^|]* \| ([^|]+) \|$",
+                      _readme_section("Other clients"), re.M)
+    assert [(name, mode) for name, mode, _ in rows] == [
+        (c.name, c.autoreset_mode.name.lower()) for c in CLIENTS.values()]

@@ -12,6 +12,7 @@ import textwrap
 from pathlib import Path
 
 import pytest
+from base_install import pyproject_version
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -94,3 +95,15 @@ def test_console_command_is_installed(fresh_venv):
     out = run(fresh_venv / "bin" / "roller-gym", "--help", cwd=fresh_venv.parent)
     for command in ("train", "evaluate", "replay", "benchmark"):
         assert command in out
+
+
+def test_the_wheel_reports_pyprojects_version(fresh_venv):
+    """``roller-gym --version`` and ``roller_gym.__version__`` of a non-editable install are
+    pyproject.toml's version (read from the wheel's metadata)."""
+    version = pyproject_version()
+    outside = fresh_venv.parent
+    assert run(fresh_venv / "bin" / "roller-gym", "--version",
+               cwd=outside).strip() == f"roller-gym {version}"
+    assert run(fresh_venv / "bin" / "python", "-c",
+               "import roller_gym; print(roller_gym.__version__)",
+               cwd=outside).strip() == version

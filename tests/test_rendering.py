@@ -66,7 +66,8 @@ def test_without_pygame_an_env_asked_for_frames_is_made_and_render_says_what_to_
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True,
                          text=True, timeout=120)
     assert out.returncode == 0, out.stderr
-    assert out.stdout.strip() == "rendering needs pygame: pip install 'roller-gym[render]'"
+    assert out.stdout.strip() == ("rendering needs pygame, which is not installed: "
+                                  'pip install ".[render]" (in a clone of the repository)')
 
 
 @pytest.mark.parametrize("env_id", IDS)

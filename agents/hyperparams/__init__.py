@@ -58,8 +58,9 @@ def _read(algo: str) -> dict[str, Any]:
     try:
         import yaml
     except ImportError:
-        raise ImportError("reading the hyperparameter files needs PyYAML: "
-                          'pip install "roller-gym[zoo]" (or pip install pyyaml)') from None
+        from roller_gym.extras import missing
+
+        raise missing("yaml", "zoo", "reading the hyperparameter files") from None
     return yaml.safe_load(config_file(algo).read_text())
 
 
