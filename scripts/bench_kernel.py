@@ -17,10 +17,9 @@ Run: ``python -m roller_gym.scripts.bench_kernel`` (about a minute).
 
 from __future__ import annotations
 
-import time
-
 import numba
 import numpy as np
+from roller_gym.bench.timing import best_time
 from roller_gym.physics import equations as eq
 from roller_gym.physics import integrators as integ
 from roller_gym.physics import preset
@@ -48,16 +47,6 @@ def _rhs_only(count, phi, w, tau, table):
     return out
 
 
-def _best(fn, repeat: int) -> float:
-    """The fastest of ``repeat`` timed calls [s]."""
-    best = np.inf
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
-
-
 def batch(num: int, rng: np.random.Generator) -> dict[str, float]:
     scene = preset("paper")
     stepper = integ.BatchStepper(num, method=METHOD, dt=DT, tol=TOL)
@@ -66,10 +55,10 @@ def batch(num: int, rng: np.random.Generator) -> dict[str, float]:
     tau = rng.uniform(-0.5, 0.5, num)
     res = stepper.advance(phi, w, tau)  # compile, warm
     count = (np.asarray(res.substeps) * RHS_PER_SUBSTEP + RHS_PER_STEP).astype(np.int64)
-    kernel = _best(lambda: stepper.advance(phi, w, tau), 5)
+    kernel = best_time(lambda: stepper.advance(phi, w, tau), 5)
     table = np.ascontiguousarray(stepper.scene_table())
     _rhs_only(count, phi, w, tau, table)
-    rhs = _best(lambda: _rhs_only(count, phi, w, tau, table), 5)
+    rhs = best_time(lambda: _rhs_only(count, phi, w, tau, table), 5)
     out = {"kernel_ns": kernel / num * 1e9, "rhs_ns": rhs / num * 1e9,
            "substeps": float(np.mean(count - RHS_PER_STEP) / RHS_PER_SUBSTEP)}
     try:
@@ -79,7 +68,7 @@ def batch(num: int, rng: np.random.Generator) -> dict[str, float]:
         env.reset(seed=0)
         actions = rng.integers(0, 2, num)
         env.step(actions)
-        out["cartpole_ns"] = _best(lambda: env.step(actions), 20) / num * 1e9
+        out["cartpole_ns"] = best_time(lambda: env.step(actions), 20) / num * 1e9
     except ImportError:
         pass
     return out
@@ -103,7 +92,7 @@ def scalar(rng: np.random.Generator) -> dict[str, float]:
             substeps.append(out[3])
 
     run()
-    ours = _best(run, 5) / len(torques)
+    ours = best_time(run, 5) / len(torques)
     env = gym.make("Pendulum-v1").unwrapped
     env.reset(seed=0)
     action = np.array([0.5], dtype=np.float32)
@@ -113,7 +102,7 @@ def scalar(rng: np.random.Generator) -> dict[str, float]:
             env.step(action)
 
     pend()
-    peer = _best(pend, 5) / len(torques)
+    peer = best_time(pend, 5) / len(torques)
     return {"stepper_us": ours * 1e6, "pendulum_us": peer * 1e6,
             "substeps": float(np.mean(substeps))}
 

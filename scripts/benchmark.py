@@ -4,6 +4,9 @@
     roller-gym benchmark --quick     # a smoke run of every part
     roller-gym benchmark --render    # the page and plots again from the results file, no measuring
     roller-gym benchmark --out DIR   # DIR/benchmarks/workprecision.json, DIR/BENCHMARKS.md, plots
+
+Rendering also writes DIR/MAINTAINERS.md (the targets and verdicts of both studies' results);
+the measurement says on stderr which part starts.
 """
 
 from __future__ import annotations
@@ -12,8 +15,8 @@ import argparse
 from collections.abc import Sequence
 from pathlib import Path
 
-from roller_gym.bench import report
-from roller_gym.bench.verdicts import VERDICTS
+from roller_gym.bench import maintainers, records, report
+from roller_gym.bench.verdicts import work_precision_verdicts
 from roller_gym.scripts.arguments import program_parser
 
 
@@ -38,19 +41,19 @@ def main(argv: Sequence[str] | None = None) -> None:
             parser.error("--render measures nothing: --quick does not apply")
         if not path.is_file():
             raise SystemExit(f"no results file at {path}: `roller-gym benchmark` measures one")
-        results = report.load_results(path)
+        results = records.load_results(path)
     else:
         from roller_gym.bench import workprecision  # MuJoCo, the environments, the kernels
 
         command = "roller-gym benchmark" + " --quick" * args.quick + (
             f" --out {args.out}" if args.out != Path("docs") else "")
         results = workprecision.measure(workprecision.Config.make(args.quick), command)
-        report.save_results(results, path)
+        records.save_results(results, path)
         print(f"wrote {path}")
     print(f"wrote {report.write(results, args.out)}")
-    for verdict in VERDICTS:
-        for v in verdict(results):
-            print(f"{v.sentence.replace('**', '')}: {v.target}: {v.measured}")
+    print(f"wrote {maintainers.write(args.out)}")
+    for v in work_precision_verdicts(results):
+        print(f"{v.sentence.replace('**', '')}: {v.target}: {v.measured}")
 
 
 if __name__ == "__main__":

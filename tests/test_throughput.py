@@ -1,11 +1,12 @@
-"""The throughput benchmark's verdicts and page, on synthetic results (no measuring)."""
+"""The throughput benchmark's verdicts and pages, on synthetic results (no measuring), and
+its replay of the environment's steps through the physics kernel alone."""
 
 from __future__ import annotations
 
 import copy
 
 import pytest
-from roller_gym.bench import throughput
+from roller_gym.bench import maintainers, throughput, throughput_report, verdicts
 
 RESULTS = {
     "machine": {"cpu": "a CPU", "cores": 2, "os": "an OS", "python": "3.11",
@@ -19,51 +20,73 @@ RESULTS = {
     "start_seconds": {"65536": 0.3},
     "single": {"ours": 150e3, "Pendulum-v1": 100e3},
     "ppo": {"RollerVecEnv": 2000.0, "DummyVecEnv": 1000.0},
-    "episode_error_rad": 5e-7,
     "peers_missing": {"EnvPool Pendulum-v1": "not measured: envpool is not installed"},
 }
 
 
 def test_verdicts_compare_each_ratio_with_its_target():
-    verdicts = {what: (value, met) for verdict in throughput.VERDICTS
-                for what, value, _target, met in verdict(RESULTS)}
-    vec = {what: v for what, v in verdicts.items() if "CartPoleVectorEnv" in what}
+    judged = {v.target: (v.value, v.met) for v in verdicts.throughput_verdicts(RESULTS)}
+    vec = {what: v for what, v in judged.items() if "CartPoleVectorEnv" in what}
     assert sorted(vec.values()) == [(0.1, False), (pytest.approx(0.3), True)]
-    assert [v for w, v in verdicts.items() if "outside the physics kernel" in w] == [(0.5, False)]
-    assert [v for w, v in verdicts.items() if "reset" in w] == [(0.3, False)]
-    assert [v for w, v in verdicts.items() if "Pendulum" in w] == [(1.5, True)]
-    assert [v for w, v in verdicts.items() if "episode" in w] == [(5e-7, True)]
+    assert [v for w, v in judged.items() if "outside the physics kernel" in w] == [(0.5, False)]
+    assert [v for w, v in judged.items() if "reset" in w] == [(0.3, False)]
+    assert [v for w, v in judged.items() if "Pendulum" in w] == [(1.5, True)]
+    assert set(verdicts.THROUGHPUT) == {
+        verdicts.verdict_vector, verdicts.verdict_envpool, verdicts.verdict_outside_kernel,
+        verdicts.verdict_start, verdicts.verdict_single}
 
 
 def test_a_verdict_turns_with_its_measurement():
     better = copy.deepcopy(RESULTS)
     better["vector"]["65536"]["ours"] = 5e6
     better["single"]["ours"] = 140e3
-    (_, ratio, _, met), = [v for v in throughput.verdict_vector(better) if "65,536" in v[0]]
-    assert ratio == pytest.approx(0.5) and met
-    assert not throughput.verdict_single(better)[0][3]
+    (v,) = [v for v in verdicts.verdict_vector(better) if "65,536" in v.target]
+    assert v.value == pytest.approx(0.5) and v.met
+    (single,) = verdicts.verdict_single(better)
+    assert single.met is False and single.miss == "speed 0.93 of the target"
 
 
 def test_render_has_every_section_and_no_gap():
-    page = throughput.render(RESULTS)
-    for heading in ("# Throughput", "## Targets", "## The vector environment",
+    page = throughput_report.render(RESULTS)
+    for heading in ("# Throughput", "## Machine and command", "## The vector environment",
                     "## One environment and SB3", "## Peers not measured"):
         assert heading in page
     assert "| 65,536 | 1,000,000 | 10,000,000 | 0.100 | 2,000,000 | 50% |" in page
     assert "the fastest of 7 repeats of each" in page  # the share's, as measured
+    assert "(benchmarks/throughput.png)" in page and "`make throughput`" in page
+    assert "a CPU, 2 cores (an OS), Python 3.11" in page
     assert "{" not in page and "None" not in page
+    assert "target" not in page.lower()  # the targets are the maintainers' page's
+
+
+def test_the_maintainers_page_has_the_verdicts_and_keeps_what_is_hand_written(tmp_path):
+    page = maintainers.render(None, RESULTS, "## History\n\nnine runs")
+    rows = [line for line in page.splitlines() if line.startswith("| vector env ≥ 0.25")]
+    assert rows == ["| vector env ≥ 0.25 × CartPoleVectorEnv at 4,096 sub-environments | 0.3 × "
+                    "(3,000,000 against 10,000,000 steps/s) | **met** |",
+                    "| vector env ≥ 0.25 × CartPoleVectorEnv at 65,536 sub-environments | 0.1 × "
+                    "(1,000,000 against 10,000,000 steps/s) | **missed**: 0.40 of the target "
+                    "(2.5× too slow) |"]
+    assert page.endswith(maintainers.HAND_WRITTEN + "\n## History\n\nnine runs\n")
+    (tmp_path / "MAINTAINERS.md").write_text("stale\n" + maintainers.HAND_WRITTEN + "\nkept\n")
+    records_path = tmp_path / throughput.RESULTS_FILE
+    from roller_gym.bench import records
+
+    records.save_results(RESULTS, records_path)
+    written = maintainers.write(tmp_path).read_text()
+    assert "stale" not in written and written.endswith(maintainers.HAND_WRITTEN + "\nkept\n")
+    assert "| one environment ≥ 1.5 × Pendulum-v1's steps/s | 1.5 × Pendulum-v1" in written
 
 
 def test_a_miss_just_below_its_target_does_not_read_as_the_target():
     """A ratio that rounds to its target at three digits is shown with the digits that tell
-    it from the target, in the page's table: a miss never reads as the target itself."""
+    it from the target: a miss never reads as the target itself."""
     near = copy.deepcopy(RESULTS)
     near["vector"]["65536"]["ours"] = 0.24996 * 10e6
-    row = next(line for line in throughput.render(near).splitlines()
-               if "CartPoleVectorEnv at 65,536" in line)
-    assert row.split("|")[2].strip() == "0.24996" and "**no**" in row
-    assert throughput._shown(0.294, 0.25) == "0.294"
-    assert throughput._shown(0.25, 0.25) == "0.25"
+    (v,) = [v for v in verdicts.verdict_vector(near) if "65,536" in v.target]
+    assert v.measured.startswith("0.24996 × ") and v.met is False
+    assert verdicts.shown(0.294, 0.25) == "0.294"
+    assert verdicts.shown(0.25, 0.25) == "0.25"
 
 
 def test_envpool_and_the_arithmetic_are_reported_where_measured():
@@ -74,10 +97,10 @@ def test_envpool_and_the_arithmetic_are_reported_where_measured():
     res["vector"]["65536"].update({"EnvPool Pendulum-v1": 2e6, "rhs_ns": 10.0, "substeps": 1.0,
                                    "unit": "expansion", "unit_ns": 30.0,
                                    "units_per_step": 1.0, "kernel_threads": 2})
-    ours = {w: (v, met) for w, v, _t, met in throughput.verdict_envpool(res)}
+    ours = {v.target: (v.value, v.met) for v in verdicts.verdict_envpool(res)}
     assert sorted(ours.values()) == [(0.5, False), (1.5, True)]
-    assert throughput.verdict_envpool(RESULTS) == []  # not measured: no verdict
-    page = throughput.render(res)
+    assert verdicts.verdict_envpool(RESULTS) == []  # not measured: no verdict
+    page = throughput_report.render(res)
     assert "| 4,096 | 2,000,000 | 1.50 |" in page
     # kernel 4e6 roller-steps/s on 2 threads: 500 core-ns, against 1 expansion of 30 ns
     assert "| 4,096 | 10.00 | 30.00 | 1.00 | 500 | 16.7 |" in page

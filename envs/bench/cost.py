@@ -39,7 +39,6 @@ stateless) is left out. What an environment gets after its first step.
 
 from __future__ import annotations
 
-import datetime
 import math
 import time
 import warnings
@@ -49,6 +48,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from roller_gym.bench import records, timing
 from roller_gym.config import DEFAULT_DT
 from roller_gym.episode import take
 from roller_gym.physics import Scene
@@ -300,13 +300,14 @@ def carried_steps(traj: Trajectories, method: str, tol: float, dt: float = DT
     return integ.StepResult(*(np.concatenate([o[f] for o in out]) for f in integ.STEP_FIELDS))
 
 
-def measure(cfg: CostConfig, command: str = "", progress: Callable[[str], None] = print
-            ) -> dict[str, Any]:
+def measure(cfg: CostConfig, command: str = "",
+            progress: Callable[[str], None] = timing.progress) -> dict[str, Any]:
     """The cost measurement: for every method and tolerance of ``cfg``, a row per variant
     (``"stateless"`` and ``"carried"``, see the module docs); plain data, with the
     ``command`` that ran it and the date."""
     t0 = time.perf_counter()
-    date = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
+    date = records.now()
+    progress(f"cost: the references of {cfg.steps} hard steps and of their trajectories")
     scene, phi, w, tau = adversarial_sample(cfg.steps, cfg.seed)
     ref, unc = references(scene, phi, w, tau)
     starts = np.arange(min(cfg.trajectories, cfg.steps))
@@ -324,6 +325,7 @@ def measure(cfg: CostConfig, command: str = "", progress: Callable[[str], None] 
     rows = []
     for method in cfg.methods:
         for tol in cfg.tols:
+            progress(f"cost {method} tol {tol:.0e}: automatic against smallest fixed counts")
             t1 = time.perf_counter()
             with np.errstate(all="ignore"):
                 auto = integ.step(scene, phi, w, tau, DT, method=method, tol=tol)
@@ -356,7 +358,7 @@ def main(argv: list[str] | None = None) -> None:
     measured; the part records its own command and date."""
     import argparse
 
-    from roller_gym.bench import report
+    from roller_gym.bench import maintainers, report
 
     p = argparse.ArgumentParser(description=main.__doc__.split("\n\n")[0])
     p.add_argument("--quick", action="store_true", help="a small sample")
@@ -366,12 +368,13 @@ def main(argv: list[str] | None = None) -> None:
     path = report.results_path(args.out)
     if not path.is_file():
         raise SystemExit(f"no results file at {path}: `roller-gym benchmark` measures one")
-    results = report.load_results(path)
+    results = records.load_results(path)
     command = "python -m roller_gym.bench.cost" + " --quick" * args.quick + (
         f" --out {args.out}" if args.out != Path("docs") else "")
     results["cost"] = measure(CostConfig.make(args.quick), command)
-    report.save_results(results, path)
+    records.save_results(results, path)
     print(f"wrote {path}\nwrote {report.write(results, args.out)}")
+    print(f"wrote {maintainers.write(args.out)}")
 
 
 if __name__ == "__main__":

@@ -1,42 +1,37 @@
-"""The work-precision study's results file, and the page and plots rendered from it.
+"""The work-precision page, ``docs/BENCHMARKS.md``, rendered from the study's results file.
 
-    save_results(results, results_path(out))   # OUT/benchmarks/workprecision.json
-    write(load_results(results_path(out)), out)  # OUT/BENCHMARKS.md, OUT/benchmarks/*.png
+    write(records.load_results(results_path(out)), out)  # OUT/BENCHMARKS.md and its plots
 
 Rendering measures nothing: every number on the page comes from the results (see
-:func:`roller_gym.bench.workprecision.measure`), the verdicts from
-:mod:`roller_gym.bench.verdicts`. The results file is JSON; a non-finite number (a diverged
-run's error, a horizon never left) is written as the string ``"inf"``, ``"-inf"`` or ``"nan"``.
+:func:`roller_gym.bench.workprecision.measure`; the file: :mod:`roller_gym.bench.records`).
+The page says what was measured, against which peers, on which machine and how to measure
+again; the targets and their verdicts are the maintainers' page's
+(:mod:`roller_gym.bench.maintainers`).
 """
 
 from __future__ import annotations
 
-import datetime
-import json
 import math
 from pathlib import Path
 from typing import Any
 
-import numpy as np
+from roller_gym.bench import plots
+from roller_gym.bench.markdown import machine_section, md_table
 from roller_gym.bench.verdicts import (
-    TARGETS,
-    VERDICTS,
     chaotic,
     compare_mujoco,
     cost_at_error,
     cost_rows,
     default_run,
-    error_of,
     family,
     fmt_err,
     fmt_time,
     horizon,
     scene,
-    verdict_cost,
 )
 from roller_gym.physics import integrators as integ
 
-__all__ = ["load_results", "plot", "render", "results_path", "save_results", "write"]
+__all__ = ["render", "results_path", "write"]
 
 Results = dict[str, Any]
 
@@ -44,242 +39,15 @@ Results = dict[str, Any]
 RESULTS_FILE = Path("benchmarks") / "workprecision.json"
 PAGE = "BENCHMARKS.md"
 
-OUR_FAMILIES = ("euler", "rk4", "rk4 auto", "rk8", "rk8 auto", "taylor", "taylor auto",
-                "midpoint", "dop853")
-MJ_FAMILIES = ("MuJoCo default", "MuJoCo tuned")
-COLORS = {"euler": "tab:red", "rk4": "tab:blue", "rk4 auto": "tab:green", "rk8": "tab:cyan",
-          "rk8 auto": "tab:olive", "taylor": "tab:pink", "taylor auto": "black",
-          "midpoint": "tab:purple", "dop853": "tab:gray",
-          "MuJoCo default": "tab:orange", "MuJoCo tuned": "tab:brown"}
-MARKERS = {"euler": "v", "rk4": "o", "rk4 auto": "s", "rk8": "h", "rk8 auto": "p",
-           "taylor": "<", "taylor auto": "*",
-           "midpoint": "D", "dop853": "^", "MuJoCo default": "X", "MuJoCo tuned": "P"}
 #: MuJoCo's integrators in words.
 _INTEGRATORS = {"Euler": "semi-implicit Euler"}
 #: Right-hand-side evaluations of an rk4 substep: under error control, and fixed.
 _RK4_EVALUATIONS = tuple(integ.scheme("rk4").evaluations(fixed=f) for f in (False, True))
 
 
-def substep_work(method: str) -> str:
-    """The work of one substep of a compiled error-controlled scheme under error control, in
-    words."""
-    scheme = integ.SCHEMES.get(method)
-    if method == "taylor":
-        return (f"one expansion to degree {scheme.order} (the sines once, then products of "
-                "series)")
-    if scheme is None or scheme.tableau is None:
-        return "several stages"
-    return f"{scheme.evaluations(fixed=False)} right-hand sides"
-
-
-# ================================================================================================
-# The results file
-# ================================================================================================
 def results_path(out: Path) -> Path:
     """Where the results file of the docs folder ``out`` is."""
     return Path(out) / RESULTS_FILE
-
-
-def _encode(x: Any) -> Any:
-    if isinstance(x, dict):
-        return {str(k): _encode(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_encode(v) for v in x]
-    if isinstance(x, np.generic):
-        x = x.item()
-    if isinstance(x, float) and not math.isfinite(x):
-        return "nan" if math.isnan(x) else ("inf" if x > 0 else "-inf")
-    return x
-
-
-def _decode(x: Any) -> Any:
-    if isinstance(x, dict):
-        return {k: _decode(v) for k, v in x.items()}
-    if isinstance(x, list):
-        return [_decode(v) for v in x]
-    if x in ("inf", "-inf", "nan"):
-        return float(x)
-    return x
-
-
-def _dumps(x: Any, level: int = 0, width: int = 100) -> str:
-    """JSON, indented by one space a level; what fits in ``width`` and every list of numbers
-    on one line."""
-    one = json.dumps(x, ensure_ascii=False, allow_nan=False)
-    numbers = isinstance(x, list) and all(isinstance(v, int | float) for v in x)
-    if not isinstance(x, dict | list) or numbers or level + len(one) <= width:
-        return one
-    pad, inner = " " * level, " " * (level + 1)
-    if isinstance(x, dict):
-        body = ",\n".join(f"{inner}{json.dumps(k, ensure_ascii=False)}: {_dumps(v, level + 1)}"
-                          for k, v in x.items())
-        return "{\n" + body + "\n" + pad + "}"
-    body = ",\n".join(inner + _dumps(v, level + 1) for v in x)
-    return "[\n" + body + "\n" + pad + "]"
-
-
-def save_results(results: Results, path: Path) -> None:
-    """Write ``results`` to ``path`` as JSON (strict: non-finite numbers as strings)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(_dumps(_encode(results)) + "\n")
-
-
-def load_results(path: Path) -> Results:
-    """The results saved at ``path`` (non-finite numbers as floats again)."""
-    return _decode(json.loads(Path(path).read_text()))
-
-
-# ================================================================================================
-# The plots
-# ================================================================================================
-def _pyplot() -> Any:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def _scene_panels(count: int, panel_height: float, legend_in: float) -> tuple[Any, Any]:
-    """A figure of ``count`` panels, three to a row, ``panel_height`` inches each, with
-    ``legend_in`` inches below them for the legend."""
-    plt = _pyplot()
-    cols = min(3, count)
-    rows = math.ceil(count / cols)
-    height = panel_height * rows + legend_in
-    return plt.subplots(rows, cols, figsize=(5.2 * cols, height), squeeze=False)
-
-
-def _save_panels(fig: Any, axes: Any, count: int, legend_in: float, legend_columns: int,
-                 title: str, path: Path) -> None:
-    """Blank the unused panels, put the first panel's legend in the ``legend_in`` inches under
-    them, title, save, close."""
-    for ax in axes.flat[count:]:
-        ax.axis("off")
-    handles, labels = axes.flat[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=legend_columns, fontsize=8)
-    fig.suptitle(title)
-    height = fig.get_figheight()
-    fig.tight_layout(rect=(0, legend_in / height, 1, 1 - 0.4 / height))
-    fig.savefig(path, dpi=110)
-    _pyplot().close(fig)
-
-
-def plot_work_precision(results: Results, path: Path, metric: str) -> None:
-    """Cost against error, one panel per scene: the global or the local error."""
-    st = results["settings"]
-    scenes = results["scenes"]
-    legend_in = 1.3  # inches under the plots for the legend
-    fig, axes = _scene_panels(len(scenes), panel_height=4.2, legend_in=legend_in)
-    for ax, sc in zip(axes.flat, scenes, strict=False):
-        hz = horizon(results, sc)
-        for fam in (*OUR_FAMILIES, *MJ_FAMILIES):
-            # in the order of the setting (substeps up, tolerance down, timestep down)
-            # (runs that blew up past 100 rad are left out: they are in the tables)
-            pts = [(error_of(r, metric), r["seconds"] / hz) for r in family(sc, fam)
-                   if error_of(r, metric) <= 100.0]
-            if pts:
-                e, c = zip(*pts, strict=True)
-                ax.loglog(np.maximum(e, 1e-16), c, marker=MARKERS[fam], color=COLORS[fam],
-                          label=fam, lw=1.2, ms=5, ls="--" if fam.startswith("MuJoCo") else "-")
-        d = default_run(sc)
-        ax.loglog([max(error_of(d, metric), 1e-16)], [d["seconds"] / hz], "*", color="k",
-                  ms=15, label=f"default ({st['method']}, tol {st['tolerance']:.0e})", zorder=5)
-        if metric == "global":
-            ax.axvline(max(sc["reference"]["own_error"][0], 1e-16), color="k", lw=0.8, ls=":",
-                       label="reference's own error")
-            ax.axvline(st["target_error"], color="tab:red", lw=0.8, ls="-.",
-                       label=f"target {st['target_error']:g} rad")
-        else:
-            ax.axvline(st["tolerance"], color="tab:red", lw=0.8, ls="-.",
-                       label=f"tolerance {st['tolerance']:.0e}")
-        title = f"{sc['name']}: {sc['note']}"
-        if metric == "global" and chaotic(results, sc):
-            title += (f"\n(chaotic: the reference itself is off by {st['target_error']:g} at "
-                      f"{sc['reference']['predictable_s']:g} s)")
-        ax.set_title(title, fontsize=9)
-        ax.set_xlabel(f"largest |φ error| over {hz:g} s [rad]" if metric == "global"
-                      else "largest |φ error| of one control step [rad]")
-        ax.set_ylabel("wall time per simulated second [s]")
-        ax.grid(True, which="major", alpha=0.3)
-    _save_panels(fig, axes, len(scenes), legend_in, 6,
-                 f"Work-precision, {metric} error: cost against error (lower left is better), "
-                 "all measured in the same run", path)
-
-
-def plot_energy(results: Results, path: Path) -> None:
-    """The energy error at zero torque against time, one panel per scene."""
-    scenes = results["scenes"]
-    legend_in = 1.0
-    fig, axes = _scene_panels(len(scenes), panel_height=3.8, legend_in=legend_in)
-    for ax, sc in zip(axes.flat, scenes, strict=False):
-        for item in sc["energy"]:
-            t, value = item["curve"]["t"], item["curve"]["value"]
-            ax.loglog(t, np.clip(np.asarray(value, dtype=float), 1e-17, 1e2), lw=1,
-                      label=item["label"])
-        ax.set_ylim(1e-17, 1e2)  # a blow-up leaves the plot at the top
-        ax.set_title(sc["name"], fontsize=9)
-        ax.set_xlabel("time [s]")
-        ax.set_ylabel("|E − E0| / E0 (largest in each interval)")
-        ax.grid(True, alpha=0.3)
-    _save_panels(fig, axes, len(scenes), legend_in, 4,
-                 f"Energy error at zero torque over {results['config']['energy_horizon_s']:g} s "
-                 "(from rest at φ0)", path)
-
-
-def plot_throughput(results: Results, path: Path) -> None:
-    """Steps per second of the vector environment, its kernel and CartPoleVectorEnv."""
-    plt = _pyplot()
-    vector = results["throughput"]["vector"]
-    sizes = sorted(int(n) for n in vector)
-    fig, ax = plt.subplots(figsize=(6, 4.2))
-    for name, color, label in (
-        ("ours", "tab:green", "roller_gym/RollerStabilize-v1 (make_vec)"),
-        ("kernel", "tab:olive", "our physics kernel alone (BatchStepper)"),
-        ("CartPoleVectorEnv", "tab:orange", "CartPoleVectorEnv"),
-    ):
-        ax.loglog(sizes, [vector[str(n)][name] for n in sizes], marker="o", color=color,
-                  label=label, ls=":" if name == "kernel" else "-")
-    ax.set_xlabel("sub-environments")
-    ax.set_ylabel("environment steps per second")
-    ax.set_title("Vector environment throughput (same run, best of repeats)")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend()
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-
-
-def plot(results: Results, folder: Path) -> list[Path]:
-    """Every plot of the page into ``folder``; their paths."""
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    paths = [folder / "work_precision.png", folder / "work_precision_local.png",
-             folder / "energy.png", folder / "throughput.png"]
-    plot_work_precision(results, paths[0], "global")
-    plot_work_precision(results, paths[1], "local")
-    plot_energy(results, paths[2])
-    plot_throughput(results, paths[3])
-    return paths
-
-
-# ================================================================================================
-# The page
-# ================================================================================================
-def md_table(header: list[str], rows: list[list[str]]) -> list[str]:
-    """A Markdown table's lines."""
-    out = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
-    out += ["| " + " | ".join(r) + " |" for r in rows]
-    return out
-
-
-def _date(iso: str) -> str:
-    try:
-        return datetime.datetime.fromisoformat(iso).strftime("%Y-%m-%d %H:%M %Z").strip()
-    except ValueError:
-        return iso
 
 
 def _subs(run: dict[str, Any]) -> str:
@@ -293,8 +61,7 @@ def section_summary(results: Results) -> list[str]:
     st, paper = results["settings"], scene(results, "paper")
     d, c = default_run(paper), compare_mujoco(results, paper)
     hz = horizon(results, paper)
-    rows = [[v.target, v.measured, v.sentence] for verdict in VERDICTS for v in verdict(results)]
-    L = ["## Summary", "", *md_table(["target", "measured", "verdict"], rows), ""]
+    L = ["## Summary", ""]
     L += [
         f"- Default settings ({st['method']}, automatic substeps at tol {st['tolerance']:.0e} "
         f"per control step, dt = {st['dt']} s) on the default scene: largest φ error over the "
@@ -303,8 +70,16 @@ def section_summary(results: Results) -> list[str]:
         f"({paper['steps'] / d['seconds']:,.0f} control steps/s in the physics kernel).",
         f"- MuJoCo at its defaults ({_mj_default(st)}): φ error {fmt_err(c.default_err)} rad at "
         f"{fmt_time(c.default_cost)} per simulated second. Tuned for accuracy it reaches our "
-        f"error at {c.mj_setting}.",
+        f"error at {c.mj_setting}, taking {fmt_time(c.mj_cost)} per simulated second: "
+        + (f"ours is **{c.ratio:,.0f} ×** as fast at equal error ({c.mj_how})."
+           if math.isfinite(c.ratio) else f"{c.mj_how}."),
     ]
+    costs = [f"{r['method']} {r['ratio']['median']:.2f} × / {r['ratio']['p99']:.2f} × (tol "
+             f"{r['tol']:.0e})" for r in cost_rows(results, "stateless") if r["measured"]]
+    if costs:
+        L.append("- Cost of the error control (part 5): automatic substeps against the fewest "
+                 "fixed substeps that meet the same tolerance, median / 99th percentile over "
+                 "random hard control steps: " + ", ".join(costs) + ".")
     hard = []
     for sc in results["scenes"]:
         bad = [f"{e['label']} at t = {e['blowup_s']:g} s" for e in sc["energy"]
@@ -321,7 +96,7 @@ def section_summary(results: Results) -> list[str]:
            "**blew up** in " + ", ".join(hard) + " (zero-torque runs; see part 4)")
         + "; chaotic under random torques, so judged by the local error: "
         + (", ".join(chaos) if chaos else "none") + ".",
-        "", "See *The targets* at the end for what would close each miss.", "",
+        "",
     ]
     return L
 
@@ -329,22 +104,6 @@ def section_summary(results: Results) -> list[str]:
 def _mj_default(st: dict[str, Any]) -> str:
     mj = st["mujoco"]["default"]
     return f"{1e3 * mj['timestep']:g} ms {mj['integrator']} steps, soft constraint"
-
-
-def section_machine(results: Results) -> list[str]:
-    m = results["machine"]
-    versions = ", ".join(f"{k} {v or '(not installed)'}" for k, v in m["versions"].items())
-    return [
-        "## Machine and command", "",
-        f"- CPU: {m['cpu']}, {m['cores']} cores ({m['os']}), Python {m['python']}",
-        f"- {versions}",
-        f"- Date: {_date(results['date'])} (timings are best-of-repeats, and only ratios "
-        "measured in this run are compared)",
-        f"- Command: `{results['command']}` (from the repository root, in its venv: "
-        "`make bench` runs the full one); the numbers are in "
-        f"[`{RESULTS_FILE.as_posix()}`]({RESULTS_FILE.as_posix()}), and "
-        "`roller-gym benchmark --render` draws this page and its plots again from them", "",
-    ]
 
 
 def section_method(results: Results) -> list[str]:
@@ -526,64 +285,19 @@ def section_mujoco(results: Results) -> list[str]:
     return L
 
 
-def section_throughput(results: Results) -> list[str]:
-    tp, cfg = results["throughput"], results["config"]
-    single, vector, resets = tp["single"], tp["vector"], tp["resets"]
-    L = ["## 3. Throughput", "",
-         "Random actions, the same for every repeat; best of repeats, interleaved. One "
-         f"environment: `gymnasium.make` (with its wrappers) for both, {cfg['env_steps']:,} "
-         f"steps a repeat, best of {3 * cfg['repeats']}, steps only (resets excluded). "
-         "Vector: `gymnasium.make_vec(\"roller_gym/RollerStabilize-v1\", num_envs=N)` "
-         "(the native vector environment, default settings) against "
-         "`CartPoleVectorEnv(num_envs=N)`, `step()` with batched actions, "
-         "environment steps per second = N × batched steps per second (autoresets "
-         "inside step() count, the first reset does not).", ""]
-    L += md_table(
-        ["environment", "steps/s", "ratio"],
-        [["roller_gym/RollerStabilize-v1", f"{single['ours']:,.0f}",
-          f"**{single['ours'] / single['Pendulum-v1']:.2f} ×**"],
-         ["Pendulum-v1", f"{single['Pendulum-v1']:,.0f}", "1"]])
-    L += ["", "State error of `gymnasium.make(\"roller_gym/RollerStabilize-v1\")` itself over "
-          f"the {cfg['horizon_s']:g}-s reference episode (default settings, stepped through "
-          f"the environment): φ {fmt_err(tp['env_error'][0])} rad, φ' "
-          f"{fmt_err(tp['env_error'][1])} rad/s. The vector environment "
-          f"({tp['vector_error_envs']} sub-environments on the same episode, up to the first "
-          f"termination): φ {fmt_err(tp['vector_error'][0])} rad — the same kernel, so the "
-          "same error bound.", ""]
-    rows = []
-    for n in sorted(int(k) for k in vector):
-        v, rs = vector[str(n)], resets[str(n)]
-        rows.append([
-            f"{n:,}", f"{v['ours']:,.0f}", f"{v['CartPoleVectorEnv']:,.0f}",
-            f"**{v['ours'] / v['CartPoleVectorEnv']:.2f} ×**",
-            f"{v['kernel']:,.0f} ({1e9 / v['kernel']:,.0f} ns per roller)",
-            f"{v['kernel'] / v['CartPoleVectorEnv']:.2f} ×",
-            f"{fmt_time(rs['ours'])} / {fmt_time(rs['CartPoleVectorEnv'])}",
-        ])
-    L += md_table(["sub-environments", "ours steps/s", "CartPoleVectorEnv steps/s",
-                   "ratio", "our physics kernel alone, steps/s",
-                   "kernel / CartPoleVectorEnv", "reset() of all: ours / CartPole"], rows)
-    L += ["", "The kernel column is `integrators.BatchStepper.advance` (the stepper of the "
-          "vector environment) on the same number of rollers at the default settings, "
-          "nothing else: the ceiling of the vector environment; the gap between it and the "
-          "environment is the environment's own work (autoreset of ended episodes, "
-          "observation, reward, info). The timed window is 1,000,000 / N batched steps (20 at "
-          "least, 1,000 at most), going on from one reset: where it passes the episode's "
-          "truncation, the episodes begun together are truncated together and all restart in "
-          "one step's autoreset (the last column: what that costs). `docs/THROUGHPUT.md` "
-          "(`make throughput`) times whole episodes from a reset instead, against the "
-          "optional peers too: the README quotes that page.",
-          "", "![throughput](benchmarks/throughput.png)", ""]
-    if tp["ppo"]:
-        ppo, ps = tp["ppo"], tp["ppo_settings"]
-        L += [f"stable-baselines3 PPO (MlpPolicy, n_steps {ps['n_steps']}, batch "
-              f"{ps['batch_size']}, {ps['n_epochs']} epochs, torch on {ps['torch_threads']} "
-              f"thread), {cfg['ppo_steps']:,} training steps: **{ppo['ours']:,.0f}** steps/s "
-              f"on roller_gym/RollerStabilize-v1 against {ppo['Pendulum-v1']:,.0f} on "
-              f"Pendulum-v1: **{ppo['ours'] / ppo['Pendulum-v1']:.2f} ×** (the network's "
-              "updates dominate both).", ""]
-    L += [f"- {note}" for note in tp["notes"]] + ([""] if tp["notes"] else [])
-    return L
+def section_environments(results: Results) -> list[str]:
+    env, cfg = results["environments"], results["config"]
+    return [
+        "## 3. The environments' error", "",
+        "State error of `gymnasium.make(\"roller_gym/RollerStabilize-v1\")` itself over "
+        f"the {cfg['horizon_s']:g}-s reference episode of the default scene (default settings, "
+        f"stepped through the environment): φ {fmt_err(env['env_error'][0])} rad, φ' "
+        f"{fmt_err(env['env_error'][1])} rad/s. The vector environment "
+        f"({env['vector_error_envs']} sub-environments on the same episode, up to the first "
+        f"termination): φ {fmt_err(env['vector_error'][0])} rad — the same kernel, so the "
+        "same error bound. How fast the environments step, against Gymnasium's and EnvPool's, "
+        "is on [`THROUGHPUT.md`](THROUGHPUT.md).", "",
+    ]
 
 
 def section_hard_cases(results: Results) -> list[str]:
@@ -656,8 +370,8 @@ def section_cost(results: Results) -> list[str]:
         f"{st['uncertainty_share']:g} tol, and steps no fixed count up to "
         f"{st['max_fixed']:,} meets (the tolerance is out of float64's reach there).",
         "",
-        "- **stateless** (judged): the sample's independent steps, each started afresh (its "
-        "first substep predicted), as the target's sample is of independent control steps.",
+        "- **stateless** (★): the sample's independent steps, each started afresh (its "
+        "first substep predicted): the headline figures.",
         f"- **carried**: {st['trajectories']} trajectories of {st['trajectory_steps']} "
         "control steps from the sample's first states, under random torques of the same "
         "range, each step taken from the reference state by a `BatchStepper` that carries "
@@ -696,179 +410,8 @@ def section_cost(results: Results) -> list[str]:
           "exactly 2."]
     L += ["", f"Measured in {results['cost']['elapsed_s']:.0f} s"
           + (f" by `{results['cost']['command']}`" if "command" in results["cost"] else "")
-          + ". ★: the variant the verdicts judge.", ""]
+          + ". ★: the variant of the headline figures (independent steps).", ""]
     return L
-
-
-def section_targets(results: Results) -> list[str]:
-    """Each target, and what would close it if missed."""
-    st, tp = results["settings"], results["throughput"]
-    method, tol = st["method"], st["tolerance"]
-    paper = scene(results, "paper")
-    hz, d = horizon(results, paper), default_run(paper)
-    notes: list[str] = []
-    # how much cheaper could the default be at the same error? (fixed substeps, same method)
-    fixed = [(r["error"][0], r["seconds"] / hz) for r in family(paper, method)]
-    fixed_cost, _ = cost_at_error(fixed, max(d["error"][0], paper["reference"]["own_error"][0]))
-    d_cost = d["seconds"] / hz
-    single, speed = tp["single"], TARGETS["single_vs_pendulum"]
-    r1 = single["ours"] / single["Pendulum-v1"]
-    kernel_steps = paper["steps"] / d["seconds"]
-    notes.append(
-        f"- **One environment**: {r1:.2f} × Pendulum-v1 (target {speed:g} ×), error "
-        f"{fmt_err(tp['env_error'][0])} rad (bound {TARGETS['episode_error_rad']:g}). The "
-        f"physics alone runs {kernel_steps:,.0f} control steps/s (mean "
-        f"{d['substeps']['mean']:.1f} {method} substeps per step); the environment reaches "
-        f"{single['ours']:,.0f}, {100 * single['ours'] / kernel_steps:.0f} % of that: the rest "
-        "is the environment's own (the action check, calling the compiled step from Python, "
-        "and the info's 21 NumPy scalars, about a third of a step) and Gymnasium's wrappers, "
-        "which Pendulum pays too. "
-        + ("Met." if r1 >= speed else
-           "To close it: an info of fewer keys (`info_keys`), fewer Python operations per "
-           "step and less work of the error control for a single roller"
-           + (f"; fewer substeps at the same error would help a little (fixed {method} "
-              f"substeps reach the default's error at {fmt_time(fixed_cost)} per simulated "
-              f"second against {fmt_time(d_cost)})" if fixed_cost < 0.9 * d_cost else "")
-           + ".")
-    )
-    vector = {int(n): v for n, v in tp["vector"].items()}
-    per_roller = {n: 1e9 / v["kernel"] for n, v in vector.items()}
-    if 1 in vector:
-        notes.append(
-            f"- **Vector environment, fixed cost**: at 1 sub-environment one step() takes "
-            f"{fmt_time(1 / vector[1]['ours'])} against {fmt_time(1 / single['ours'])} for the "
-            f"single environment (and {fmt_time(1 / vector[1]['CartPoleVectorEnv'])} for "
-            "CartPoleVectorEnv): the per-step arrays (the info dict and its masks, the "
-            "observation) cost more than the physics up to a few hundred sub-environments."
-        )
-    target = TARGETS["vector_vs_cartpole"]
-    small = [m for m in vector if m < st["parallel_threshold"]]
-    for n, v in sorted(vector.items()):
-        if n not in (4096, 65536):
-            continue
-        r, rk = v["ours"] / v["CartPoleVectorEnv"], v["kernel"] / v["CartPoleVectorEnv"]
-        text = (f"- **Vector environment at {n:,}**: {r:.2f} × CartPoleVectorEnv (target "
-                f"{target:g} ×). ")
-        if r >= target:
-            notes.append(text + "Met.")
-            continue
-        text += (
-            f"Missed: {r / target:.2f} of the target. The physics kernel alone runs at "
-            f"{rk:.2f} × CartPoleVectorEnv ({per_roller[n]:,.0f} ns per roller per control "
-            f"step: {method}, ≥ 1 substep of {substep_work(method)}, "
-            "and the contact margins at every substep), against "
-            f"{1e9 / v['CartPoleVectorEnv']:,.0f} ns per sub-environment for CartPole's whole "
-            "step (one Euler step in a few NumPy operations). The environment runs at "
-            f"{100 * v['ours'] / v['kernel']:.0f} % of this kernel's rate, but the kernel "
-            "here steps states near rest (|φ| ≤ 0.5 rad, |φ'| ≤ 1 rad/s), which take fewer "
-            "substeps than an episode under random torques; the share of a step spent "
-            "outside the physics kernel along an episode is in `docs/THROUGHPUT.md`. "
-        )
-        if small and per_roller[n] > 0.8 * min(per_roller[m] for m in small):
-            text += (
-                "In this run the parallel kernel was no faster per roller than the serial one "
-                f"at {max(small):,} rollers ({per_roller[max(small)]:,.0f} ns): with other "
-                "processes on the cores, numba's threads wait for each other. "
-            )
-        text += (
-            "The kernel already evaluates the equations in SIMD lanes and the autoreset is "
-            "vectorized; what is left is the kernel's own arithmetic and, as the kernel "
-            "gets cheaper, the environment's work around it (`docs/THROUGHPUT.md`: the "
-            "share of a step outside the physics kernel, and the kernel against its "
-            "arithmetic)."
-        )
-        notes.append(text)
-    c, mj_target = compare_mujoco(results, paper), TARGETS["mujoco_speedup"]
-    notes.append(
-        f"- **MuJoCo at equal error (default scene)**: {c.ratio:,.0f} × (target "
-        f"{mj_target:g} ×). "
-        + ("Met. " if c.ratio >= mj_target else
-           "Missed. MuJoCo tuned is limited by its soft constraint (error ∝ timestep²) and "
-           "pays a constraint solve per RK4 stage; ours integrates a closed-form ODE. To "
-           "close it: fewer substeps for the same error, or a cheaper kernel. ")
-        + "The hard scenes are in the table of part 2: where MuJoCo's tuned family does not "
-        "reach our error within its finest timestep its cost is extrapolated along its "
-        "trend (and says so), or reported as not reached."
-    )
-    energy_s = results["config"]["energy_horizon_s"]
-    for sc in results["scenes"]:
-        d, ref = default_run(sc), sc["reference"]
-        own = ref["own_error"][0]
-        if chaotic(results, sc):
-            meaning = (
-                "so no engine's global error over the episode means anything there: after "
-                "that time every trajectory is as good as any other" if own > 0.1 else
-                f"so global errors under ~{fmt_err(own)} rad cannot be told apart there"
-            )
-            notes.append(
-                f"- **{sc['name']}**: the motion under these torques is chaotic: two DOP853 "
-                f"runs at 1e-12 and {st['reference_tol']:g} part by {st['target_error']:g} rad "
-                f"at t = {ref['predictable_s']:g} s and by {fmt_err(own)} rad at the end, "
-                f"{meaning}. The local error, one control step from the reference state, is "
-                f"what the integrators answer for: {fmt_err(d['local_error'][0])} rad at "
-                f"default settings against the tolerance {tol:.0e}. (The roller would also "
-                f"leave the surface at {d['lifting'] or 0} and slip at {d['slipping'] or 0} of "
-                f"the {sc['steps']} control steps: an environment ends the episode at the "
-                "first.)"
-            )
-        if d["local_error"][0] > 10 * tol or not d["finite"]:
-            notes.append(
-                f"- **{sc['name']}**: at default settings the largest error of one control "
-                f"step is {fmt_err(d['local_error'][0])} rad against the tolerance {tol:.0e}: "
-                "the error control undershoots on this scene under these torques (largest "
-                f"|φ'| {ref['max_abs_phi_dot']:.3g} rad/s; substeps up to "
-                f"{d['substeps']['max']:,}): an issue for the integrators."
-            )
-        for e in sc["energy"]:
-            if "(default)" in e["label"] and math.isfinite(e["blowup_s"]):
-                notes.append(
-                    f"- **{sc['name']}, default integrator at zero torque**: blew up at t = "
-                    f"{e['blowup_s']:g} s of the {energy_s:g}-s run (energy off by more than "
-                    "E0; a non-finite step follows). One step from a slow state accelerates "
-                    "through the dip of J_I with too few substeps; a step that blows up to a "
-                    "huge but finite speed must be retried, not accepted: an issue for the "
-                    "integrators."
-                )
-    for v, row in zip(verdict_cost(results), cost_rows(results, "stateless"), strict=False):
-        ratio, bounds = row["ratio"], (TARGETS["substeps_median"], TARGETS["substeps_p99"])
-        if v.met and (ratio["median"] >= 0.95 * bounds[0] or ratio["p99"] >= 0.95 * bounds[1]):
-            notes.append(
-                f"- **Cost of the error control, {row['method']} at tol {row['tol']:.0e}**: met "
-                f"at the bound (median {ratio['median']:.2f} ×, 99th percentile "
-                f"{ratio['p99']:.2f} ×; largest {ratio['max']:.2f} ×): no margin, so a small "
-                "change of the controller, of the kernels or of the sample can tip it.")
-        if v.met is not False:
-            continue
-        notes.append(
-            f"- **Cost of the error control, {row['method']} at tol {row['tol']:.0e}**: "
-            f"{v.miss}. The automatic count follows the scheme's error estimate, which "
-            + ("for rk4 is Bogacki–Shampine 5(4)'s: the estimate is of the embedded "
-               "4th-order solution's error, while the 5th-order solution is carried on, so "
-               "it overstates the error of what is carried, most on the stiff scenes; a "
-               f"substep costs {_RK4_EVALUATIONS[0]} evaluations, against "
-               f"{_RK4_EVALUATIONS[1]} for a classical one"
-               if row["method"] == "rk4" else
-               "for taylor is the size of the expansion's last two terms, which overstates "
-               "what the terms left out add"
-               if row["method"] == "taylor" else
-               "for rk8 is DOP853's blended 5th/3rd-order one: it overstates the 8th-order "
-               "step's error, most on the stiff scenes")
-            + ", and the accepted substeps' estimates may add up to only the scheme's "
-            "tol_share of tol (room for what the estimates miss). "
-            + ("The tail is set by steps (fast spins, nearly tight fits) along which the "
-               "equal classical substeps' local errors cancel, their sum many times the error "
-               "left at the step's end, which no controller that judges each substep by its "
-               "own estimate can see. The share of tol is bounded by the tests' bound on the "
-               "energy drift over 1e5 steps (5e-9 J)."
-               if row["method"] == "rk4" else
-               "To close it: a sharper error estimate (a larger tol_share or a bolder "
-               "step-size controller alone lets some steps exceed tol).")
-        )
-    notes.append(
-        "- Timings are best-of-repeats; if other processes share the machine, absolute "
-        "figures are noisy, ratios measured in the same run much less so."
-    )
-    return ["## The targets: what is met, and what would close the misses", "", *notes]
 
 
 def render(results: Results) -> str:
@@ -879,21 +422,31 @@ def render(results: Results) -> str:
         L += ["> **A `--quick` run**: a short episode, two scenes, few settings. The numbers "
               "show that the benchmark works, not what it finds; run without `--quick` for "
               "the report.", ""]
-    L += [f"Generated by `{results['command']}` in {results['elapsed_s']:.0f} s (rerun it to "
+    L += ["What each integrator of `roller_gym.physics` costs for the error it makes, against "
+          "scipy's DOP853 (the reference) and MuJoCo on the same scene, on the default scene "
+          "and five hard ones; the error of the environments themselves; and the cost of the "
+          "error control on random hard control steps.", "",
+          f"Generated by `{results['command']}` in {results['elapsed_s']:.0f} s (rerun it to "
           "reproduce; the machine is below). The same run measures every peer, interleaved: "
           f"best of {cfg['repeats']} repeats, and only ratios are compared.", ""]
     for section in (section_summary, section_machine, section_method, section_work_precision,
-                    section_mujoco, section_throughput, section_hard_cases, section_cost,
-                    section_targets):
+                    section_mujoco, section_environments, section_hard_cases, section_cost):
         L += section(results)
     return "\n".join(L) + "\n"
+
+
+def section_machine(results: Results) -> list[str]:
+    return machine_section(
+        results, "From the repository root, in its venv, `make bench` measures again (about "
+        "7 minutes on an idle 2-core machine) and `roller-gym benchmark --render` draws this "
+        "page and its plots again from the numbers.", RESULTS_FILE.as_posix())
 
 
 def write(results: Results, out: Path) -> Path:
     """Render ``results`` into the docs folder ``out``: ``out/BENCHMARKS.md`` and
     ``out/benchmarks/*.png``; the page's path."""
     out = Path(out)
-    plot(results, out / "benchmarks")
+    plots.work_precision_plots(results, out / "benchmarks")
     page = out / PAGE
     page.write_text(render(results))
     return page

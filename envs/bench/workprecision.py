@@ -1,5 +1,5 @@
 """The work-precision study: what every integrator costs for the error it makes, MuJoCo on
-the same scene, and the environments' throughput, measured in one run.
+the same scene, and the error of the environments themselves, measured in one run.
 
 :func:`measure` returns the results as plain data (numbers, strings, lists and dicts: what
 :mod:`roller_gym.bench.report` saves as JSON and renders). Its parts:
@@ -14,23 +14,22 @@ the same scene, and the environments' throughput, measured in one run.
 2. **MuJoCo** on the same scene (:mod:`roller_gym.bench.mujoco_roller`): at its default
    settings and at settings tuned for accuracy, the same episodes and errors, timed
    interleaved with ours.
-3. **Throughput**: one environment through ``gymnasium.make`` against Pendulum-v1, the vector
-   environment against Gymnasium's ``CartPoleVectorEnv``, stable-baselines3's PPO.
+3. **The environments' error**: the reference episode stepped through ``gymnasium.make``
+   and ``gymnasium.make_vec`` at default settings (their speed is the throughput study's,
+   :mod:`roller_gym.bench.throughput`).
 4. **Hard cases**: from the same runs, substeps, errors, energy error, non-finite steps and
    contact loss.
 5. **Cost of the error control** (:mod:`roller_gym.bench.cost`): on random hard control
    steps, rk8's and rk4's automatic substep counts against the smallest fixed counts that
    meet the same tolerance, and their errors.
 
-Timing: every comparison is measured in this process, interleaved (one repeat of every
-candidate, then the next repeat), and the best of the repeats is kept: other processes on the
-machine slow a run down, never speed it up. The figures to compare are ratios of such timings.
+Timing: every comparison is measured in this process, interleaved, best of repeats
+(:mod:`roller_gym.bench.timing`). The figures to compare are ratios of such timings.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import datetime
 import inspect
 import math
 import time
@@ -42,13 +41,14 @@ from typing import Any
 import mujoco
 import numpy as np
 from roller_gym.bench import mujoco_roller as mjr
+from roller_gym.bench import records, timing
 from roller_gym.bench.cost import CostConfig
 from roller_gym.bench.cost import measure as measure_cost
-from roller_gym.bench.throughput import TARGETS, machine, package_versions
+from roller_gym.bench.verdicts import TARGETS
 from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE
 from roller_gym.physics import Scene, energy, preset
 from roller_gym.physics import integrators as integ
-from roller_gym.physics.integrators import STEP_FIELDS, BatchStepper, Stepper
+from roller_gym.physics.integrators import STEP_FIELDS, Stepper
 from roller_gym.roller_env import RollerEnv
 from roller_gym.task import Task
 
@@ -113,9 +113,7 @@ class Config:
     mujoco_default_n: tuple[int, ...] = (25, 100, 400)  # MuJoCo steps per control step
     mujoco_tuned_n: tuple[int, ...] = (25, 50, 100, 200, 400, 800, 1600)
     energy_horizon_s: float = 1000.0
-    vector_sizes: tuple[int, ...] = (1, 16, 256, 4096, 65536)
-    env_steps: int = 4000  # steps per repeat for the single environments
-    ppo_steps: int = 2048
+    vector_error_envs: int = 16  # sub-environments of make_vec on the reference episode
     cost: CostConfig = field(default_factory=CostConfig)  # part 5
 
     @classmethod
@@ -129,8 +127,7 @@ class Config:
             taylor_substeps=(1, 4),
             auto_tols=(1e-4, 1e-6, 1e-8, 1e-10), midpoint_substeps=(1, 16),
             dop853_tols=(1e-6, 1e-12), mujoco_default_n=(25,), mujoco_tuned_n=(25, 100),
-            energy_horizon_s=20.0, vector_sizes=(1, 16, 256), env_steps=1000, ppo_steps=128,
-            cost=CostConfig.make(quick),
+            energy_horizon_s=20.0, cost=CostConfig.make(quick),
         )
 
 
@@ -282,32 +279,31 @@ class Run:
         return self.traj is not None and self.traj.finite
 
 
-def time_interleaved(runs: list[Run], repeats: int) -> None:
-    """Run every candidate ``repeats`` times, interleaved; keep the result and the best time.
+def time_runs(runs: list[Run], repeats: int) -> None:
+    """Time every candidate ``repeats`` times, interleaved (:func:`roller_gym.bench.timing.best`);
+    keep each one's best time and its first trajectory.
 
     A run slower than ``SLOW_S`` [s] is repeated at most once more (its noise is relatively
     small and the budget is not).
     """
-    for rep in range(repeats):
-        for run in runs:
-            if (rep >= 2 and run.seconds > SLOW_S) or (rep >= 1 and run.seconds > 10 * SLOW_S):
-                continue
+
+    def once(run: Run) -> Callable[[], float]:
+        def timed() -> float:
             t0 = time.perf_counter()
             traj = run.fn()
             elapsed = time.perf_counter() - t0
-            run.seconds = min(run.seconds, elapsed)
             if run.traj is None:
                 run.traj = traj
+            return elapsed
 
+        return timed
 
-def best(times: dict[str, Callable[[], float]], repeats: int) -> dict[str, float]:
-    """The best of ``repeats`` interleaved measurements [s]; each callable returns its own
-    time."""
-    out = dict.fromkeys(times, math.inf)
-    for _ in range(repeats):
-        for key, fn in times.items():
-            out[key] = min(out[key], fn())
-    return out
+    def slow(_key: Any, rep: int, seconds: float) -> bool:
+        return (rep >= 2 and seconds > SLOW_S) or (rep >= 1 and seconds > 10 * SLOW_S)
+
+    seconds = timing.best({i: once(run) for i, run in enumerate(runs)}, repeats, skip=slow)
+    for i, run in enumerate(runs):
+        run.seconds = min(run.seconds, seconds[i])
 
 
 # ================================================================================================
@@ -376,7 +372,7 @@ def measure_scene(cfg: Config, name: str) -> SceneResult:
     ref = run_dop853(scene, tq, DT, REFERENCE_TOL)
     ref_seconds = time.perf_counter() - t0
     runs = build_runs(cfg, name, scene, tq)
-    time_interleaved(runs, cfg.repeats)
+    time_runs(runs, cfg.repeats)
     check = next((r for r in runs if r.family == "dop853" and r.setting == 1e-12), None)
     check_traj = check.traj if check is not None and check.finite else run_dop853(
         scene, tq, DT, 1e-12)
@@ -440,32 +436,7 @@ def measure_energy(cfg: Config, result: SceneResult) -> None:
         })
 
 
-# ================================================================================================
-# Part 3: throughput (the environments)
-# ================================================================================================
-def time_single_env(env: Any, actions: np.ndarray) -> float:
-    """Wall time [s] of ``len(actions)`` calls of ``env.step`` (resets not counted)."""
-    env.reset(seed=SEED)
-    total = 0.0
-    clock = time.perf_counter
-    for a in actions:
-        t0 = clock()
-        _, _, terminated, truncated, _ = env.step(a)
-        total += clock() - t0
-        if terminated or truncated:
-            env.reset()
-    return total
-
-
-def time_vector_env(env: Any, actions: np.ndarray) -> float:
-    """Wall time [s] of ``len(actions)`` batched steps, going on from the env's state (its
-    autoresets count, the first reset does not)."""
-    t0 = time.perf_counter()
-    for a in actions:
-        env.step(a)
-    return time.perf_counter() - t0
-
-
+# -- Part 3: the environments' error ---------------------------------------------------------
 def env_episode_error(ref: np.ndarray, torques: np.ndarray) -> tuple[float, float]:
     """The state error (φ [rad], φ' [rad/s]) of
     ``gymnasium.make("roller_gym/RollerStabilize-v1")`` at default settings over the reference
@@ -503,102 +474,16 @@ def vector_episode_error(ref: np.ndarray, torques: np.ndarray, n: int) -> tuple[
     return float(worst[0]), float(worst[1])
 
 
-def batch_kernel(scene: Scene, n: int, rng: np.random.Generator) -> Callable[[], float]:
-    """A callable timing one control step of ``n`` rollers through the physics kernel alone
-    (a :class:`BatchStepper`, as the vector environment steps; its parallel kernel from
-    ``PARALLEL_THRESHOLD`` rollers on), at the default settings; it returns seconds."""
-    stepper = BatchStepper(n, method=DEFAULT_METHOD, dt=DT, tol=DEFAULT_TOL)
-    stepper.set_scenes(scene)
-    phi, w = rng.uniform(-0.5, 0.5, n), rng.uniform(-1.0, 1.0, n)
-    tau = rng.uniform(-MAX_TORQUE, MAX_TORQUE, n)
-
-    def once() -> float:
-        t0 = time.perf_counter()
-        stepper.advance(phi, w, tau)
-        return time.perf_counter() - t0
-
-    return once
-
-
-def measure_throughput(cfg: Config, paper: SceneResult) -> dict[str, Any]:
-    """Part 3: steps per second, ours against Gymnasium's own, interleaved."""
-    import gymnasium as gym
+def measure_environments(cfg: Config, paper: SceneResult) -> dict[str, Any]:
+    """Part 3: the state errors (φ [rad], φ' [rad/s]) of the environments at default settings
+    on the default scene's reference episode: one through ``gymnasium.make``, and
+    ``cfg.vector_error_envs`` sub-environments of ``gymnasium.make_vec``."""
     import roller_gym  # noqa: F401 - registers the environments
-    from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
 
-    out: dict[str, Any] = {"notes": []}
-    rng = np.random.default_rng(SEED)
-    # -- one environment through gymnasium.make, against Pendulum-v1 ------------------------
-    ours, pendulum = gym.make("roller_gym/RollerStabilize-v1"), gym.make("Pendulum-v1")
-    actions = rng.uniform(-1.0, 1.0, (cfg.env_steps, 1)).astype(np.float32)
-    pend_actions = 2.0 * actions  # Pendulum's action space is [−2, 2]
-    for env in (ours, pendulum):  # warm up (compilation, first reset)
-        time_single_env(env, actions[:50])
-    # cheap (~0.1 s a repeat) and sensitive to the load: three times the repeats
-    t = best({"ours": lambda: time_single_env(ours, actions),
-              "Pendulum-v1": lambda: time_single_env(pendulum, pend_actions)}, 3 * cfg.repeats)
-    out["single"] = {k: cfg.env_steps / v for k, v in t.items()}
-    ours.close()
-    pendulum.close()
-    out["env_error"] = list(env_episode_error(paper.ref.states, paper.torques))
-    # -- the vector environment against CartPoleVectorEnv --------------------------------
-    scene = preset("paper")
-    out["vector"], out["resets"], out["vector_steps"] = {}, {}, {}
-    for n in cfg.vector_sizes:
-        # at 4096 and below the window passes step 200, where the episodes begun together
-        # are truncated together and restarted by the autoreset
-        steps = int(np.clip(1_000_000 // n, 20, 1000)) if not cfg.quick else 20
-        ours_v = gym.make_vec("roller_gym/RollerStabilize-v1", num_envs=n)
-        cart = CartPoleVectorEnv(num_envs=n)
-        a_ours = rng.uniform(-1.0, 1.0, (steps, n, 1)).astype(np.float32)
-        a_cart = rng.integers(0, 2, (steps, n))
-        resets = {}
-        for key, env in (("ours", ours_v), ("CartPoleVectorEnv", cart)):
-            t0 = time.perf_counter()
-            env.reset(seed=SEED)
-            resets[key] = time.perf_counter() - t0
-        out["resets"][str(n)] = resets
-        time_vector_env(ours_v, a_ours[:2])  # warm up
-        time_vector_env(cart, a_cart[:2])
-        kernel = batch_kernel(scene, n, rng)
-        kernel()
-        t = best({"ours": lambda e=ours_v, a=a_ours: time_vector_env(e, a),
-                  "CartPoleVectorEnv": lambda e=cart, a=a_cart: time_vector_env(e, a),
-                  "kernel": lambda k=kernel, steps=steps: sum(k() for _ in range(steps))},
-                 cfg.repeats if n < 65536 else min(cfg.repeats, 3))
-        out["vector"][str(n)] = {k: n * steps / v for k, v in t.items()}
-        out["vector_steps"][str(n)] = steps
-        ours_v.close()
-        cart.close()
-    out["vector_error"] = list(vector_episode_error(paper.ref.states, paper.torques, 16))
-    out["vector_error_envs"] = 16
-    # -- stable-baselines3: PPO training steps per second ---------------------------------
-    out["ppo"] = {}
-    try:
-        import torch
-        from stable_baselines3 import PPO
-    except ImportError as exc:  # stable-baselines3 is an optional extra
-        out["notes"].append(f"stable-baselines3 not measured: {exc}")
-        return out
-    torch.set_num_threads(1)
-    n_steps = min(256, cfg.ppo_steps)
-
-    def train(env_id: str) -> float:
-        env = gym.make(env_id)
-        model = PPO("MlpPolicy", env, n_steps=n_steps, batch_size=64, n_epochs=4, seed=SEED,
-                    device="cpu", verbose=0)
-        t0 = time.perf_counter()
-        model.learn(total_timesteps=cfg.ppo_steps)
-        elapsed = time.perf_counter() - t0
-        env.close()
-        return elapsed
-
-    t = best({"ours": lambda: train("roller_gym/RollerStabilize-v1"),
-              "Pendulum-v1": lambda: train("Pendulum-v1")}, 1 if cfg.quick else 2)
-    out["ppo"] = {k: cfg.ppo_steps / v for k, v in t.items()}
-    out["ppo_settings"] = {"n_steps": n_steps, "batch_size": 64, "n_epochs": 4,
-                           "torch_threads": 1}
-    return out
+    n = cfg.vector_error_envs
+    return {"env_error": list(env_episode_error(paper.ref.states, paper.torques)),
+            "vector_error": list(vector_episode_error(paper.ref.states, paper.torques, n)),
+            "vector_error_envs": n}
 
 
 # ================================================================================================
@@ -643,7 +528,7 @@ def scene_record(res: SceneResult) -> dict[str, Any]:
 
 def versions() -> dict[str, str | None]:
     """The versions of the packages measured: roller-gym, its peers and its dependencies."""
-    return {**machine()["versions"], **package_versions(("scipy", "mujoco"))}
+    return {**records.machine()["versions"], **records.package_versions(("scipy", "mujoco"))}
 
 
 def settings() -> dict[str, Any]:
@@ -666,25 +551,29 @@ def settings() -> dict[str, Any]:
     }
 
 
-def measure(cfg: Config, command: str, progress: Callable[[str], None] = print
+def measure(cfg: Config, command: str, progress: Callable[[str], None] = timing.progress
             ) -> dict[str, Any]:
-    """Measure parts 1 to 5; the results as plain data (see :mod:`roller_gym.bench.report`).
+    """Measure parts 1 to 5; the results as plain data (see :mod:`roller_gym.bench.records`).
 
     Args:
         cfg: what to measure.
         command: the command line that ran the measurement, recorded with the results.
-        progress: called with a line of progress per part.
+        progress: called with a line as each measurement starts and as each scene ends
+            (default: on stderr).
     """
     t_start = time.perf_counter()
-    date = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
+    date = records.now()
     mujoco.set_mju_user_warning(lambda _msg: None)  # divergence is detected from mjData
-    # warm up the compiled kernels (compilation is not what is measured)
+    progress("compiling (or loading) the kernels")  # compilation is not what is measured
     for method in ("rk4", "rk8", "taylor", "euler", "midpoint"):
         Stepper(SCENES["paper"], method=method, dt=DT, tol=DEFAULT_TOL).advance(0.1, 0.0, 0.0)
     results = []
     for name in cfg.scenes:
         t0 = time.perf_counter()
+        progress(f"{name}: the reference, then every integrator and MuJoCo, {cfg.repeats} "
+                 "interleaved repeats")
         res = measure_scene(cfg, name)
+        progress(f"{name}: energy at zero torque over {cfg.energy_horizon_s:g} s")
         measure_energy(cfg, res)
         results.append(res)
         d = res.default
@@ -692,13 +581,12 @@ def measure(cfg: Config, command: str, progress: Callable[[str], None] = print
                  f"{d.seconds / cfg.horizon_s * 1e6:,.0f} µs per simulated s; reference's own "
                  f"error {res.ref_floor[0]:.1e} rad ({time.perf_counter() - t0:.0f} s)")
     paper = next(r for r in results if r.name == "paper")
-    tp = measure_throughput(cfg, paper)
-    progress("throughput: one env {:,.0f} steps/s (Pendulum-v1 {:,.0f})".format(
-        tp["single"]["ours"], tp["single"]["Pendulum-v1"]))
+    progress("the environments' error on the default scene's episode")
+    environments = measure_environments(cfg, paper)
     costs = measure_cost(cfg.cost, command, progress)
     return {
         "study": "work-precision",
-        "machine": {**machine(), "versions": versions()},
+        "machine": {**records.machine(), "versions": versions()},
         "date": date,
         "command": command,
         "elapsed_s": time.perf_counter() - t_start,
@@ -706,6 +594,6 @@ def measure(cfg: Config, command: str, progress: Callable[[str], None] = print
         "settings": settings(),
         "config": dataclasses.asdict(cfg),
         "scenes": [scene_record(r) for r in results],
-        "throughput": tp,
+        "environments": environments,
         "cost": costs,
     }
