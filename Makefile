@@ -7,15 +7,18 @@ STAMP := $(VENV)/.installed
 
 .PHONY: run test test-rllib train-rllib bench throughput results clean
 
-# Where pip finds torch's CPU build (torch==2.13.0 resolves to the CUDA build on PyPI, on Linux).
-TORCH_INDEX ?= https://download.pytorch.org/whl/cpu
+# An index with torch's CPU build, where pip's own settings have none: on the open internet,
+# `make test TORCH_INDEX=https://download.pytorch.org/whl/cpu` (torch==2.13.0 resolves to the
+# CUDA build on PyPI, on Linux). Empty by default: an index pip cannot reach costs every
+# install a time-out.
+TORCH_INDEX ?=
 
 # Every environment is made by one recipe: a venv in the stamp's folder, the project installed
 # editable there with the extras that environment's stamp names (EXTRAS below).
 %/.installed: pyproject.toml
 	$(PYTHON) -m venv $(@D)
 	$(@D)/bin/python -m pip install --quiet --upgrade pip
-	$(@D)/bin/python -m pip install --quiet --extra-index-url $(TORCH_INDEX) -e ".[$(EXTRAS)]"
+	$(@D)/bin/python -m pip install --quiet $(if $(TORCH_INDEX),--extra-index-url $(TORCH_INDEX)) -e ".[$(EXTRAS)]"
 	touch $@
 
 $(STAMP): EXTRAS := all
