@@ -14,7 +14,8 @@ module                 what it holds
                        kernels, the steppers (``docs/INTEGRATORS.md``)
 ``taylor``             the Taylor series of the motion, written out by a generator into
                        ``_taylor_series`` (what the ``taylor`` scheme expands)
-``compiling``          a line on stderr where compiling a kernel for its first use takes long
+``compiling``          how the small compiled functions are inlined; a line on stderr where
+                       compiling a kernel for its first use takes long
 =====================  ================================================================
 """
 
