@@ -13,13 +13,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba.extending import register_jitable
 from roller_gym.physics import trig
+from roller_gym.physics.compiling import inlined
 
 __all__ = ["blend", "near", "tolerance", "wrap_angle"]
 
 
-@register_jitable(inline="always")
+@inlined
 def near(x, margin, value_at_margin=0.1):
     """exp(ln(value_at_margin)·(x/margin)²): 1 at x = 0, ``value_at_margin`` at |x| = margin."""
     t = x / margin
@@ -27,7 +27,7 @@ def near(x, margin, value_at_margin=0.1):
     return trig.exp(math.log(value_at_margin) * (t * t))
 
 
-@register_jitable(inline="always")
+@inlined
 def tolerance(x, bound, margin, value_at_margin=0.1):
     """1 where |x| <= ``bound``; outside, :func:`near` of the distance to the bound, so
     ``value_at_margin`` at |x| = bound + margin (dm_control's ``tolerance`` with a
@@ -35,13 +35,13 @@ def tolerance(x, bound, margin, value_at_margin=0.1):
     return near(np.maximum(np.abs(x) - bound, 0.0), margin, value_at_margin)
 
 
-@register_jitable(inline="always")
+@inlined
 def blend(term, weight):
     """1 − w + w·term: a term that pulls the reward down by at most ``weight``."""
     return 1.0 - weight + weight * term
 
 
-@register_jitable(inline="always")
+@inlined
 def wrap_angle(x):
     """x wrapped into [−π, π) [rad]."""
     return x - 2.0 * math.pi * np.floor((x + math.pi) / (2.0 * math.pi))

@@ -14,10 +14,12 @@ module                 what it holds
                        kernels, the steppers (``docs/INTEGRATORS.md``)
 ``taylor``             the Taylor series of the motion, written out by a generator into
                        ``_taylor_series`` (what the ``taylor`` scheme expands)
+``compiling``          how the small compiled functions are inlined; a line on stderr where
+                       compiling a kernel for its first use takes long
 =====================  ================================================================
 """
 
-from roller_gym.physics import analysis
+from roller_gym.physics import analysis, compiling
 from roller_gym.physics.analysis import *  # noqa: F403  (its __all__: kinematics, contact, energy, ...)
 from roller_gym.physics.forms import FORMS
 from roller_gym.physics.integrators import (
@@ -30,6 +32,8 @@ from roller_gym.physics.integrators import (
     step,
 )
 from roller_gym.physics.scene import PRESETS, Scene, preset
+
+compiling.install()
 
 __all__ = [
     *analysis.__all__,

@@ -2,10 +2,11 @@
 
 Every function here is plain arithmetic, so the same source serves a Python float, a NumPy
 array (a batch of states, torques and per-element scene parameters, broadcast together) and,
-compiled by numba (``register_jitable``), the integrators' inner loops. Sines and cosines are
-:mod:`roller_gym.physics.trig`'s: a branch-free form (so a loop over rollers runs in SIMD
-lanes), within 1 ulp of the exact value, compiled for float64 whether called from numba or
-from Python, so a state gives the same bits alone and in a batch.
+compiled by numba (:data:`~roller_gym.physics.compiling.inlined`), the integrators' inner
+loops. Sines and cosines are :mod:`roller_gym.physics.trig`'s: a branch-free form (so a
+loop over rollers runs in SIMD lanes), within 1 ulp of the exact value, compiled for float64
+whether called from numba or from Python, so a state gives the same bits alone and in a
+batch.
 
 Conventions (``docs/PHYSICS.md``): φ is the roller's rotation, positive clockwise,
 0 when C is straight below O1 and O1 straight below O. With the signed curvature
@@ -23,8 +24,8 @@ m/s², N·m·s/rad); φ in rad, φ' in rad/s, τ in N·m.
 
 from __future__ import annotations
 
-from numba.extending import register_jitable
 from roller_gym.physics import trig
+from roller_gym.physics.compiling import inlined
 
 __all__ = [
     "accel",
@@ -54,67 +55,67 @@ __all__ = [
 ]
 
 
-@register_jitable(inline="always")
+@inlined
 def sinc(x):
     """sin(x)/x, with its limit 1 at x = 0."""
     return sinc_of(x, trig.sin(x))
 
 
-@register_jitable(inline="always")
+@inlined
 def sinc_of(x, sin_x):
     """:func:`sinc` of x given its sine ``sin_x``."""
     nonzero = x != 0.0
     return trig.select(nonzero, sin_x / trig.select(nonzero, x, 1.0), 1.0)
 
 
-@register_jitable(inline="always")
+@inlined
 def shape_factors(phi, r, kappa):
     """(s, ψ, θ): s = 1 − rκ, ψ = rκφ/s [rad], θ = φ/s [rad]."""
     s = 1.0 - r * kappa
     return s, r * kappa * phi / s, phi / s
 
 
-@register_jitable(inline="always")
+@inlined
 def ic_squared(phi, r, kappa, e):
     """|IC|² = r² + e² − 2re cos θ [m²], written (r − e)² + 4re sin²(θ/2) (no cancellation):
     :func:`inertia_per_mass` of a point mass (k = 0)."""
     return inertia_per_mass(half_theta_sin(phi, r, kappa), r, e, 0.0)
 
 
-@register_jitable(inline="always")
+@inlined
 def half_theta_sin(phi, r, kappa):
     """sin(θ/2), θ = φ/s: what |IC| and J_I depend on."""
     return trig.sin(0.5 * phi / (1.0 - r * kappa))
 
 
-@register_jitable(inline="always")
+@inlined
 def inertia_per_mass(half_sin, r, e, k):
     """J_I/m = k² + |IC|² = k² + (r − e)² + 4re sin²(θ/2) [m²], from ``half_sin`` = sin(θ/2):
     the denominator D of :func:`accel_terms`."""
     return k * k + (r - e) * (r - e) + 4.0 * r * e * half_sin * half_sin
 
 
-@register_jitable(inline="always")
+@inlined
 def inertia(phi, m, r, kappa, e, k):
     """J_I = m (k² + |IC|²), the moment of inertia about the instant center I [kg·m²]."""
     return m * inertia_per_mass(half_theta_sin(phi, r, kappa), r, e, k)
 
 
-@register_jitable(inline="always")
+@inlined
 def dinertia(phi, m, r, kappa, e):
     """dJ_I/dφ = 2 m r e sin θ / s [kg·m²/rad]."""
     s = 1.0 - r * kappa
     return 2.0 * m * r * e * trig.sin(phi / s) / s
 
 
-@register_jitable(inline="always")
+@inlined
 def d2inertia(phi, m, r, kappa, e):
     """d²J_I/dφ² = 2 m r e cos θ / s² [kg·m²/rad²]."""
     s = 1.0 - r * kappa
     return 2.0 * m * r * e * trig.cos(phi / s) / (s * s)
 
 
-@register_jitable(inline="always")
+@inlined
 def potential(phi, m, r, kappa, e, g):
     """V = m g [(R − r)(1 − cos ψ) + e (1 − cos φ)] [J], zero at φ = 0.
 
@@ -126,21 +127,21 @@ def potential(phi, m, r, kappa, e, g):
     return m * g * (r * phi * half_sin * sinc_of(0.5 * psi, half_sin) + 2.0 * e * h * h)
 
 
-@register_jitable(inline="always")
+@inlined
 def dpotential(phi, m, r, kappa, e, g):
     """dV/dφ = m g (r sin ψ + e sin φ) [N·m]: minus the moment of gravity about I."""
     psi = r * kappa * phi / (1.0 - r * kappa)
     return m * g * (r * trig.sin(psi) + e * trig.sin(phi))
 
 
-@register_jitable(inline="always")
+@inlined
 def d2potential(phi, m, r, kappa, e, g):
     """d²V/dφ² = m g (r²κ/s cos ψ + e cos φ) [N·m/rad]."""
     s, psi, _ = shape_factors(phi, r, kappa)
     return m * g * (r * r * kappa / s * trig.cos(psi) + e * trig.cos(phi))
 
 
-@register_jitable(inline="always")
+@inlined
 def accel(phi, phi_dot, tau, m, r, kappa, e, k, g, c):
     """φ'' [rad/s²] from the closed-form equation of motion (PHYSICS.md, the paper's example):
 
@@ -153,7 +154,7 @@ def accel(phi, phi_dot, tau, m, r, kappa, e, k, g, c):
     return lhs / inertia
 
 
-@register_jitable(inline="always")
+@inlined
 def accel_terms(phi, phi_dot, tau, m, r, kappa, e, k, g, c):
     """The parts of :func:`accel`: (L [N·m/kg], D [m²], sin θ, cos θ, sin ψ, cos ψ, sin φ),
     φ'' = L/D with
@@ -176,7 +177,7 @@ def accel_terms(phi, phi_dot, tau, m, r, kappa, e, k, g, c):
     return lhs, inertia_per_mass(h, r, e, k), sin_t, cos_t, sin_psi, cos_psi, sin_phi
 
 
-@register_jitable(inline="always")
+@inlined
 def angles(phi, r, kappa):
     """A state's trigonometry from two sine–cosine pairs (θ/2 and ψ): (sin(θ/2), sin θ,
     cos θ, sin ψ, cos ψ, sin φ), with sin θ = 2 sin(θ/2) cos(θ/2), cos θ = 1 − 2 sin²(θ/2)
@@ -191,7 +192,7 @@ def angles(phi, r, kappa):
     return h, sin_t, cos_t, sin_psi, cos_psi, sin_t * cos_psi - cos_t * sin_psi
 
 
-@register_jitable(inline="always")
+@inlined
 def accel_concentric(phi, phi_dot, tau, m, r, kappa, k, g, c):
     """φ'' [rad/s²] of :func:`accel` with e = 0, the terms that vanish left out:
 
@@ -202,26 +203,26 @@ def accel_concentric(phi, phi_dot, tau, m, r, kappa, k, g, c):
     )
 
 
-@register_jitable(inline="always")
+@inlined
 def energy(phi, phi_dot, m, r, kappa, e, k, g):
     """E = ½ J_I φ'² + V [J]."""
     return energy_at(inertia_per_mass(half_theta_sin(phi, r, kappa), r, e, k), phi, phi_dot,
                      m, r, kappa, e, g)
 
 
-@register_jitable(inline="always")
+@inlined
 def energy_at(d, phi, phi_dot, m, r, kappa, e, g):
     """:func:`energy` given d = J_I/m [m²] at φ (:func:`accel_terms`' D)."""
     return 0.5 * (m * d) * phi_dot * phi_dot + potential(phi, m, r, kappa, e, g)
 
 
-@register_jitable(inline="always")
+@inlined
 def denergy_dt(phi_dot, tau, c):
     """dE/dt = τφ' − c φ'² [W]: the power balance (the drive in, the axle's damping out)."""
     return (tau - c * phi_dot) * phi_dot
 
 
-@register_jitable(inline="always")
+@inlined
 def positions(phi, r, kappa, e):
     """Positions [m] of O1, C and I: ``(o1x, o1y, cx, cy, ix, iy)``.
 
@@ -240,7 +241,7 @@ def positions(phi, r, kappa, e):
     return o1x, o1y, cx, cy, ix, iy
 
 
-@register_jitable(inline="always")
+@inlined
 def instant_center_velocity(phi, phi_dot, r, kappa):
     """u [m/s], the velocity with which I runs along the space centrode: (rφ'/s)(cos ψ, sin ψ)."""
     s, psi, _ = shape_factors(phi, r, kappa)
@@ -248,7 +249,7 @@ def instant_center_velocity(phi, phi_dot, r, kappa):
     return speed * trig.cos(psi), speed * trig.sin(psi)
 
 
-@register_jitable(inline="always")
+@inlined
 def contact_forces(phi, phi_dot, phi_ddot, m, r, kappa, e, g):
     """(N, F) [N], the contact force on the roller at I, from m a_C = N + F + m g.
 
@@ -262,7 +263,7 @@ def contact_forces(phi, phi_dot, phi_ddot, m, r, kappa, e, g):
     return forces(sin_t, cos_t, sin_psi, cos_psi, phi_dot, phi_ddot, m, r, kappa, e, g)
 
 
-@register_jitable(inline="always")
+@inlined
 def forces(sin_t, cos_t, sin_psi, cos_psi, phi_dot, phi_ddot, m, r, kappa, e, g):
     """:func:`contact_forces` (N, F) [N] given the state's sin θ, cos θ, sin ψ and cos ψ
     (:func:`angles`)."""
@@ -273,7 +274,7 @@ def forces(sin_t, cos_t, sin_psi, cos_psi, phi_dot, phi_ddot, m, r, kappa, e, g)
     return normal, friction
 
 
-@register_jitable(inline="always")
+@inlined
 def margins(normal, friction, m, g, mu):
     """(N/(m g), (μN − |F|)/(m g)): the lift-off margin (<= 0: the roller leaves the surface)
     and the slip margin (< 0: the friction needed exceeds μN), from the contact forces [N]."""

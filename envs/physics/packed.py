@@ -14,7 +14,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 from numba import types
-from numba.extending import intrinsic, register_jitable
+from numba.extending import intrinsic
+from roller_gym.physics.compiling import inlined
 
 __all__ = ["pack", "unpack"]
 
@@ -52,7 +53,7 @@ def _pointer(typingctx, address, dtype):
     return signature, codegen
 
 
-@register_jitable(inline="always")
+@inlined
 def unpack(table, k, dtype):
     """Array ``k`` of a :func:`pack` table, of ``dtype`` (a numba type), as a 2-D view of its
     memory (a 1-D array as its one row: ``unpack(table, k, dtype)[0]``). Nothing is checked

@@ -48,6 +48,7 @@ from typing import Any
 import numpy as np
 from numba import njit, types
 from numba.extending import intrinsic, overload, register_jitable
+from roller_gym.physics.compiling import INLINED_OPTIONS as _INLINED
 
 __all__ = ["DOMAIN", "EXACT_RANGE", "cos", "exp", "select", "sin", "sincos", "tanh"]
 
@@ -282,13 +283,13 @@ def _bitcast_to_float(typingctx, b):
     return types.float64(types.int64), codegen
 
 
-@overload(_bits, inline="always", jit_options={"nogil": True})
+@overload(_bits, jit_options=_INLINED)
 def _bits_compiled(x):
     """Compiled: a bitcast (one instruction, in SIMD lanes too)."""
     return lambda x: _bitcast_to_int(x)
 
 
-@overload(_from_bits, inline="always", jit_options={"nogil": True})
+@overload(_from_bits, jit_options=_INLINED)
 def _from_bits_compiled(b):
     return lambda b: _bitcast_to_float(b)
 
@@ -342,8 +343,8 @@ def tanh(x):
     return _each(_tanh_loop, x, 1)[0] if _looped(x) else np.tanh(x)
 
 
-# Compiled, each function is its branch-free form, inlined where it is called so that the loop
-# that calls it keeps no call (and vectorizes).
+# Compiled, each function is its branch-free form, inlined (by LLVM: _INLINED) where it is
+# called so that the loop that calls it keeps no call (and vectorizes).
 def _compiled_as(form):
     """numba's overload of a function of x: its branch-free ``form``."""
 
@@ -354,7 +355,7 @@ def _compiled_as(form):
 
 
 for _face, _form in ((sin, _sin), (cos, _cos), (sincos, _sincos), (exp, _exp), (tanh, _tanh)):
-    overload(_face, inline="always", jit_options={"nogil": True})(_compiled_as(_form))
+    overload(_face, jit_options=_INLINED)(_compiled_as(_form))
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

@@ -7,9 +7,9 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 from roller_gym.physics import equations as eq
+from roller_gym.physics.compiling import inlined
 from roller_gym.physics.integrators.layout import (
     _C,
     _CF_CONSTANT,
@@ -84,7 +84,7 @@ def _midpoint_substep(phi, w, tau, m, r, kappa, e, k, g, c, h):
 # -- the fixed-substep kernel ------------------------------------------------------------------
 
 
-@numba.extending.register_jitable(inline="always")
+@inlined
 def _fixed_steps(io, cfg, substep):
     """The loop of a fixed-substep scheme around its ``substep`` function: each roller on its
     own, n equal substeps."""

@@ -297,7 +297,8 @@ def _rk_chunk(io, lo, hi, tab, cfg):
                 i += 1
     # the end states' fields, all lanes at once, then each roller's outputs to its column
     end = rows[23:29]
-    end[4, :n], end[5, :n] = lift[:n], slip[:n]
+    for i in range(n):  # (a loop: a slice assignment compiles numba's shape-mismatch message)
+        end[4, i], end[5, i] = lift[i], slip[i]
     _end_lanes(phi, w, tau, par, n, end)
     for i in range(n):
         io[_H_NEXT, lo + int(slot[i])] = 0.0 if fixed or status[i] != 1.0 else carry[i]

@@ -12,6 +12,7 @@ import numba
 import numpy as np
 from roller_gym.physics import equations as eq
 from roller_gym.physics import trig
+from roller_gym.physics.compiling import inlined
 from roller_gym.physics.integrators.layout import (
     _ACC,
     _C,
@@ -76,7 +77,7 @@ def _finite(x):
     return x - x == 0.0
 
 
-@numba.extending.register_jitable(inline="always")
+@inlined
 def _margins(phi, w, a, m, r, kappa, e, g, mu):
     """(N/(m g), (μN − |F|)/(m g)): the lift-off and slip margins at a state."""
     normal, friction = eq.contact_forces(phi, w, a, m, r, kappa, e, g)
@@ -105,7 +106,7 @@ def _margin_lanes(phi, w, a, par, na, lift, slip):
         lift[i], slip[i] = min(lift[i], li), min(slip[i], si)
 
 
-@numba.extending.register_jitable(inline="always")
+@inlined
 def _end_fields(phi, w, tau, m, r, kappa, e, k, g, c, mu):
     """(φ'', N, F, E, N/(m g), (μN − |F|)/(m g)) at the end state (no branch)."""
     lhs, d, sin_t, cos_t, sin_psi, cos_psi, _ = eq.accel_terms(phi, w, tau, m, r, kappa, e, k,
@@ -167,7 +168,7 @@ _SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0
 _MAX_ATTEMPTS = 4 * MAX_SUBSTEPS
 
 
-@numba.extending.register_jitable(inline="always")
+@inlined
 def _serial(io, tab, cfg, one, chunk):
     """A batch kernel on one core: ``one`` for a batch of one roller (a Stepper: the same
     arithmetic without lanes), else ``chunk`` over chunks of CHUNK rollers."""

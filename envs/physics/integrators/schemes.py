@@ -23,12 +23,14 @@ from roller_gym.physics.integrators.rk import (
     _DOP853,
     _RK4,
     _rk_chunk,
+    _rk_one,
     _rk_parallel,
     _rk_serial,
 )
 from roller_gym.physics.integrators.rules import MAX_SUBSTEPS
 from roller_gym.physics.integrators.taylor_kernel import (
     _taylor_chunk,
+    _taylor_one,
     _taylor_parallel,
     _taylor_serial,
     _taylor_substep,
@@ -53,6 +55,10 @@ class Scheme:
         chunk: for a scheme whose batch kernels advance chunks of rollers in lanes, that
             function, ``chunk(io, lo, hi, tableau, cfg)`` (rollers lo..hi−1): what a caller
             fusing more work into the same pass over chunks calls (:meth:`BatchStepper.run`).
+        one: for a scheme with a kernel of its own for one roller (``_rk_one``,
+            ``_taylor_one``: the chunk's arithmetic without lanes), that kernel,
+            ``one(io, tableau, cfg)`` on column 0: what a caller fusing more work into one
+            roller's step calls (:meth:`Stepper.bind`), so that it compiles no lanes.
         tableau: for an explicit Runge–Kutta pair, its coefficients (see ``_tableau``).
         fixed_tableau: the coefficients its fixed substeps (``substeps=n``) take, where they
             differ from ``tableau`` (rk4: classical RK4; under error control,
@@ -77,6 +83,7 @@ class Scheme:
     kernel: Callable | None = None
     parallel: Callable | None = None
     chunk: Callable | None = None
+    one: Callable | None = None
     constant: float = 0.0
     sweep_exponent: float = 0.5
     halvings: int = 0
@@ -104,15 +111,16 @@ class Scheme:
 
 
 _SCHEME_LIST = (
-    Scheme("rk8", 8, 1.0, True, _rk_chunk, _DOP853, chunk=_rk_chunk, constant=1e-6,
-           sweep_exponent=0.75, halvings=3, tol_share=0.1),
+    Scheme("rk8", 8, 1.0, True, _rk_chunk, _DOP853, chunk=_rk_chunk, one=_rk_one,
+           constant=1e-6, sweep_exponent=0.75, halvings=3, tol_share=0.1),
     Scheme("rk4", 4, 1.0, True, _rk_chunk, _BS5, fixed_tableau=_RK4, chunk=_rk_chunk,
-           constant=0.02, halvings=2, tol_share=0.12),
+           one=_rk_one, constant=0.02, halvings=2, tol_share=0.12),
     Scheme("euler", 1, 0.5, False, _euler_substep, kernel=_euler_kernel, constant=2.0),
     Scheme("midpoint", 2, math.inf, False, _midpoint_substep, kernel=_midpoint_kernel,
            constant=0.3),
     Scheme("taylor", series.ORDER, 1.0, True, _taylor_substep, kernel=_taylor_serial,
-           parallel=_taylor_parallel, chunk=_taylor_chunk, constant=1e-6, tol_share=0.01),
+           parallel=_taylor_parallel, chunk=_taylor_chunk, one=_taylor_one,
+           constant=1e-6, tol_share=0.01),
     Scheme("dop853", 8, math.inf, True, None),
 )
 #: The schemes by name.

@@ -201,7 +201,8 @@ def _taylor_chunk(io, lo, hi, tab, cfg):
             else:
                 i += 1
     end = np.empty((6, n + _PAD))
-    end[4, :n], end[5, :n] = lift[:n], slip[:n]
+    for i in range(n):  # (a loop: a slice assignment compiles numba's shape-mismatch message)
+        end[4, i], end[5, i] = lift[i], slip[i]
     _end_lanes(phi, w, tau, par, n, end)
     for i in range(n):
         col = lo + int(slot[i])
