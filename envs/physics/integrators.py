@@ -71,11 +71,12 @@ estimate is at the level of float64 rounding (``ROUNDOFF_FACTOR · ε · max(|φ
 accepted even if that exceeds its share of ``tol`` (no smaller substep would do better); a
 substep's next size aims at the larger of its share and ε · max(|φ|, |φ'|), so that through
 a spike of φ'' (J_I near zero), where the share of a substep small enough falls below
-float64's rounding of the state, the substeps do not keep shrinking. After ``MAX_SUBSTEPS``
-accepted substeps the rest of the control step is taken in at
-most as many more, each accepted. A step whose accepted substeps' estimates add up to more
-than ``tol_share · tol`` reports ``tol_met=False`` (its tolerance was not verified);
-:class:`Stepper` and :class:`BatchStepper` then warn once (not with fixed ``substeps``).
+float64's rounding of the state, the substeps do not keep shrinking. After half of
+``MAX_SUBSTEPS`` accepted substeps the rest of the control step is taken in fewer than as
+many more, each accepted: no step takes more than ``MAX_SUBSTEPS``. A step whose accepted
+substeps' estimates add up to more than ``tol_share · tol`` reports ``tol_met=False`` (its
+tolerance was not verified); :class:`Stepper` and :class:`BatchStepper` then warn once (not
+with fixed ``substeps``).
 ``error_estimate`` is the sum of the accepted substeps' error estimates. Measured on random
 scenes, the estimates can miss part of the error (local errors also grow along the step), so
 each scheme's estimates may add up to only ``tol_share · tol``.
@@ -224,7 +225,8 @@ class StepResult:
         tol_met: False where the accepted substeps' error estimates add up to more than the
             scheme's share of ``tol`` (substeps accepted at float64 rounding or past the
             budget: the tolerance was out of reach and is not verified); for euler and
-            midpoint, where the predicted substeps were more than ``MAX_SUBSTEPS``.
+            midpoint, where the predicted substeps were more than ``MAX_SUBSTEPS``; for
+            DOP853, where scipy failed or raised rtol = ``tol`` to its floor, 100 ε.
     """
 
     phi: np.ndarray | float
@@ -300,10 +302,12 @@ def scene_arrays(scene: Scene, n: int | None = None) -> np.ndarray:
 # -- the substep rule (the first step-size guess of the adaptive schemes) ------------------------
 
 #: The most substeps one control step may take: the fixed-substep schemes' (the smallest
-#: substep is dt / MAX_SUBSTEPS), and the error-controlled schemes' budget (after this many
-#: accepted substeps, the rest of the control step is taken in at most as many more, accepted
-#: whatever their estimates).
+#: substep is dt / MAX_SUBSTEPS), and the error-controlled schemes' budget (after half as
+#: many accepted substeps, the rest of the control step is taken in fewer than as many more,
+#: of at least its length over _FORCE_REST each, accepted whatever their estimates).
 MAX_SUBSTEPS = 200_000
+_FORCE_AFTER = MAX_SUBSTEPS // 2
+_FORCE_REST = float(MAX_SUBSTEPS - _FORCE_AFTER - 2)  # one spare for a rounded-off end
 #: A substep whose error estimate is below ROUNDOFF_FACTOR · ε · max(|φ|, |φ'|) (float64
 #: rounding) is accepted even above its share of tol: no smaller substep would do better.
 ROUNDOFF_FACTOR = 8.0
@@ -588,9 +592,9 @@ def _judge(h, e5p, e5w, e3p, e3w, phi, w, phin, wn, a_new, count, hforce, t, hde
     errw = h * e5w * e5w / math.sqrt(trig.select(dw > 0.0, dw, 1.0))
     err = max(errp, errw)
     fin = _finite(phin) & _finite(wn) & _finite(a_new) & _finite(err)
-    # past MAX_SUBSTEPS accepted substeps, the rest in as many more
-    start = (count == MAX_SUBSTEPS) & (hforce == 0.0)
-    hforce = trig.select(start, (dt - t) / MAX_SUBSTEPS, hforce)
+    # past _FORCE_AFTER accepted substeps, the rest in fewer than as many more
+    start = (count == _FORCE_AFTER) & (hforce == 0.0)
+    hforce = trig.select(start, (dt - t) / _FORCE_REST, hforce)
     floor = max(1e-12 * dt, hforce)
     # the error a substep aims at: its share of tol, or float64's rounding of the state if
     # that is larger (a smaller substep would only add rounding)
@@ -598,7 +602,8 @@ def _judge(h, e5p, e5w, e3p, e3w, phi, w, phin, wn, a_new, count, hforce, t, hde
     aim = max(share * h / dt, _EPS * big)
     ratio = trig.select(aim > 0.0, err / trig.select(aim > 0.0, aim, 1.0), 0.0)
     # an estimate at the level of float64 rounding is accepted: no smaller substep does better
-    forced = (h <= floor) | (err <= ROUNDOFF_FACTOR * _EPS * big)
+    # (a non-finite trial never is: it is rejected and shrunk, failing only at the floor)
+    forced = (h <= floor) | (fin & (err <= ROUNDOFF_FACTOR * _EPS * big))
     accept = trig.select(fixed, fin, fin & ((ratio <= 1.0) | forced))
     fail = (not fin) & (fixed | forced)
     ends = accept & (last != 0.0)
@@ -922,9 +927,9 @@ def _taylor_tick(fin, last, rounding, count, nfixed, t, h, err_sum, err, hforce,
     status = trig.select(ends, 1.0, trig.select(fin, status, 2.0))
     t = trig.select(ends, dt, t + h)
     count = count + trig.select(fin, 1.0, 0.0)
-    # past MAX_SUBSTEPS substeps, the rest in at most as many more
-    start = (count == MAX_SUBSTEPS) & (hforce == 0.0)
-    hforce = trig.select(start, (dt - t) / MAX_SUBSTEPS, hforce)
+    # past _FORCE_AFTER substeps, the rest in fewer than as many more
+    start = (count == _FORCE_AFTER) & (hforce == 0.0)
+    hforce = trig.select(start, (dt - t) / _FORCE_REST, hforce)
     return status, t, count, err_sum + err, hforce, round_sum + rounding
 
 
@@ -1108,13 +1113,15 @@ def _dop853_kernel(io: np.ndarray, tab: None, cfg: np.ndarray) -> None:
         sol = solve_ivp(rhs, (0.0, dt), np.concatenate((phi, w)), method="DOP853", rtol=tol,
                         atol=tol)
         y = sol.y[:, -1] if sol.success else np.full(2 * n, np.nan)
+        # scipy raises an rtol below 100 ε to 100 ε (and warns): tol is then not what it met
+        met = bool(sol.success) and tol >= 100.0 * _EPS
         a0 = eq.accel(phi, w, tau, m, r, kappa, e, k, g, c)
         normal, friction = eq.contact_forces(phi, w, a0, m, r, kappa, e, g)
         lift, slip = eq.margins(normal, friction, m, g, mu)
     for col in range(n):
         _finish_py(io, col, bool(sol.success), float(y[col]), float(y[n + col]),
                    float(tau[col]), sol.t.size - 1, float(lift[col]), float(slip[col]),
-                   math.nan, True)
+                   math.nan, met)
 
 
 _finish_py = _finish  # register_jitable leaves it a Python function too
