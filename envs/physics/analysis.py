@@ -12,6 +12,7 @@ import math
 from dataclasses import dataclass
 
 import numba
+import numba.extending
 import numpy as np
 from roller_gym.physics import equations as eq
 from roller_gym.physics.scene import Scene
@@ -255,30 +256,24 @@ def nearest_unstable_rests(r: np.ndarray, kappa: np.ndarray, e: np.ndarray,
     return out
 
 
-@numba.njit(cache=True, nogil=True)
-def _bisect_d2(a, b, r, kappa, e):
-    """The zero of d²V/dφ² between a and b (a sign change), to the last bit."""
-    fa = eq.d2potential(a, 1.0, r, kappa, e, 1.0)
-    while True:
-        mid = 0.5 * (a + b)
-        if mid <= a or mid >= b:
-            return a
-        fm = eq.d2potential(mid, 1.0, r, kappa, e, 1.0)
-        if (fm < 0.0) == (fa < 0.0):
-            a, fa = mid, fm
-        else:
-            b = mid
+@numba.extending.register_jitable
+def _derivative(order, phi, r, kappa, e):
+    """dV/dφ (order 1) or d²V/dφ² (order 2) at φ, per m g."""
+    if order == 1:
+        return eq.dpotential(phi, 1.0, r, kappa, e, 1.0)
+    return eq.d2potential(phi, 1.0, r, kappa, e, 1.0)
 
 
 @numba.njit(cache=True, nogil=True)
-def _bisect_d1(a, b, r, kappa, e):
-    """The zero of dV/dφ between a and b (a sign change), to the last bit."""
-    fa = eq.dpotential(a, 1.0, r, kappa, e, 1.0)
+def _bisect(order, a, b, r, kappa, e):
+    """The zero of :func:`_derivative` between a and b (a sign change), to the last bit:
+    the end of the last bracket where it is smaller."""
+    fa = _derivative(order, a, r, kappa, e)
     while True:
         mid = 0.5 * (a + b)
         if mid <= a or mid >= b:
-            return mid if abs(eq.dpotential(b, 1.0, r, kappa, e, 1.0)) < abs(fa) else a
-        fm = eq.dpotential(mid, 1.0, r, kappa, e, 1.0)
+            return b if abs(_derivative(order, b, r, kappa, e)) < abs(fa) else a
+        fm = _derivative(order, mid, r, kappa, e)
         if fm == 0.0:
             return mid
         if (fm < 0.0) == (fa < 0.0):
@@ -309,7 +304,7 @@ def _nearest_unstable_root(r, kappa, e, half, resolution, out):
             if s_prev == 0.0:
                 new = (i - 1) * step
             elif (s_prev < 0.0 and s_x > 0.0) or (s_prev > 0.0 and s_x < 0.0):
-                new = _bisect_d2((i - 1) * step, x, rj, kj, ej)
+                new = _bisect(2, (i - 1) * step, x, rj, kj, ej)
             elif last:
                 new = x
             if new > knot:
@@ -319,7 +314,7 @@ def _nearest_unstable_root(r, kappa, e, half, resolution, out):
                 if fa == 0.0:
                     root = knot
                 elif (fa < 0.0 and fb > 0.0) or (fa > 0.0 and fb < 0.0):
-                    root = _bisect_d1(knot, new, rj, kj, ej)
+                    root = _bisect(1, knot, new, rj, kj, ej)
                 if (root > 0.0 and root < end
                         and eq.d2potential(root, 1.0, rj, kj, ej, 1.0) < 0.0):
                     out[j] = root
