@@ -52,13 +52,15 @@ At rest near the bottom: φ and φ' uniform in ±0.1 (rad, rad/s).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 from roller_gym import feasibility
 from roller_gym.physics import Scene, contact
-from roller_gym.task import Task, per_scene, register, unstable_rest_positions
+from roller_gym.physics.analysis import nearest_unstable_rests
+from roller_gym.task import Task, register, unstable_rest_positions
 
 __all__ = ["BalanceTask"]
 
@@ -82,10 +84,9 @@ class BalanceTask(Task):
 
     def default_target(self, scene: Scene) -> float:
         """φ_b > 0 [rad], the unstable rest position (its mirror −φ_b counts as well)."""
-        targets = unstable_rest_positions(scene)
-        if not targets:
+        phi_b = float(unstable_rest_targets(scene)[0])
+        if math.isnan(phi_b):
             raise ValueError(f"{scene!r} has no unstable rest position to balance at")
-        phi_b = abs(targets[0])
         c = contact(scene, phi_b, 0.0, 0.0)
         if c.lifting or c.slipping:
             raise ValueError(
@@ -101,10 +102,31 @@ class BalanceTask(Task):
     start_rule = "near rest at the bottom, |φ| <= 0.1 rad and |φ'| <= 0.1 rad/s"
 
     def sample_targets(self, u: np.ndarray, scene: Scene) -> np.ndarray:
-        return np.broadcast_to(per_scene(self.default_target, scene), np.shape(u))
+        """φ_b of each roller: :func:`unstable_rest_targets`. (The scenes of a range were
+        proven at construction to rest there, so the contact is not checked again.)"""
+        return np.broadcast_to(unstable_rest_targets(scene), np.shape(u))
 
     def start_candidates(
         self, u_phi: np.ndarray, u_dot: np.ndarray, scene: Scene
     ) -> tuple[np.ndarray, np.ndarray]:
         """Near rest at the bottom: φ [rad] and φ' [rad/s] uniform in ±0.1."""
         return 0.2 * u_phi - 0.1, 0.2 * u_dot - 0.1
+
+
+def unstable_rest_targets(scene: Scene) -> np.ndarray:
+    """φ_b [rad] of :meth:`BalanceTask.default_target` for each roller of ``scene`` (an
+    array of the batch's size; of 1 for a scalar scene), without its contact check:
+    :func:`roller_gym.physics.analysis.nearest_unstable_rests` (compiled, once per distinct
+    r, R, e: the other fields do not move a rest position); where there is no unstable rest
+    position in (0, the search window's end) (φ_b = 0, or π on the floor),
+    :func:`roller_gym.task.unstable_rest_positions` answers for that scene."""
+    n = scene.batch_size or 1
+    rows = np.stack([np.broadcast_to(np.asarray(getattr(scene, f), float), (n,))
+                     for f in ("r", "R", "e")], axis=1)
+    unique, inverse = np.unique(rows, axis=0, return_inverse=True)
+    r, big_r, e = unique.T
+    out = nearest_unstable_rests(r, 1.0 / big_r, e)
+    for j in np.flatnonzero(np.isnan(out)):  # the rule's other cases, per scene
+        targets = unstable_rest_positions(Scene(r=r[j], R=big_r[j], e=e[j]))
+        out[j] = abs(targets[0]) if targets else np.nan
+    return out[np.asarray(inverse).reshape(-1)]

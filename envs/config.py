@@ -72,7 +72,11 @@ class EnvConfig:
         render_mode: str | None,
         render_modes: list[str],
         info_keys: Sequence[str] | None = None,
+        scenes: Sequence[Scene] | None = None,
     ) -> EnvConfig:
+        """The checked arguments; ``scenes`` (the vector env's, one per sub-environment)
+        replaces ``scene`` in the checks: each distinct one is checked, ``randomize``'s range
+        proof included, and an error names its first sub-environment."""
         if max_torque is not None:
             max_torque = validation.real("max_torque", max_torque, positive=True, unit="N·m")
         task = task_class(max_torque)
@@ -86,11 +90,24 @@ class EnvConfig:
         # (pygame is not required here: SB3's make_vec_env asks every environment for
         # render_mode="rgb_array" whether or not it will render; render() says what to install)
         info_keys = validation.subset("info_keys", info_keys, tuple(INFO_KEYS))
-        validation.check_integrable(scene, dt, task.max_torque)
-        reason = task.infeasible(scene)
-        if reason is not None:
-            raise ValueError(reason)
-        ranges = check_randomize(task, scene, dt, randomize)
+        distinct: dict[tuple, tuple[int, Scene]] = {}
+        for i, one in enumerate([scene] if scenes is None else scenes):
+            distinct.setdefault(tuple(one.as_dict().items()), (i, one))
+        ranges: dict[str, tuple[float, float]] = {}
+        for i, one in distinct.values():
+            try:
+                validation.check_integrable(one, dt, task.max_torque)
+                reason = task.infeasible(one)
+                if reason is not None:
+                    raise ValueError(reason)
+                ranges = check_randomize(task, one, dt, randomize)
+            except ValueError as exc:
+                if scenes is None:
+                    raise
+                shared = sum(1 for s in scenes if s == one)
+                raise ValueError(f"scene[{i}] (sub-environment {i}"
+                                 f"{f' and {shared - 1} more of that scene' if shared > 1 else ''}"
+                                 f", {one!r}): {exc}") from None
         return cls(task, scene, dt, tolerance, integrator, substeps or 0, ranges, render_mode,
                    info_keys)
 

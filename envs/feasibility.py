@@ -15,7 +15,7 @@ not proven, naming what was proven.
 What is proven on a box B (the conditions of :func:`problem`, in exact arithmetic):
 
 1. :func:`roller_gym.validation.check_integrable`: m g r and J_min within [1e-100, 1e100]
-   and (ω_max + spin)·dt <= LARGEST_PHASE_PER_STEP, on intervals.
+   and (ω_max + spin + c/J_min)·dt <= LARGEST_PHASE_PER_STEP, on intervals.
 2. A start state (:meth:`Task.fallback_start`): one of the fixed candidates rolls (N > 0,
    |F| <= μN) under −max_torque, 0 and +max_torque for every scene of B. Each candidate's
    φ and φ' are enclosed by their hull over B's corners: for the tasks here they are
@@ -31,14 +31,14 @@ from __future__ import annotations
 import functools
 import itertools
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from typing import NamedTuple
 
 import numpy as np
 from roller_gym import validation
 from roller_gym.intervals import Interval
 from roller_gym.physics import Scene, equations
-from roller_gym.physics.analysis import MAX_TURNS
+from roller_gym.physics.analysis import MAX_TURNS, nearest_unstable_rests
 from roller_gym.task import Task, unstable_rest_positions
 
 __all__ = ["MAX_BOXES", "Params", "box_params", "check_ranges", "problem",
@@ -47,7 +47,9 @@ __all__ = ["MAX_BOXES", "Params", "box_params", "check_ranges", "problem",
 #: The most boxes the branch and bound examines before it refuses a range as not proven.
 MAX_BOXES = 4000
 #: Boxes narrower than this share of their field's range (every field) are not split again.
-SMALLEST_SHARE = 1e-9
+SMALLEST_SHARE = 1e-5
+#: The most such boxes (neither proven nor refuted) before the proof gives up.
+MAX_STALLED = 4
 #: Points of the scan along a field that names the feasible part of its range.
 SCAN_POINTS = 33
 
@@ -88,41 +90,104 @@ def problem(task: Task, scene: Scene, dt: float) -> str | None:
     return task.infeasible(scene)
 
 
-# -- the conditions on a box ------------------------------------------------------------------
-def _integrable_proven(p: Params, dt: float, max_torque: float) -> bool:
+def _posable(task: Task, scene: Scene, dt: float,
+             points: Sequence[Mapping[str, float]]) -> Iterator[bool]:
+    """For each point of the box of ranges, whether :func:`problem` finds nothing there: for
+    a task without a condition of its own, :func:`problem`'s checks on all points at once
+    (floats; the same equations), True where they pass; else False (ask :func:`problem`)."""
+    if not points or type(task).check_scene is not Task.check_scene:
+        return iter([False] * len(points))
+    names = list(points[0])
+    batch = scene.replace(**{n: np.array([p[n] for p in points], float) for n in names})
+    m, r, kappa, e, k, g, c = (np.broadcast_to(np.asarray(x, float), (len(points),))
+                               for x in batch.params)
+    with np.errstate(all="ignore"):
+        weight_arm, j_min = validation.integration_magnitudes(m, r, e, k, g)
+        omega, spin, decay = validation.integration_rates(m, r, kappa, e, g, c, j_min,
+                                                          task.max_torque)
+        ok = (omega + spin + decay) * dt <= validation.LARGEST_PHASE_PER_STEP
+        for x in (weight_arm, j_min):
+            ok &= (np.abs(x) >= validation.SMALLEST) & (np.abs(x) <= validation.LARGEST)
+    ok &= (task.max_torque >= validation.SMALLEST) & (task.max_torque <= validation.LARGEST)
+    phi, phi_dot = task.fallback_candidates(batch)
+    ok &= task.start_accepted(phi, phi_dot, batch).any(axis=1)
+    return iter(ok.tolist())
+
+
+# -- the conditions on boxes, many at once (arrays of intervals, one element a box) ---------
+def _boxes_params(scene: Scene, boxes: Sequence[Box]) -> Params:
+    """:func:`box_params` of many boxes of the same fields: intervals of shape (len(boxes),)."""
+    n = len(boxes)
+
+    def field(name: str) -> Interval:
+        if name in boxes[0]:
+            ends = np.array([b[name] for b in boxes], float).reshape(n, 2)
+            return Interval(ends[:, 0], ends[:, 1])
+        return Interval(np.full(n, float(getattr(scene, name))))
+
+    kappa = 1.0 / field("R") if "R" in boxes[0] else Interval(np.full(n, float(scene.kappa)))
+    return Params(field("m"), field("r"), kappa, field("e"), field("k"), field("g"),
+                  field("damping"), field("mu"))
+
+
+def _integrable_proven(p: Params, dt: float, max_torque: float) -> np.ndarray:
     weight_arm, j_min = validation.integration_magnitudes(p.m, p.r, p.e, p.k, p.g)
+    ok = np.ones(np.shape(p.m.lo), bool)
     for x in (weight_arm, j_min):
         size = abs(x)
-        if not (size.lo >= validation.SMALLEST and size.hi <= validation.LARGEST):
-            return False
-    omega, spin = validation.integration_rates(p.m, p.r, p.kappa, p.e, p.g, j_min, max_torque)
-    return bool(((omega + spin) * dt).hi <= validation.LARGEST_PHASE_PER_STEP)
+        ok &= (size.lo >= validation.SMALLEST) & (size.hi <= validation.LARGEST)
+    # The rates with m scaled out (J_min ∝ m; ω_max does not depend on m, spin² and decay
+    # are ∝ 1/m: largest at the least m), so that m's range is not counted twice.
+    least = Interval(p.m.lo)
+    _, j_unit = validation.integration_magnitudes(1.0, p.r, p.e, p.k, p.g)
+    omega, spin, decay = validation.integration_rates(1.0, p.r, p.kappa, p.e, p.g,
+                                                      p.c / least, j_unit,
+                                                      max_torque / least)
+    return ok & (((omega + spin + decay) * dt).hi <= validation.LARGEST_PHASE_PER_STEP)
 
 
-def _corners(scene: Scene, box: Box) -> Scene:
-    """The box's corners as one batch scene."""
-    names = list(box)
-    values = np.array(list(itertools.product(*(box[n] for n in names))), float).reshape(-1,
-                                                                                      len(names))
+def _corners(scene: Scene, boxes: Sequence[Box]) -> Scene:
+    """The corners of every box as one batch scene (box by box, 2^fields corners each)."""
+    names = list(boxes[0])
+    values = np.array([list(itertools.product(*(b[n] for n in names))) for b in boxes],
+                      float).reshape(-1, len(names))
     return scene.replace(**{n: values[:, i] for i, n in enumerate(names)})
 
 
-def _start_proven(task: Task, scene: Scene, box: Box, p: Params) -> bool:
-    phi, phi_dot = task.fallback_candidates(_corners(scene, box) if box else scene)
-    phi, phi_dot = Interval.hull(phi), Interval.hull(phi_dot)
+def _starts_proven(task: Task, scene: Scene, boxes: Sequence[Box], p: Params) -> np.ndarray:
+    """Whether, for each box, one start candidate rolls in all its scenes."""
+    n = len(boxes)
+    phi, phi_dot = task.fallback_candidates(_corners(scene, boxes) if boxes[0] else scene)
+    phi, phi_dot = (Interval.hull(x.reshape(n, -1, x.shape[-1]), axis=1)
+                    for x in (phi, phi_dot))  # (boxes, candidates)
+    p = Params(*(Interval(x.lo[:, None], x.hi[:, None]) for x in p))
+    weights = [(p.m, p.g)]
+    if not (phi_dot.lo.any() or phi_dot.hi.any()):
+        # At rest (φ' = 0) φ'' = (τ − dV/dφ)/J_I, and N/(m g), F/(m g) are affine in
+        # τ/(m g) (m and g enter only so); N > 0 and μN − |F| >= 0 (concave in it) hold for
+        # every m g of the box where they hold at its least and at its largest m g.
+        weights = [(Interval(p.m.lo), Interval(p.g.lo)), (Interval(p.m.hi), Interval(p.g.hi))]
     ok = np.ones(np.shape(phi.lo), bool)
-    for normal, friction in task.start_contacts(phi, phi_dot, p.m, p.r, p.kappa, p.e, p.k,
-                                                p.g, p.c):
-        ok &= (normal.lo > 0) & (abs(friction).hi <= (p.mu * normal).lo)
-    return bool(ok.any())
+    for m, g in weights:
+        for normal, friction in task.start_contacts(phi, phi_dot, m, p.r, p.kappa, p.e, p.k,
+                                                    g, p.c):
+            ok &= (normal.lo > 0) & (abs(friction).hi <= (p.mu * normal).lo)
+    return ok.any(axis=1)
 
 
-def _box_proven(task: Task, scene: Scene, dt: float, box: Box, ranges: Box) -> bool:
-    estimates = (scene.replace(**_middle(ranges)), scene.replace(**_middle(box)))
+def _boxes_proven(task: Task, scene: Scene, dt: float, boxes: Sequence[Box],
+                  ranges: Box) -> np.ndarray:
+    """Whether each box is proven: the conditions common to the tasks on all boxes at once,
+    then the task's own (:meth:`Task.scene_proven`) box by box where it has one."""
     with np.errstate(all="ignore"):  # infinities and NaN prove nothing (see intervals)
-        p = box_params(scene, box)
-        return (_integrable_proven(p, dt, task.max_torque)
-                and _start_proven(task, scene, box, p) and task.scene_proven(p, estimates))
+        p = _boxes_params(scene, boxes)
+        ok = _integrable_proven(p, dt, task.max_torque) & _starts_proven(task, scene, boxes, p)
+        if type(task).scene_proven is not Task.scene_proven:
+            for i in np.flatnonzero(ok):
+                estimates = (scene.replace(**_middle(boxes[i])),  # the nearer first
+                             scene.replace(**_middle(ranges)))
+                ok[i] = task.scene_proven(box_params(scene, boxes[i]), estimates)
+    return ok
 
 
 # -- Balance: the unstable rest position ------------------------------------------------------
@@ -157,9 +222,12 @@ def unstable_rest_proven(p: Params, estimates: Sequence[Scene]) -> bool:
     A box where any of this fails is not proven (split, or refused where that does not end).
     """
     for scene in estimates:
-        estimate = unstable_rest_positions(scene)
-        if estimate and estimate[0] > 0 and _unstable_rest_proven_near(p, estimate[0]):
+        nearest = float(nearest_unstable_rests(scene.r, scene.kappa, scene.e)[0])
+        if nearest > 0 and _unstable_rest_proven_near(p, nearest):  # (False for NaN)
             return True
+        if not math.isnan(nearest):
+            continue
+        estimate = unstable_rest_positions(scene)  # the rule's other cases
         if estimate == (0.0,) and _unstable_bottom_proven(p):
             return True
         if estimate and estimate[0] < 0 and _floor_top_proven(p):
@@ -322,28 +390,42 @@ def _check_ranges_cached(task_class: type[Task], max_torque: float,
         if reason is not None:
             return _counterexample(ranges, corner, reason, fails)
     width = {n: hi - lo for n, (lo, hi) in ranges.items()}
-    stack: list[Box] = [dict(ranges)]
+    frontier: list[Box] = [dict(ranges)]  # the boxes of one depth, examined together
     proven: list[Box] = []
+    stalled: list[Box] = []  # boxes split as finely as allowed, neither proven nor refuted
     examined = 0
-    while stack:
-        box = stack.pop()
-        examined += 1
-        if examined > MAX_BOXES:
-            return _not_proven(ranges, proven, box, f"within {MAX_BOXES} boxes")
-        if _box_proven(task, scene, dt, box, ranges):
-            proven.append(box)
-            continue
-        middle = _middle(box)
-        reason = fails(middle)
-        if reason is not None:
-            return _counterexample(ranges, middle, reason, fails)
-        shares = {n: (box[n][1] - box[n][0]) / width[n] for n in names if width[n] > 0}
-        widest = max(shares, key=shares.get, default=None)
-        if widest is None or shares[widest] < SMALLEST_SHARE:
-            return _not_proven(ranges, proven, box, "however finely the box is split")
-        lo, hi = box[widest]
-        split = middle[widest]
-        stack += [{**box, widest: (split, hi)}, {**box, widest: (lo, split)}]
+    while frontier:
+        batch, left = frontier[:MAX_BOXES - examined], frontier[MAX_BOXES - examined:]
+        examined += len(batch)
+        deeper: list[Box] = []
+        ok = _boxes_proven(task, scene, dt, batch, ranges)
+        posable = _posable(task, scene, dt, [_middle(b) for b, good in zip(batch, ok,
+                                                                           strict=True)
+                                             if not good])
+        for box, good in zip(batch, ok, strict=True):
+            if good:
+                proven.append(box)
+                continue
+            middle = _middle(box)
+            reason = None if next(posable) else fails(middle)
+            if reason is not None:
+                return _counterexample(ranges, middle, reason, fails)
+            shares = {n: (box[n][1] - box[n][0]) / width[n] for n in names if width[n] > 0}
+            widest = max(shares, key=shares.get, default=None)
+            if widest is None or shares[widest] < SMALLEST_SHARE:
+                stalled.append(box)  # the rest of the box of ranges is examined all the same
+                if len(stalled) >= MAX_STALLED:  # (its coarser boxes were, at lower depths)
+                    return _not_proven(ranges, proven, stalled,
+                                       "however finely the box is split")
+                continue
+            lo, hi = box[widest]
+            split = middle[widest]
+            deeper += [{**box, widest: (lo, split)}, {**box, widest: (split, hi)}]
+        if left:
+            return _not_proven(ranges, proven, [*stalled, left[0]], f"within {MAX_BOXES} boxes")
+        frontier = deeper
+    if stalled:
+        return _not_proven(ranges, proven, stalled, "however finely the box is split")
     return None
 
 
@@ -386,13 +468,15 @@ def _round_to(x: float, digits: int, up: bool) -> float:
     return y if (y >= x if up else y <= x) else x  # keep the direction despite rounding
 
 
-def _not_proven(ranges: Mapping[str, tuple[float, float]], proven: list[Box], box: Box,
-                how: str) -> str:
-    """The refusal when the proof does not close (no counterexample found either)."""
+def _not_proven(ranges: Mapping[str, tuple[float, float]], proven: list[Box],
+                stalled: list[Box], how: str) -> str:
+    """The refusal when the proof does not close (no counterexample found either): says
+    that the range may be feasible, where the proof stalled, and what was proven (for one
+    field, every proven run of it, on both sides of the stalls)."""
     def show(b: Mapping[str, tuple[float, float]]) -> str:
         return ", ".join(f"{n} in {_inward(lo, hi)}" for n, (lo, hi) in b.items())
 
-    if len(ranges) == 1 and proven:  # the longest run of proven intervals
+    if len(ranges) == 1 and proven:  # the runs of proven intervals
         (name,) = ranges
         runs: list[list[float]] = []
         for lo, hi in sorted(b[name] for b in proven):
@@ -400,8 +484,7 @@ def _not_proven(ranges: Mapping[str, tuple[float, float]], proven: list[Box], bo
                 runs[-1][1] = max(runs[-1][1], hi)
             else:
                 runs.append([lo, hi])
-        lo, hi = max(runs, key=lambda run: run[1] - run[0])
-        done = f"{name} in {_inward(lo, hi)}"
+        done = " and ".join(f"{name} in {_inward(lo, hi)}" for lo, hi in runs)
     elif proven:
         def share(b: Box) -> float:
             return math.prod((hi - lo) / (ranges[n][1] - ranges[n][0]) for n, (lo, hi)
@@ -410,10 +493,13 @@ def _not_proven(ranges: Mapping[str, tuple[float, float]], proven: list[Box], bo
         done = f"the largest proven box is {show(max(proven, key=share))}"
     else:
         done = "nothing"
-    return (f"randomize={dict(ranges)!r} cannot be used: that the task can be posed in every "
-            f"scene of it could not be proven {how} (the proof does not close on "
-            f"{show(box)}, where no counterexample was found either); proven: {done}. Narrow "
-            "the ranges to a proven part")
+    where = "; ".join(show(b) for b in stalled[:MAX_STALLED])
+    if len(stalled) > MAX_STALLED:
+        where += f"; and {len(stalled) - MAX_STALLED} more boxes"
+    return (f"randomize={dict(ranges)!r} cannot be used: it may be feasible (no scene of it "
+            "was found where the task cannot be posed), but that the task can be posed in "
+            f"every scene of it could not be proven {how} (the proof does not close on "
+            f"{where}); proven: {done}. Narrow the ranges to a proven part")
 
 
 def _feasible_part(ok: Callable[[float], bool], low: float, high: float,

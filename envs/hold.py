@@ -42,9 +42,10 @@ torque beyond the target's own holding torque.
 
 ## Starting state
 
-ψ uniform in ±60°, φ' uniform in ±1 rad/s (redrawn until the roller rolls); the target
-uniform in the holdable range. ``reset(options={"target": psi_star})`` sets ψ* [rad]
-(on the floor, where ψ stays 0, the target is φ* [rad]).
+ψ uniform in ±60° (φ within ±64 turns on a nearly flat surface), φ' uniform in ±1 rad/s
+(redrawn until the roller rolls); the target uniform in the holdable range.
+``reset(options={"target": psi_star})`` sets ψ* [rad] (on the floor, where ψ stays 0, the
+target is φ* [rad]).
 
 ## Episode end
 

@@ -150,7 +150,8 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         if self._stream_seed is None:
             raise RuntimeError("call reset() before step()")
-        common = type(action) is np.ndarray and action.shape == (1,) and action.dtype.kind == "f"
+        common = (type(action) is np.ndarray and action.shape == (1,)
+                  and action.dtype.char in "fd")  # .item() a Python float (not a longdouble)
         a = action.item() if common else math.nan
         if math.isfinite(a):  # the common case, without the checks' cost
             a = min(1.0, max(-1.0, a))

@@ -38,7 +38,8 @@ resting one band-width outside it costs about 14 % (see ``envs/task.py``).
 
 ## Starting state
 
-ψ uniform in ±60°, φ' uniform in ±1 rad/s, redrawn until the roller rolls there.
+ψ uniform in ±60° (φ within ±64 turns on a nearly flat surface), φ' uniform in ±1 rad/s,
+redrawn until the roller rolls there.
 
 ## Episode end
 

@@ -74,7 +74,7 @@ import math
 import numpy as np
 from roller_gym import rewards
 from roller_gym.physics import Scene
-from roller_gym.task import Task, hold_ranges, objective, register, wrap_rate
+from roller_gym.task import START_TURNS, Task, hold_ranges, objective, register, wrap_rate
 
 __all__ = ["SwingTask"]
 
@@ -96,7 +96,7 @@ class SwingTask(Task):
     control_weight = 0.2
     #: The amplitude's range, as shares of the range friction holds on its side.
     amplitude_shares = (0.45, 0.85)
-    start_rule = "at rest, ψ within ±5°"
+    start_rule = "at rest, ψ within ±5° (|φ| <= 64 turns)"
     parameters = ("energy_band", "energy_margin", "control_weight", "max_torque",
                   "symmetric_target", "observes_target")
 
@@ -127,5 +127,6 @@ class SwingTask(Task):
         self, u_phi: np.ndarray, u_dot: np.ndarray, scene: Scene
     ) -> tuple[np.ndarray, np.ndarray]:
         q = np.abs(wrap_rate(scene))
-        limit = (math.radians(5.0) / np.asarray(q, float)).reshape(-1, 1)
+        limit = np.minimum(math.radians(5.0) / np.asarray(q, float),
+                           2.0 * math.pi * START_TURNS).reshape(-1, 1)
         return limit * (2.0 * u_phi - 1.0), 0.0 * u_dot

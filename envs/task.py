@@ -158,6 +158,10 @@ def get_task(task: str | type[Task]) -> type[Task]:
     return TASKS[name]
 
 
+#: The most turns of φ a start state lies from the bottom (see :meth:`Task.start_candidates`).
+START_TURNS = 64
+
+
 class Task:
     """The base of the tasks. Subclasses set the class variables and, where the task has a
     target to draw, ``sample_targets`` (a rest position) or ``sample_target_params`` and
@@ -232,7 +236,7 @@ class Task:
 
     # -- per episode (arrays of rollers; the uniforms come from the episode core) ------
     #: The start-state rule, as the error message states it when no start state is found.
-    start_rule: ClassVar[str] = "ψ within ±60° and |φ'| <= 1 rad/s"
+    start_rule: ClassVar[str] = "ψ within ±60° (|φ| <= 64 turns) and |φ'| <= 1 rad/s"
 
     def check_scene(self, scene: Scene) -> None:
         """Raise ValueError if the task cannot be posed in ``scene`` (default: any scene)."""
@@ -302,9 +306,11 @@ class Task:
     ) -> tuple[np.ndarray, np.ndarray]:
         """Candidate start states (φ [rad], φ' [rad/s]) of shape (n, K) from uniforms of that
         shape (``scene`` a batch of n): around the bottom, up to ψ = ±60°, and a speed up
-        to ±1 rad/s."""
+        to ±1 rad/s; φ within ±START_TURNS turns (on a nearly flat surface, R of thousands
+        of r, ψ = ±60° lies further: float64's rounding of such a φ passes the tolerance)."""
         q = np.abs(wrap_rate(scene))  # q < 0 on a drum; q = 1 on the floor
-        limit = (math.radians(60.0) / np.asarray(q, float)).reshape(-1, 1)
+        limit = np.minimum(math.radians(60.0) / np.asarray(q, float),
+                           2.0 * math.pi * START_TURNS).reshape(-1, 1)
         return limit * (2.0 * u_phi - 1.0), 2.0 * u_dot - 1.0
 
     @property

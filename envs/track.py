@@ -42,10 +42,10 @@ resting one band-width outside it costs about 14 % (see ``envs/task.py``).
 
 ## Starting state
 
-ψ uniform in ±60°, φ' uniform in ±1 rad/s (redrawn until the roller rolls). The target
-trajectory: center c within ±30 % of the holdable range's half-width about its middle;
-two sinusoids of amplitude 20–50 % each of what is left to the range's edge, of frequency
-0.2–0.8 rad/s, and of uniform phase.
+ψ uniform in ±60° (φ within ±64 turns on a nearly flat surface), φ' uniform in ±1 rad/s
+(redrawn until the roller rolls). The target trajectory: center c within ±30 % of the
+holdable range's half-width about its middle; two sinusoids of amplitude 20–50 % each of
+what is left to the range's edge, of frequency 0.2–0.8 rad/s, and of uniform phase.
 
 ## Episode end
 

@@ -91,10 +91,14 @@ def actions(value: Any, shape: tuple[int, ...], scale: float = 1.0,
             out: np.ndarray | None = None) -> np.ndarray:
     """Actions as float64 in [−1, 1] of ``shape``, times ``scale``: real numbers only, of
     ``shape`` or, where its last axis is 1, of ``shape`` without it (an action a number, a
-    batch's a row); out-of-range values are clipped; NaN, inf, another shape (a transposed
-    batch among them), complex or text raise ValueError (and leave ``out`` as it was). Into
+    batch's a row), of any real dtype (longdouble too); out-of-range values are clipped; NaN,
+    inf, another shape (a transposed batch among them), complex, text or a masked array
+    raise ValueError (and leave ``out`` as it was). Into
     ``out`` (C-contiguous float64 of as many elements) if given: compiled, one pass to check
     and one to write."""
+    if isinstance(value, np.ma.MaskedArray):  # np.asarray would take the data under the mask
+        raise ValueError(f"action={value!r} is a masked array, which is not allowed: every "
+                         "action must be given (pass a plain NumPy array)")
     a = np.asarray(value)
     shapes = (shape, shape[:-1]) if shape and shape[-1] == 1 else (shape,)
     if a.dtype.kind not in "iuf" or a.shape not in shapes:
@@ -102,7 +106,9 @@ def actions(value: Any, shape: tuple[int, ...], scale: float = 1.0,
         raise ValueError(f"action={value!r} is not allowed: it must be real numbers of shape "
                          f"{allowed} in [-1, 1] (out-of-range values are clipped), not "
                          f"{a.dtype} of shape {a.shape}")
-    if a.dtype not in _COMPILED_ACTIONS:
+    if a.dtype.kind == "f" and a.dtype.itemsize > 8:  # longdouble: clipped in its own type
+        a = np.where(np.isfinite(a), np.clip(a, -1, 1), a)  # (one past float64's range: ±1)
+    if a.dtype not in _COMPILED_ACTIONS:  # e.g. float16, longdouble, int8
         a = a.astype(np.float64)
     out = np.empty(shape) if out is None else out
     assert out.flags.c_contiguous and out.dtype == np.float64 and out.size == a.size
@@ -136,13 +142,14 @@ def check_integrable(scene: Scene, dt: float, max_torque: float) -> None:
     With J_min = m (k² + (r − e)²) [kg·m²] the smallest moment of inertia about the contact,
     the limits are: m g r, J_min and max_torque representable with room for their squares
     (between 1e-100 and 1e100 in SI units), and the fastest phase per control step,
-    (ω_max + sqrt(max_torque / J_min)) · dt with ω_max² = m g (r²|κ|/(1 − rκ) + e)/J_min,
-    at most 1e4 rad: beyond it a control step spans more oscillations than the integrators'
-    substep budget can follow.
+    (ω_max + sqrt(max_torque / J_min) + c / J_min) · dt with
+    ω_max² = m g (r²|κ|/(1 − rκ) + e)/J_min and c the damping, at most 1e4: beyond it a
+    control step spans more oscillations, or more e-foldings of the damping's decay, than
+    the integrators' substep budget can follow.
     """
     for i in range(scene.batch_size or 1):
         one = scene.item(i) if scene.batch_size else scene
-        m, r, kappa, e, k, g = (float(x) for x in one.params[:6])
+        m, r, kappa, e, k, g, c = (float(x) for x in one.params)
         weight_arm, j_min = integration_magnitudes(m, r, e, k, g)
         for label, x in (("m g r", weight_arm), ("J_min = m (k² + (r − e)²)", j_min),
                          ("max_torque", max_torque)):
@@ -151,15 +158,15 @@ def check_integrable(scene: Scene, dt: float, max_torque: float) -> None:
                     f"{one!r} cannot be integrated in float64: {label} = {x:.3g} (SI) lies "
                     "outside [1e-100, 1e100]; rescale the scene's units"
                 )
-        omega, spin = integration_rates(m, r, kappa, e, g, j_min, max_torque)
-        phase = (omega + spin) * dt
+        omega, spin, decay = integration_rates(m, r, kappa, e, g, c, j_min, max_torque)
+        phase = (omega + spin + decay) * dt
         if not phase <= LARGEST_PHASE_PER_STEP:
             raise ValueError(
                 f"dt={dt!r} s is too long for {one!r}: its fastest time scale is "
-                f"{1.0 / (omega + spin):.3g} s (ω_max = {omega:.3g} rad/s, torque spin-up "
-                f"{spin:.3g} rad/s), {phase:.3g} rad per step where at most "
-                f"{LARGEST_PHASE_PER_STEP:g} can be followed; use a shorter dt, a larger k or "
-                "a smaller e"
+                f"{1.0 / (omega + spin + decay):.3g} s (ω_max = {omega:.3g} rad/s, torque "
+                f"spin-up {spin:.3g} rad/s, damping c/J_min = {decay:.3g} 1/s), {phase:.3g} "
+                f"rad per step where at most {LARGEST_PHASE_PER_STEP:g} can be followed; use a "
+                "shorter dt, a larger k, a smaller e or less damping"
             )
 
 
@@ -169,10 +176,11 @@ def integration_magnitudes(m: Any, r: Any, e: Any, k: Any, g: Any) -> tuple[Any,
     return m * g * r, m * (k * k + (r - e) ** 2)
 
 
-def integration_rates(m: Any, r: Any, kappa: Any, e: Any, g: Any, j_min: Any,
-                      max_torque: Any) -> tuple[Any, Any]:
-    """(ω_max, spin) [rad/s] of :func:`check_integrable`: ω_max² = m g (r²|κ|/(1 − rκ) + e)
-    / J_min, spin² = max_torque / J_min (floats, or intervals)."""
+def integration_rates(m: Any, r: Any, kappa: Any, e: Any, g: Any, c: Any, j_min: Any,
+                      max_torque: Any) -> tuple[Any, Any, Any]:
+    """(ω_max, spin, decay) [rad/s, rad/s, 1/s] of :func:`check_integrable`:
+    ω_max² = m g (r²|κ|/(1 − rκ) + e) / J_min, spin² = max_torque / J_min and
+    decay = c / J_min, the damping's fastest rate (floats, or intervals)."""
     s = 1.0 - r * kappa
     omega = np.sqrt(m * g * (r * r * abs(kappa) / s + e) / j_min)
-    return omega, np.sqrt(max_torque / j_min)
+    return omega, np.sqrt(max_torque / j_min), c / j_min

@@ -22,6 +22,7 @@ Autoreset (``autoreset_mode=``, Gymnasium's three modes):
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -125,6 +126,25 @@ def _masks(keys: Sequence[str], n: int, where: np.ndarray | None = None) -> dict
     return dict(zip((f"_{k}" for k in keys), rows, strict=True))
 
 
+#: Memory [bytes] a sub-environment's arrays take, at most (its tables of outcome, starts
+#: drawn ahead and stepper, with every info key; rounded up).
+BYTES_PER_ENV = 4096
+
+
+def _check_memory(num_envs: int) -> None:
+    """Refuse a ``num_envs`` whose arrays would not fit in the machine's physical memory
+    (where the platform tells it), rather than fail in NumPy or be killed later."""
+    try:
+        total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, OSError, ValueError):  # not told: MemoryError is caught instead
+        return
+    need = num_envs * BYTES_PER_ENV
+    if need > total:
+        raise ValueError(f"num_envs={num_envs} is too many: their arrays need about "
+                         f"{need / 2**30:.3g} GiB of memory (up to {BYTES_PER_ENV} bytes "
+                         f"each), more than the machine's {total / 2**30:.3g} GiB; use fewer")
+
+
 def _some(idx: np.ndarray) -> str:
     """Sub-environment numbers for a message: the first ten, and how many more."""
     more = f" and {idx.size - 10} more" if idx.size > 10 else ""
@@ -194,12 +214,29 @@ class RollerVectorEnv(VectorEnv):
         info_keys: Sequence[str] | None = None,
     ) -> None:
         num_envs = validation.count("num_envs", num_envs)
+        _check_memory(num_envs)
+        try:
+            self._build(num_envs, task, scene, dt, max_torque, tolerance, integrator, substeps,
+                        randomize, render_mode, max_episode_steps, autoreset_mode, info_keys)
+        except MemoryError:
+            raise ValueError(f"num_envs={num_envs} is too many: the arrays of that many "
+                             "sub-environments could not be allocated (out of memory); use "
+                             "fewer") from None
+
+    def _build(self, num_envs: int, task: str | type[Task], scene: Any, dt: float,
+               max_torque: float | None, tolerance: float, integrator: str,
+               substeps: int | None, randomize: Mapping[str, tuple[float, float]] | None,
+               render_mode: str | None, max_episode_steps: int | None,
+               autoreset_mode: AutoresetMode | str, info_keys: Sequence[str] | None) -> None:
         per_env = self._per_env_scenes(scene, num_envs)
+        task_class = get_task(task)
+        resolved = [resolve_scene(s, task_class.default_scene) for s in per_env]
         self.config = EnvConfig.build(
-            get_task(task), scene=None if per_env else scene, dt=dt, max_torque=max_torque,
+            task_class, scene=None if per_env else scene, dt=dt, max_torque=max_torque,
             tolerance=tolerance, integrator=integrator, substeps=substeps,
             randomize=randomize, render_mode=render_mode,
             render_modes=self.metadata["render_modes"], info_keys=info_keys,
+            scenes=resolved or None,
         )
         if integrator not in BATCH_INTEGRATORS:
             raise ValueError(f"integrator={integrator!r} is a reference for the single "
@@ -208,13 +245,7 @@ class RollerVectorEnv(VectorEnv):
         self.autoreset_mode = _autoreset_mode(autoreset_mode)
         self.metadata = {**type(self).metadata, "autoreset_mode": self.autoreset_mode}
         task = self.task = self.config.task
-        if per_env:
-            resolved = [resolve_scene(s, task.default_scene) for s in per_env]
-            for s in {id(s): s for s in resolved}.values():
-                reason = task.infeasible(s)
-                if reason is not None:
-                    raise ValueError(reason)
-                validation.check_integrable(s, self.config.dt, task.max_torque)
+        if per_env:  # each distinct scene checked by EnvConfig.build
             self._base = Scene.stack(resolved)
         else:
             self._base = self.config.scene

@@ -1137,3 +1137,57 @@ def test_taylor_does_not_flag_a_reachable_tolerance():
     tau = rng.uniform(-1, 1, n) * scene.m * scene.g * scene.r
     out = step(scene, phi, w, tau, 0.02, method="taylor", tol=1e-10)
     assert out.finite.all() and out.tol_met.all(), int((~out.tol_met).sum())
+
+
+def test_dop853_reports_tol_met_only_where_scipy_kept_the_tolerance():
+    """scipy raises an rtol below 100 ε to 100 ε (and warns); the step then reports
+    tol_met=False, as every other scheme does at a tolerance float64 cannot reach."""
+    scene = PRESETS["paper"]
+    for tol, kept in ((1e-8, True), (1e-15, False)):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            out = step(scene, 0.3, 0.5, 0.1, DT, method="dop853", tol=tol)
+        loosened = any("rtol" in str(w.message) for w in caught)
+        assert loosened == (not kept)  # scipy's own account of what it did
+        assert out.finite and bool(out.tol_met) == kept
+        others = step(scene, 0.3, 0.5, 0.1, DT, method="rk8", tol=tol)
+        assert bool(others.tol_met) == kept
+
+
+def test_a_carried_substep_size_never_fails_a_step_that_a_fresh_one_passes():
+    """rk8 carries its proposed substep size to the next step; on a state it did not step
+    to, a first trial that overflows is rejected and shrunk (it ended the step non-finite,
+    with 0 substeps), and the step ends as the same step from a fresh stepper does."""
+    scene = PRESETS["rim_mass"]
+    first = (2.939902186110369, 4.969354228348603, -0.04551300450597362)
+    second = (0.03250393038817867, 2.83564580148128, 0.22713056202077542)
+    fresh = integrators.Stepper(scene, method="rk8", dt=0.05, tol=1e-6)
+    expected = fresh.advance(*second)
+    ref = reference(scene, *second[:2], second[2])
+    assert expected[4] and max(abs(expected[0] - ref[0]), abs(expected[1] - ref[1])) <= 1e-6
+    for method in ("rk8", "rk4"):
+        rng = np.random.default_rng(5)
+        stepper = integrators.Stepper(scene, method=method, dt=0.05, tol=1e-6)
+        states = [first, second] + [(rng.uniform(-6, 6), rng.uniform(-8, 8),
+                                     rng.uniform(-0.3, 0.3)) for _ in range(30)]
+        for state in states:
+            carried = stepper.advance(*state)  # after a step to somewhere else
+            stepper.forget()
+            anew = stepper.advance(*state)
+            if anew[4]:
+                assert carried[4], (method, state)  # finite
+            if anew[4] and anew[11]:
+                assert carried[11], (method, state)  # tol_met
+            stepper.advance(*states[0])  # leaves a carried size for the next
+
+
+@pytest.mark.parametrize("method", ["taylor", "rk8", "rk4"])
+@pytest.mark.parametrize("case", ["tolerance 1e-300", "R = 0.1000001"])
+def test_no_step_takes_more_substeps_than_the_documented_budget(method, case):
+    """MAX_SUBSTEPS (200,000) is the most a step takes, even where the tolerance is out of
+    reach (it took 400,001 at tol 1e-300 and 385,786 at R = 1.000001 r)."""
+    scene, tol = ((PRESETS["paper"], 1e-300) if case == "tolerance 1e-300" else
+                  (Scene(R=0.1000001), 1e-8))
+    out = step(scene, 0.4, 1.0, 0.2, DT, method=method, tol=tol)
+    assert out.substeps <= integrators.MAX_SUBSTEPS
+    assert out.finite

@@ -11,6 +11,8 @@ import itertools
 import math
 from dataclasses import dataclass
 
+import numba
+import numba.extending
 import numpy as np
 from roller_gym.physics import equations as eq
 from roller_gym.physics.scene import Scene
@@ -28,6 +30,7 @@ __all__ = [
     "kinematics",
     "linearize",
     "moment_of_inertia",
+    "nearest_unstable_rests",
     "power",
     "small_oscillation_frequency",
 ]
@@ -230,3 +233,93 @@ def equilibria(scene: Scene, tau: float = 0.0, resolution: int = 4000) -> list[E
         psi = r * kappa * phi / s
         out.append(Equilibrium(float(phi), float(psi), bool(stiffness(phi) > 0)))
     return out
+
+
+def nearest_unstable_rests(r: np.ndarray, kappa: np.ndarray, e: np.ndarray,
+                           resolution: int = 4000) -> np.ndarray:
+    """The smallest unstable rest position φ > 0 [rad] at zero torque of each scene of the
+    arrays ``r`` [m], ``kappa`` [1/m], ``e`` [m] (no other field moves a rest position), in
+    one compiled call: the roots of dV/dφ with d²V/dφ² < 0 in (0, the window's end) of
+    :func:`equilibria` (the same window and grid spacing), NaN where there is none there.
+
+    As :func:`equilibria` does, the zeros of d²V/dφ² are bracketed on the grid, walked
+    outward from 0 and refined by bisection to the last bit; between two of them dV/dφ is
+    monotone, and its root there is refined likewise. The walk stops at the first unstable
+    root, so the cost is that of the distance to it.
+    """
+    r, kappa, e = (np.ascontiguousarray(x, dtype=float).reshape(-1) for x in (r, kappa, e))
+    rate = np.abs(r * kappa / (1.0 - r * kappa))
+    with np.errstate(divide="ignore"):
+        half = np.where(kappa == 0.0, math.pi, math.pi * np.minimum(1.0 / rate, MAX_TURNS))
+    out = np.empty(r.size)
+    _nearest_unstable_root(r, kappa, e, half, resolution, out)
+    return out
+
+
+@numba.extending.register_jitable
+def _derivative(order, phi, r, kappa, e):
+    """dV/dφ (order 1) or d²V/dφ² (order 2) at φ, per m g."""
+    if order == 1:
+        return eq.dpotential(phi, 1.0, r, kappa, e, 1.0)
+    return eq.d2potential(phi, 1.0, r, kappa, e, 1.0)
+
+
+@numba.njit(cache=True, nogil=True)
+def _bisect(order, a, b, r, kappa, e):
+    """The zero of :func:`_derivative` between a and b (a sign change), to the last bit:
+    the end of the last bracket where it is smaller."""
+    fa = _derivative(order, a, r, kappa, e)
+    while True:
+        mid = 0.5 * (a + b)
+        if mid <= a or mid >= b:
+            return b if abs(_derivative(order, b, r, kappa, e)) < abs(fa) else a
+        fm = _derivative(order, mid, r, kappa, e)
+        if fm == 0.0:
+            return mid
+        if (fm < 0.0) == (fa < 0.0):
+            a, fa = mid, fm
+        else:
+            b = mid
+
+
+@numba.njit(cache=True, nogil=True)
+def _nearest_unstable_root(r, kappa, e, half, resolution, out):
+    """out[j]: the smallest φ in (0, half[j]·(1 − 1e-9)) where dV/dφ = 0 and d²V/dφ² < 0
+    (m g = 1: neither moves it), or NaN where there is none."""
+    for j in range(r.size):
+        rj, kj, ej = r[j], kappa[j], e[j]
+        out[j] = np.nan
+        count = int(resolution * half[j] / np.pi) + 1
+        step = 2.0 * half[j] / count
+        end = half[j] * (1.0 - 1e-9)
+        knot = 0.0  # dV/dφ is monotone between consecutive knots (zeros of d²V/dφ²)
+        s_prev = eq.d2potential(0.0, 1.0, rj, kj, ej, 1.0)
+        i = 0
+        while True:
+            i += 1
+            x = i * step
+            last = x > half[j] + step
+            s_x = eq.d2potential(x, 1.0, rj, kj, ej, 1.0)
+            new = np.nan
+            if s_prev == 0.0:
+                new = (i - 1) * step
+            elif (s_prev < 0.0 and s_x > 0.0) or (s_prev > 0.0 and s_x < 0.0):
+                new = _bisect(2, (i - 1) * step, x, rj, kj, ej)
+            elif last:
+                new = x
+            if new > knot:
+                fa = eq.dpotential(knot, 1.0, rj, kj, ej, 1.0)
+                fb = eq.dpotential(new, 1.0, rj, kj, ej, 1.0)
+                root = np.nan
+                if fa == 0.0:
+                    root = knot
+                elif (fa < 0.0 and fb > 0.0) or (fa > 0.0 and fb < 0.0):
+                    root = _bisect(1, knot, new, rj, kj, ej)
+                if (root > 0.0 and root < end
+                        and eq.d2potential(root, 1.0, rj, kj, ej, 1.0) < 0.0):
+                    out[j] = root
+                    break
+                knot = new
+            if last or knot >= end:
+                break
+            s_prev = s_x

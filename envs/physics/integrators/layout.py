@@ -47,7 +47,8 @@ class StepResult:
         tol_met: False where the accepted substeps' error estimates add up to more than the
             scheme's share of ``tol`` (substeps accepted at float64 rounding or past the
             budget: the tolerance was out of reach and is not verified); for euler and
-            midpoint, where the predicted substeps were more than ``MAX_SUBSTEPS``.
+            midpoint, where the predicted substeps were more than ``MAX_SUBSTEPS``; for
+            DOP853, where scipy failed or raised rtol = ``tol`` to its floor, 100 ε.
     """
 
     phi: np.ndarray | float

@@ -18,7 +18,7 @@ from roller_gym.physics.integrators.layout import (
     _W_IN,
     SCENE_FIELDS,
 )
-from roller_gym.physics.integrators.rules import _finish
+from roller_gym.physics.integrators.rules import _EPS, _finish
 from scipy.integrate import solve_ivp
 
 
@@ -36,13 +36,15 @@ def _dop853_kernel(io: np.ndarray, tab: None, cfg: np.ndarray) -> None:
         sol = solve_ivp(rhs, (0.0, dt), np.concatenate((phi, w)), method="DOP853", rtol=tol,
                         atol=tol)
         y = sol.y[:, -1] if sol.success else np.full(2 * n, np.nan)
+        # scipy raises an rtol below 100 ε to 100 ε (and warns): tol is then not what it met
+        met = bool(sol.success) and tol >= 100.0 * _EPS
         a0 = eq.accel(phi, w, tau, m, r, kappa, e, k, g, c)
         normal, friction = eq.contact_forces(phi, w, a0, m, r, kappa, e, g)
         lift, slip = eq.margins(normal, friction, m, g, mu)
     for col in range(n):
         _finish_py(io, col, bool(sol.success), float(y[col]), float(y[n + col]),
                    float(tau[col]), sol.t.size - 1, float(lift[col]), float(slip[col]),
-                   math.nan, True)
+                   math.nan, met)
 
 
 _finish_py = _finish  # register_jitable leaves it a Python function too

@@ -44,7 +44,8 @@ from roller_gym.physics.integrators.rules import (
     _MAX_FACTOR,
     _MIN_FACTOR,
     _SAFETY,
-    MAX_SUBSTEPS,
+    FORCE_AFTER,
+    FORCE_REST,
     ROUNDOFF_FACTOR,
     _accel_lanes,
     _end_lanes,
@@ -147,9 +148,9 @@ def _judge(h, e5p, e5w, e3p, e3w, phi, w, phin, wn, a_new, count, hforce, t, hde
     errw = h * e5w * e5w / math.sqrt(trig.select(dw > 0.0, dw, 1.0))
     err = max(errp, errw)
     fin = _finite(phin) & _finite(wn) & _finite(a_new) & _finite(err)
-    # past MAX_SUBSTEPS accepted substeps, the rest in as many more
-    start = (count == MAX_SUBSTEPS) & (hforce == 0.0)
-    hforce = trig.select(start, (dt - t) / MAX_SUBSTEPS, hforce)
+    # past FORCE_AFTER accepted substeps, the rest in fewer than as many more
+    start = (count == FORCE_AFTER) & (hforce == 0.0)
+    hforce = trig.select(start, (dt - t) / FORCE_REST, hforce)
     floor = max(1e-12 * dt, hforce)
     # the error a substep aims at: its share of tol, or float64's rounding of the state if
     # that is larger (a smaller substep would only add rounding)
@@ -157,7 +158,8 @@ def _judge(h, e5p, e5w, e3p, e3w, phi, w, phin, wn, a_new, count, hforce, t, hde
     aim = max(share * h / dt, _EPS * big)
     ratio = trig.select(aim > 0.0, err / trig.select(aim > 0.0, aim, 1.0), 0.0)
     # an estimate at the level of float64 rounding is accepted: no smaller substep does better
-    forced = (h <= floor) | (err <= ROUNDOFF_FACTOR * _EPS * big)
+    # (a non-finite trial never is: it is rejected and shrunk, failing only at the floor)
+    forced = (h <= floor) | (fin & (err <= ROUNDOFF_FACTOR * _EPS * big))
     accept = trig.select(fixed, fin, fin & ((ratio <= 1.0) | forced))
     fail = (not fin) & (fixed | forced)
     ends = accept & (last != 0.0)

@@ -45,10 +45,12 @@ _jit = numba.njit(cache=True, fastmath=False, nogil=True, error_model="numpy")
 # -- the substep rule (the first step-size guess of the adaptive schemes) ------------------------
 
 #: The most substeps one control step may take: the fixed-substep schemes' (the smallest
-#: substep is dt / MAX_SUBSTEPS), and the error-controlled schemes' budget (after this many
-#: accepted substeps, the rest of the control step is taken in at most as many more, accepted
-#: whatever their estimates).
+#: substep is dt / MAX_SUBSTEPS), and the error-controlled schemes' budget (after half as
+#: many accepted substeps, the rest of the control step is taken in fewer than as many more,
+#: of at least its length over FORCE_REST each, accepted whatever their estimates).
 MAX_SUBSTEPS = 200_000
+FORCE_AFTER = MAX_SUBSTEPS // 2
+FORCE_REST = float(MAX_SUBSTEPS - FORCE_AFTER - 2)  # one spare for a rounded-off end
 #: A substep whose error estimate is below ROUNDOFF_FACTOR · ε · max(|φ|, |φ'|) (float64
 #: rounding) is accepted even above its share of tol: no smaller substep would do better.
 ROUNDOFF_FACTOR = 8.0

@@ -38,7 +38,8 @@ from roller_gym.physics.integrators.rules import (
     _EPS,
     _MAX_ATTEMPTS,
     _SAFETY,
-    MAX_SUBSTEPS,
+    FORCE_AFTER,
+    FORCE_REST,
     _end_lanes,
     _finish,
     _finite,
@@ -138,9 +139,9 @@ def _taylor_tick(fin, last, rounding, count, nfixed, t, h, err_sum, err, hforce,
     status = trig.select(ends, 1.0, trig.select(fin, status, 2.0))
     t = trig.select(ends, dt, t + h)
     count = count + trig.select(fin, 1.0, 0.0)
-    # past MAX_SUBSTEPS substeps, the rest in at most as many more
-    start = (count == MAX_SUBSTEPS) & (hforce == 0.0)
-    hforce = trig.select(start, (dt - t) / MAX_SUBSTEPS, hforce)
+    # past FORCE_AFTER substeps, the rest in fewer than as many more
+    start = (count == FORCE_AFTER) & (hforce == 0.0)
+    hforce = trig.select(start, (dt - t) / FORCE_REST, hforce)
     return status, t, count, err_sum + err, hforce, round_sum + rounding
 
 
