@@ -13,8 +13,8 @@ import math
 
 import numba
 import numpy as np
-from numba.extending import register_jitable
 from roller_gym.physics import Scene, equations, equilibria
+from roller_gym.physics.compiling import inlined
 from roller_gym.physics.integrators import SCENE_FIELDS, scene_arrays
 
 __all__ = ["hold_range", "hold_ranges", "per_scene", "psi_rate", "unstable_rest_positions",
@@ -107,7 +107,7 @@ def hold_range(scene: Scene, max_torque: float, torque_share: float = 0.8,
     return float(low[0]), float(high[0])
 
 
-@register_jitable(inline="always")
+@inlined
 def _holds(phi, m, r, kappa, e, k, g, c, mu, torque_limit, friction_share):
     """Whether the roller can be held at rest at φ [rad] (:func:`hold_ranges`' condition): its
     holding torque τ = dV/dφ [N·m] within ``torque_limit``, and under τ at rest N > 0 and
@@ -119,7 +119,7 @@ def _holds(phi, m, r, kappa, e, k, g, c, mu, torque_limit, friction_share):
             & (abs(friction) <= friction_share * mu * normal))
 
 
-@register_jitable(inline="always")
+@inlined
 def _linspace_at(i, div, step, stop):
     """Point i of ``np.linspace(0.0, stop, div + 1)``, bit for bit, as NumPy computes it:
     i·step + 0.0 with step = (stop − 0.0)/div (where step underflows to 0,

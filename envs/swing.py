@@ -10,8 +10,8 @@ a swing of that amplitude has that energy at every point of it.
 ## Action space
 
 ``Box(-1, 1, (1,), float32)``: the torque τ = action · ``max_torque`` [N·m] (default
-0.1 N·m: a few pumps reach the target swing), positive in the sense of φ. Out-of-range actions are clipped; NaN or inf raise
-``ValueError``.
+0.1 N·m: a few pumps reach the target swing), positive in the sense of φ. Out-of-range
+actions are clipped; NaN or inf raise ``ValueError``.
 
 ## Observation space
 

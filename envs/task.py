@@ -57,9 +57,9 @@ from collections.abc import Sequence
 from typing import Any, ClassVar
 
 import numpy as np
-from numba.extending import register_jitable
 from roller_gym import rewards
 from roller_gym.physics import Scene, equations, trig
+from roller_gym.physics.compiling import inlined
 from roller_gym.physics.integrators import contact_state, scene_arrays
 from roller_gym.rest import (  # the scene's rates and rest positions, importable from here too
     hold_range,
@@ -141,10 +141,10 @@ _KERNEL_PARAMETERS = ("max_torque", "symmetric_target", "observes_target")
 
 def objective(function: Any) -> Any:
     """Decorator of a task's ``reward(s, k)`` or ``success(s, k)``: compiled into the
-    environments' per-step kernel (inlined, numba's ``register_jitable``); in Python the
-    function itself, for floats and arrays alike. Write it from NumPy's ufuncs,
+    environments' per-step kernel (inlined by LLVM: ``roller_gym.physics.compiling.inlined``);
+    in Python the function itself, for floats and arrays alike. Write it from NumPy's ufuncs,
     :mod:`roller_gym.rewards` and :mod:`roller_gym.physics.trig`."""
-    return register_jitable(inline="always")(function)
+    return inlined(function)
 
 
 def get_task(task: str | type[Task]) -> type[Task]:
@@ -425,7 +425,7 @@ def _as_step(step: Any) -> Any:
 TASK_CONSTANTS = Task.parameters
 
 
-@register_jitable(inline="always")
+@inlined
 def position_error(phi, target, q, symmetric):
     """The position error [rad of φ], wrap(q (φ − φ*))/q (see the module docs); with
     ``symmetric`` (1.0) the error to the nearer of ±φ*."""
@@ -436,7 +436,7 @@ def position_error(phi, target, q, symmetric):
     return error
 
 
-@register_jitable(inline="always")
+@inlined
 def step_reward(error, speed_error, control_error, band, position_margin, precision_weight,
                 speed_margin, speed_weight, control_weight):
     """The reward in [0, 1] (formula in the module docs) from the position error ε [rad of φ],
@@ -447,13 +447,13 @@ def step_reward(error, speed_error, control_error, band, position_margin, precis
             * rewards.blend(rewards.near(control_error, 1.0), control_weight))
 
 
-@register_jitable(inline="always")
+@inlined
 def step_success(error, speed_error, band, success_speed):
     """|ε| <= band [rad of φ] and |φ' − φ*'| <= success_speed [rad/s]."""
     return (np.abs(error) <= band) & (np.abs(speed_error) <= success_speed)
 
 
-@register_jitable(inline="always")
+@inlined
 def state_observation(phi, phi_dot, rate):
     """The roller's own fields of :data:`OBSERVATION_FIELDS` (the first five, in order);
     ``rate`` = dψ/dφ."""
@@ -462,7 +462,7 @@ def state_observation(phi, phi_dot, rate):
     return cos_psi, sin_psi, cos_phi, sin_phi, trig.tanh(phi_dot / SPEED_SCALE)
 
 
-@register_jitable(inline="always")
+@inlined
 def target_observation(target, rate, target_rate):
     """The target's fields of :data:`OBSERVATION_FIELDS` (the last five, in order);
     ``target_rate`` φ*' [rad/s]."""
@@ -472,7 +472,7 @@ def target_observation(target, rate, target_rate):
             trig.tanh(target_rate / SPEED_SCALE))
 
 
-@register_jitable(inline="always")
+@inlined
 def observation_values(phi, phi_dot, target, rate, target_rate):
     """Every field of :data:`OBSERVATION_FIELDS`, in its order (the formulas listed there);
     ``rate`` = dψ/dφ, ``target_rate`` φ*' [rad/s]."""

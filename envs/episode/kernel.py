@@ -21,7 +21,7 @@ from typing import Any
 import numba
 import numpy as np
 from numba.core import types
-from numba.extending import overload, register_jitable
+from numba.extending import overload
 from numba.np.unsafe.ndarray import to_fixed_tuple
 from roller_gym.episode.outcome import (
     SCRATCH_SIZE,
@@ -40,6 +40,7 @@ from roller_gym.episode.record import (
     F,
     O,
 )
+from roller_gym.physics.compiling import inlined
 from roller_gym.physics.integrators import (
     CHUNK,
     PARALLEL_THRESHOLD,
@@ -74,22 +75,7 @@ def _numbers_overload(constants, n):
     return None
 
 
-@register_jitable(inline="always")
-def _advance_and_outcome(io, tab, cfg, result, chunk, reward, success, k, context, observed,
-                         out, flags, obs):
-    """A scheme's ``chunk`` (the physics, :attr:`~roller_gym.physics.integrators.Scheme.chunk`)
-    and then the outcome (:func:`~roller_gym.episode.outcome.outcome_range`) of each chunk of
-    rollers in turn, chunks on all cores: the outcome reads the chunk's results while they
-    are still in cache, and a step is one parallel pass instead of two."""
-    n = io.shape[1]
-    for c in numba.prange((n + CHUNK - 1) // CHUNK):
-        lo, hi = c * CHUNK, min(n, (c + 1) * CHUNK)
-        chunk(io, lo, hi, tab, cfg)
-        outcome_range(reward, success, k, lo, hi, result, context, observed, out, flags, obs,
-                      np.empty(SCRATCH_SIZE))
-
-
-@register_jitable(inline="always")
+@inlined
 def _outcome_all(reward, success, k, result, context, observed, out, flags, obs, scratch):
     """Every roller's outcome on one core, in ``scratch``; a batch of one by
     :func:`~roller_gym.episode.outcome.outcome_one`."""
@@ -109,7 +95,7 @@ _ONE_ARRAYS = ((np.float64, 2), (np.float64, 2), (np.float64, 1), (np.float64, 2
 _ONE_DTYPES = tuple(dtype for dtype, _ in _ONE_ARRAYS)
 
 
-@register_jitable(inline="always")
+@inlined
 def _unpack_one(packed):
     """The single environment's buffers from ``packed`` (see :data:`_ONE_ARRAYS`): the
     stepper's io, tableau and cfg, then the context, the task's numbers, the observed fields,
@@ -120,13 +106,13 @@ def _unpack_one(packed):
             unpack(packed, 6, d[6]), unpack(packed, 7, d[7]), unpack(packed, 8, d[8]))
 
 
-@register_jitable(inline="always")
+@inlined
 def _one_roller(phi, phi_dot, tau, kernel, reward, success, k, io, tab, cfg, context, observed,
                 out, flags, obs):
     """The single environment's step: its roller's inputs and torque written, the physics
-    (the scheme's serial ``kernel``) and the outcome, and what the environment reads back,
-    as :meth:`~roller_gym.physics.integrators.Stepper.bind` takes it: (missed, φ [rad],
-    φ' [rad/s], reward, terminated)."""
+    (the scheme's ``kernel`` for one roller, ``Scheme.one``) and the outcome, and what the
+    environment reads back, as :meth:`~roller_gym.physics.integrators.Stepper.bind` takes
+    it: (missed, φ [rad], φ' [rad/s], reward, terminated)."""
     flat = io[:, 0]
     put_inputs(flat, phi, phi_dot, tau)
     context[C.torque, 0] = tau
@@ -141,6 +127,7 @@ def _one_roller(phi, phi_dot, tau, kernel, reward, success, k, io, tab, cfg, con
 _TAYLOR, _RK = SCHEMES["taylor"], SCHEMES["rk8"]
 _TAYLOR_CHUNK, _RK_CHUNK = _TAYLOR.chunk, _RK.chunk
 _TAYLOR_SERIAL, _RK_SERIAL = _TAYLOR.kernels()[0], _RK.kernels()[0]
+_TAYLOR_ONE, _RK_ONE = _TAYLOR.one, _RK.one  # a roller alone: no chunk's lanes compiled
 
 
 @dataclass(frozen=True)
@@ -171,27 +158,37 @@ def task_kernels(task: type) -> TaskKernels:
         _outcome_all(reward, success, K(*_numbers(constants, n)), result, context,
                      observed, out, flags, obs, scratch)
 
+    # The loops over chunks on all cores: each chunk's physics (a scheme's ``chunk``) then its
+    # outcome, while the chunk's results are in cache: one parallel pass per step. The task's
+    # numbers cross into the loop as the array (numba rebuilds a tuple that crosses into a
+    # parallel loop by its class's name, which a task's Constants is not in scope under).
     @jit(parallel=True)
     def parallel(result, context, constants, observed, out, flags, obs, scratch):
-        k = K(*_numbers(constants, n))
         rollers = result.shape[1]
-        for chunk in numba.prange((rollers + CHUNK - 1) // CHUNK):
-            outcome_range(reward, success, k, chunk * CHUNK, min(rollers, (chunk + 1) * CHUNK),
-                          result, context, observed, out, flags, obs, np.empty(SCRATCH_SIZE))
+        for c in numba.prange((rollers + CHUNK - 1) // CHUNK):
+            outcome_range(reward, success, K(*_numbers(constants, n)), c * CHUNK,
+                          min(rollers, (c + 1) * CHUNK), result, context, observed, out, flags,
+                          obs, np.empty(SCRATCH_SIZE))
 
     @jit(parallel=True)
     def taylor_and_outcome(io, tab, cfg, result, context, constants, observed, out, flags,
                            obs, scratch):
-        _advance_and_outcome(io, tab, cfg, result, _TAYLOR_CHUNK, reward, success,
-                             K(*_numbers(constants, n)), context, observed, out, flags,
-                             obs)
+        rollers = io.shape[1]
+        for c in numba.prange((rollers + CHUNK - 1) // CHUNK):
+            lo, hi = c * CHUNK, min(rollers, (c + 1) * CHUNK)
+            _TAYLOR_CHUNK(io, lo, hi, tab, cfg)
+            outcome_range(reward, success, K(*_numbers(constants, n)), lo, hi, result, context,
+                          observed, out, flags, obs, np.empty(SCRATCH_SIZE))
 
     @jit(parallel=True)
     def rk_and_outcome(io, tab, cfg, result, context, constants, observed, out, flags, obs,
                        scratch):
-        _advance_and_outcome(io, tab, cfg, result, _RK_CHUNK, reward, success,
-                             K(*_numbers(constants, n)), context, observed, out, flags,
-                             obs)
+        rollers = io.shape[1]
+        for c in numba.prange((rollers + CHUNK - 1) // CHUNK):
+            lo, hi = c * CHUNK, min(rollers, (c + 1) * CHUNK)
+            _RK_CHUNK(io, lo, hi, tab, cfg)
+            outcome_range(reward, success, K(*_numbers(constants, n)), lo, hi, result, context,
+                          observed, out, flags, obs, np.empty(SCRATCH_SIZE))
 
     @jit
     def taylor_then_outcome(io, tab, cfg, result, context, constants, observed, out, flags,
@@ -210,14 +207,14 @@ def task_kernels(task: type) -> TaskKernels:
     @jit
     def taylor_one(phi, phi_dot, tau, packed):
         io, tab, cfg, context, constants, observed, out, flags, obs = _unpack_one(packed)
-        return _one_roller(phi, phi_dot, tau, _TAYLOR_SERIAL, reward, success,
+        return _one_roller(phi, phi_dot, tau, _TAYLOR_ONE, reward, success,
                            K(*_numbers(constants, n)), io, tab, cfg, context, observed, out,
                            flags, obs)
 
     @jit
     def rk_one(phi, phi_dot, tau, packed):
         io, tab, cfg, context, constants, observed, out, flags, obs = _unpack_one(packed)
-        return _one_roller(phi, phi_dot, tau, _RK_SERIAL, reward, success,
+        return _one_roller(phi, phi_dot, tau, _RK_ONE, reward, success,
                            K(*_numbers(constants, n)), io, tab, cfg, context, observed, out,
                            flags, obs)
 

@@ -32,6 +32,7 @@ from roller_gym.episode.record import (
     rows,
 )
 from roller_gym.physics import trig
+from roller_gym.physics.compiling import INLINED_OPTIONS, inlined
 from roller_gym.task import (
     OBSERVATION_FIELDS,
     observation_values,
@@ -85,14 +86,14 @@ def _at(table, row, i):
     """Roller i's value in ``row`` of a table: a scratch (1-d, rows _B apart) or a 2-d table."""
 
 
-@overload(_at)
+@overload(_at, jit_options=INLINED_OPTIONS)
 def _at_overload(table, row, i):
     if table.ndim == 1:
         return lambda table, row, i: table[row * _B + i]
     return lambda table, row, i: table[row, i]
 
 
-@register_jitable(inline="always")
+@inlined
 def outcome_of(reward, success, k, steps, sr, context, cr, i):
     """Roller i's computed outputs, the values of COMPUTED in order (a flag as 1.0 or 0.0),
     from its step's rows (``steps``, rows ``sr`` by name) and its context (``context``, rows
@@ -168,7 +169,7 @@ def outcome_one(reward, success, k, result, context, observed, out, flags, obs):
     _observe_row(obs, 0, result[S.phi, 0], result[S.phi_dot, 0], context, observed)
 
 
-@register_jitable(inline="always")
+@inlined
 def _observe_row(obs, i, phi, phi_dot, context, observed):
     """Row i of ``obs``: the ``observed`` fields of a roller at φ [rad], φ' [rad/s] under
     column i of ``context``."""
@@ -186,7 +187,7 @@ def observe(rows, phi, phi_dot, context, observed, obs):
         _observe_row(obs, i, phi[i], phi_dot[i], context, observed)
 
 
-@register_jitable(inline="always")
+@inlined
 def _copy(dst, dst_start, src, src_start, m):
     """dst[dst_start + i] = src[src_start + i] for i < m, on rows (1-d arrays); the indices
     unsigned, so that no wraparound check keeps the loop out of SIMD lanes."""
@@ -195,7 +196,7 @@ def _copy(dst, dst_start, src, src_start, m):
         dst[d + i] = src[s + i]
 
 
-@register_jitable(inline="always")
+@inlined
 def _copy_flag(dst, dst_start, src, src_start, m):
     """dst[dst_start + i] = src[src_start + i] != 0 for i < m: a row of 1.0/0.0 into a
     boolean row (as :func:`_copy`)."""
@@ -240,7 +241,7 @@ def _fence(typingctx):
     return numba.types.void(), codegen
 
 
-@register_jitable(inline="always")
+@inlined
 def _stream(dst, dst_start, src, src_start, m):
     """:func:`_copy` into a new table's row, by non-temporal stores (followed, once the
     rows are written, by :func:`_fence`)."""
