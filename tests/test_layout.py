@@ -74,3 +74,15 @@ def test_every_package_folder_is_installed() -> None:
             found.add(".".join((name, *rel)))
     assert "roller_gym.physics.integrators" in found
     assert found <= listed, f"not in [tool.setuptools] packages: {sorted(found - listed)}"
+
+
+def test_no_source_file_of_the_package_exceeds_600_lines() -> None:
+    """Each module holds one idea: none of the package's sources (envs/, agents/, scripts/) is
+    over 600 lines, except a generated one that says so in its first line."""
+    long = []
+    for folder in ("envs", "agents", "scripts"):
+        for path in (ROOT / folder).rglob("*.py"):
+            lines = path.read_text().splitlines()
+            if len(lines) > 600 and "generated" not in (lines[0] if lines else "").lower():
+                long.append(f"{path.relative_to(ROOT)}: {len(lines)} lines")
+    assert not long, long
