@@ -5,9 +5,9 @@ cached kernel on its own file only, while roller-gym's kernels inline functions
 of other modules (the tasks' objectives, the reward vocabulary, the sines, the equations).
 :class:`DigestLocator` gives each
 kernel of ``roller_gym`` (and each kernel made for a task whose module lies elsewhere) a
-source stamp that digests its own file, the files of the modules its code and closure name
-(a task's module among them) and of every roller_gym module those reach through their
-globals: editing any of them makes the next run recompile. Where
+source stamp that digests every source file of the package and the module of a task its
+closure names: editing any of them makes the next run recompile (all of the package's
+kernels: a digest of what one kernel reaches would depend on the process's imports). Where
 the package's folder is read-only, numba's own fall-backs (``NUMBA_CACHE_DIR``, then the
 user-wide cache) still choose the folder.
 """
@@ -15,7 +15,6 @@ user-wide cache) still choose the folder.
 from __future__ import annotations
 
 import hashlib
-import inspect
 import os
 import sys
 import types
@@ -41,59 +40,41 @@ def _module_of(value: Any) -> types.ModuleType | None:
     return sys.modules.get(name) if isinstance(name, str) else None
 
 
-def _reachable(func: Any, seen: set[str]) -> None:
-    """Add to ``seen`` the modules a function reaches: its own, those of the globals its code
-    names and of its closure's cells (a task's module), and, through their globals,
-    roller_gym's modules, recursively."""
-    roots = [_module_of(func)]
-    code = getattr(func, "__code__", None)
-    if code is not None:
-        names, stack = set(), [code]
-        while stack:  # the code and the code objects nested in it
-            c = stack.pop()
-            names.update(c.co_names)
-            stack.extend(x for x in c.co_consts if isinstance(x, types.CodeType))
-        found = getattr(func, "__globals__", {})
-        roots += [_module_of(found[n]) for n in names if n in found]
-    for cell in getattr(func, "__closure__", None) or ():
-        try:
-            roots.append(_module_of(cell.cell_contents))
-        except ValueError:  # an empty cell
-            continue
-    for module in roots:
-        _add_module(module, seen, root=True)
-
-
 def _is_package(name: str) -> bool:
     return name == PACKAGE or name.startswith(PACKAGE + ".")
 
 
-def _add_module(module: types.ModuleType | None, seen: set[str], root: bool) -> None:
-    """Add a module (a root, or one of roller_gym's) and the roller_gym modules its globals
-    reach; installed libraries and the standard library are left out."""
-    if module is None or module.__name__ in seen or not getattr(module, "__file__", None):
-        return
-    if module.__name__.split(".")[0] in _OUTSIDE or not (root or _is_package(module.__name__)):
-        return
-    seen.add(module.__name__)
-    for value in list(vars(module).values()):
-        inner = _module_of(value)
-        if inner is not None and inner is not module and _is_package(inner.__name__):
-            _add_module(inner, seen, root=False)
-
-
 #: Top-level packages whose sources are never digested (installed libraries: their versions
-#: are numba's and Python's concern, and reading them would cost every import).
+#: are numba's and Python's concern).
 _OUTSIDE = frozenset(sys.stdlib_module_names) | {"numba", "numpy", "scipy", "llvmlite",
                                                  "gymnasium", "builtins"}
 
 
+def _package_files() -> tuple[str, ...]:
+    """Every source file of the roller_gym package (its folder, recursively), sorted."""
+    root = os.path.dirname(os.path.abspath(__file__))
+    found = []
+    for folder, _, names in os.walk(root):
+        found += [os.path.join(folder, n) for n in names if n.endswith(".py")]
+    return tuple(sorted(found))
+
+
 def sources(func: Any) -> tuple[str, ...]:
-    """The source files a kernel's stamp digests (sorted): see the module docs."""
-    seen: set[str] = set()
-    _reachable(func, seen)
-    files = {inspect.getfile(sys.modules[name]) for name in seen}
-    return tuple(sorted(f for f in files if f.endswith(".py")))
+    """The source files a kernel's stamp digests: every file of the roller_gym package, and
+    the module of each of its closure's cells that lies outside it (a task's own module).
+    The whole package rather than the modules a kernel reaches: what a module's globals
+    reach depends on what the process imported before, and the stamp must not."""
+    outside = set()
+    for cell in getattr(func, "__closure__", None) or ():
+        try:
+            module = _module_of(cell.cell_contents)
+        except ValueError:  # an empty cell
+            continue
+        name = getattr(module, "__name__", "") or ""
+        if (module is not None and getattr(module, "__file__", None) and not _is_package(name)
+                and name.split(".")[0] not in _OUTSIDE):
+            outside.add(os.path.abspath(module.__file__))
+    return _package_files() + tuple(sorted(outside))
 
 
 def _digest(files: tuple[str, ...]) -> str:

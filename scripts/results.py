@@ -40,7 +40,7 @@ import numpy as np
 import roller_gym
 from roller_gym.agents.hyperparams import ALGOS
 from roller_gym.agents.policies import BASELINES, baseline, evaluation_env, load_policy, read_config
-from roller_gym.bench.throughput import package_versions
+from roller_gym.bench.records import package_versions
 from roller_gym.scripts.arguments import at_least, output_folder, program_parser, stage
 from roller_gym.scripts.evaluate import (  # its targets, read here from the intervals
     BASELINE_LABELS,

@@ -239,7 +239,8 @@ def test_observation_entries_match_the_state(env_id):
         assert env.observation_space.contains(obs)
         expected = [math.cos(psi), math.sin(psi), math.cos(phi), math.sin(phi),
                     math.tanh(phi_dot / 10.0)]
-        if env_id in ("roller_gym/RollerHold-v1", "roller_gym/RollerTrack-v0"):
+        if env_id in ("roller_gym/RollerHold-v1", "roller_gym/RollerTrack-v0",
+                      "roller_gym/RollerSwing-v0"):
             target = info["target_phi"]
             assert info["target_psi"] == pytest.approx(q * target, rel=1e-12)
             expected += [math.cos(q * target), math.sin(q * target), math.cos(target),

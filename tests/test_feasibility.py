@@ -333,11 +333,11 @@ def test_balance_targets_of_randomized_scenes_are_a_batch_computation(monkeypatc
     Python (it did, 7–12 ms each): none at all for fields that cannot move one (m, μ), and
     for r, R and e one compiled call, whose results agree with the search of
     ``physics.equilibria`` (scipy's brentq) on every drawn scene."""
-    import roller_gym.task
+    import roller_gym.rest
 
     calls = []
-    search = roller_gym.task.equilibria
-    monkeypatch.setattr(roller_gym.task, "equilibria",
+    search = roller_gym.rest.equilibria
+    monkeypatch.setattr(roller_gym.rest, "equilibria",
                         lambda *a, **k: calls.append(a) or search(*a, **k))
     for ranges in ({"m": (0.8, 1.2), "mu": (0.6, 1.0)}, {"R": (0.7, 1.5), "e": (0.06, 0.1)}):
         vec = gym.make_vec(BALANCE, num_envs=128, randomize=ranges)

@@ -251,13 +251,13 @@ def test_streaming_stores_write_the_values_and_are_fenced():
     them: compiled afresh here, a stream of rows writes exactly the values NumPy copies,
     into rows at any offset, and its code carries the non-temporal hint and the fence."""
     import numba
-    from roller_gym.episode import outcome
+    from roller_gym.episode.outcome import _fence, _stream
 
     @numba.njit(nogil=True)
     def stream(dst, src, start, m):
         for r in range(src.shape[0]):
-            outcome._stream(dst[r], start, src[r], start, m)
-        outcome._fence()
+            _stream(dst[r], start, src[r], start, m)
+        _fence()
 
     rng = np.random.default_rng(5)
     src = rng.normal(size=(3, 300))

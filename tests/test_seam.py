@@ -144,19 +144,26 @@ def digest(array: np.ndarray) -> str:
 
 @pytest.mark.slow
 def test_the_tasks_outcomes_are_bit_for_bit_those_recorded():
-    """Stabilize, Hold, Balance and Track give bit for bit the outcomes recorded before the
-    objective became the task's own (tests/data/outcomes.npz: the arrays of the single env
-    and of 5 sub-environments, and the digest of those of 2,100)."""
+    """Stabilize, Hold and Track give bit for bit the outcomes recorded before the objective
+    became the task's own (tests/data/outcomes.npz: the arrays of the single env and of 5
+    sub-environments, and the digest of those of 2,100). Balance's target, the unstable rest
+    position, comes since from a compiled bisection that agrees with the recording's scipy
+    root to 4.4e-16 rad: its arrays agree to 1e-12, and its digests are not compared."""
     recorded = np.load(RECORDED)
     tasks = sorted({key.split("/")[0] for key in recorded.files})
     env_ids = [i for i in IDS if roller_gym.file_name(i) in tasks]
     assert len(env_ids) == 4
     now = run_outcomes(env_ids)
     for key in recorded.files:
+        exact = not key.startswith("RollerBalance-v1/")
         if key.endswith("/digest"):
-            assert digest(now[key[:-len("/digest")]]) == str(recorded[key]), key
-        else:
+            if exact:
+                assert digest(now[key[:-len("/digest")]]) == str(recorded[key]), key
+        elif exact:
             np.testing.assert_array_equal(now[key], recorded[key], err_msg=key)
+        else:
+            np.testing.assert_allclose(now[key], recorded[key], rtol=1e-12, atol=1e-12,
+                                       err_msg=key)
 
 
 # -- no stale kernels ---------------------------------------------------------------------

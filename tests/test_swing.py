@@ -37,7 +37,7 @@ def test_the_energy_target_is_the_potential_at_the_amplitude_and_starts_at_rest(
         assert target_energy(env) == pytest.approx(potential(scene, info["target_phi"]),
                                                    rel=1e-12)
         assert info["phi_dot"] == 0.0 and abs(info["psi"]) <= math.radians(5.0) + 1e-12
-        assert info["energy"] < 0.02 * target_energy(env)  # at rest near the bottom
+        assert info["energy"] < 0.05 * target_energy(env)  # at rest near the bottom
         amplitudes.append(info["target_psi"])
     assert min(amplitudes) < 0 < max(amplitudes)  # both sides drawn
 

@@ -191,7 +191,8 @@ def test_start_accepted_is_the_rule_on_start_contacts(name):
     for normal, friction in task.start_contacts(phi, phi_dot, col["m"], col["r"], kappa,
                                                 col["e"], col["k"], col["g"], col["damping"]):
         want &= (normal > 0) & (np.abs(friction) <= col["mu"] * normal)
-    assert got.shape == phi.shape and 0 < want.sum() < want.size
+    assert got.shape == phi.shape and want.sum() > 0
+    assert want.sum() < want.size or name == "RollerSwing"  # its 0.1 N·m: every state rolls
     np.testing.assert_array_equal(got, want)
 
 

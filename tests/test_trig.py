@@ -193,16 +193,16 @@ def test_the_outcome_of_a_block_of_rollers_runs_in_simd_lanes(task_id):
     values: exp, tanh and sines included) is computed in one loop that LLVM runs in SIMD
     lanes, for every task's own objective."""
     import gymnasium as gym
-    from roller_gym.episode import outcome
+    from roller_gym.episode.outcome import SCRATCH_SIZE, _outcome_block
 
     task = gym.spec(task_id).make().unwrapped.task
     reward, success, k = type(task).reward, type(task).success, task.constants
 
     @numba.njit(error_model="numpy", nogil=True)
     def block(b, m):
-        outcome._outcome_block(reward, success, k, b, m)
+        _outcome_block(reward, success, k, b, m)
 
-    block(np.zeros(outcome.SCRATCH_SIZE), 16)
+    block(np.zeros(SCRATCH_SIZE), 16)
     assert "vector.body" in block.inspect_llvm(block.signatures[0])
 
 

@@ -83,7 +83,9 @@ assert (len(_PASS_STEP) + len(_PASS_CONTEXT) + len(_PASS_FLAGS) + len(COMPUTED)
 
 
 def _at(table, row, i):
-    """Roller i's value in ``row`` of a table: a scratch (1-d, rows _B apart) or a 2-d table."""
+    """Roller i's value in ``row`` of a table: a scratch (1-d, rows _B apart) or a 2-d table
+    (interpreted, as ``NUMBA_DISABLE_JIT`` runs it; compiled, the overload below)."""
+    return table[row * _B + i] if table.ndim == 1 else table[row, i]
 
 
 @overload(_at, jit_options=INLINED_OPTIONS)

@@ -66,7 +66,11 @@ from roller_gym.physics.integrators.taylor_kernel import ROUNDING_SHARE, TAYLOR_
 # the module became a package.
 from roller_gym.physics.integrators.layout import _PAD, _ROW  # noqa: F401  isort: skip
 from roller_gym.physics.integrators.rk import _rk_chunk, _rk_one  # noqa: F401  isort: skip
-from roller_gym.physics.integrators.rules import _accel_lanes  # noqa: F401  isort: skip
+from roller_gym.physics.integrators.rules import (  # noqa: F401  isort: skip
+    _accel_lanes,
+    _end_lanes,
+    _margin_lanes,
+)
 from roller_gym.physics.integrators.taylor_kernel import (  # noqa: F401  isort: skip
     _T_IN,
     _T_WIDTH,
