@@ -1,14 +1,15 @@
 """What a task asks of the roller: start state, target, observation, reward, success.
 
 A task knows the physics (:mod:`roller_gym.physics`) but neither Gymnasium nor pygame. Its
-per-episode methods (targets, start states) take arrays of rollers. Its per-step formulas
-(position error, reward, success, observation) are this module's compiled functions, the
-same for every task and parametrized by the task's class variables (:data:`TASK_CONSTANTS`);
-the single and the vector environment run them in one compiled kernel
-(:func:`roller_gym.episode.outcome`). Each task is one class in its own module (``stabilize.py``,
-``hold.py``, ``balance.py``, ``track.py``), added to the registry :data:`TASKS` by the decorator
-:func:`register`, as dm_control's suite does; registration with Gymnasium, the agents,
-the scripts and the tests iterate over the registry. A new task is one class in a module of
+per-episode methods (targets, start states) take arrays of rollers. Its per-step
+objective (``reward``, ``success``, see below) is its own; the position error and the
+observation are this module's compiled functions, the same for every task; the single and
+the vector environment run them in one compiled kernel per task
+(:mod:`roller_gym.episode.kernel`). Each task is one class in its own module
+(``stabilize.py``, ``hold.py``, ``balance.py``, ``track.py``, ``swing.py``), added to the
+registry :data:`TASKS` by the decorator :func:`register`, as dm_control's suite does;
+registration with Gymnasium, the agents, the scripts and the tests iterate over the
+registry. A new task is one class in a module of
 its own, listed in ``roller_gym.TASK_MODULES``, with its hyperparameters (README, "Adding a
 task").
 
