@@ -305,7 +305,11 @@ def test_the_readmes_warning_on_a_first_reset_that_raised_holds_and_its_remedy_w
         with pytest.raises(ValueError, match="options"):
             env.reset(seed=0, options={"bogus": 1})
         env.reset(seed=0)
-        if checked:  # what the README warns of
+        # The break comes with the checker's data-reuse check (Gymnasium 1.4; RLlib's 1.2.2
+        # has no such check and recovers).
+        checker = env.env.env if checked else None
+        if checked and hasattr(checker, "checked_data_reuse"):  # what the README warns of
+            assert isinstance(checker, gym.wrappers.PassiveEnvChecker)
             with pytest.raises(TypeError, match="cannot unpack non-iterable NoneType"):
                 env.step(np.zeros(1, np.float32))
         else:
