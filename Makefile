@@ -26,11 +26,11 @@ $(STAMP): EXTRAS := all
 RG := $(VENV)/bin/roller-gym
 
 run: $(STAMP)  ## train the default agent (SAC, rl-zoo3) on the default task, evaluate it against LQR
-	$(RG) train --algo sac --env roller_gym/RollerStabilize-v1 --log-folder runs
-	$(RG) evaluate --env roller_gym/RollerStabilize-v1 --runs runs --algos sac --out results
+	$(RG) train --algo sac --env roller_gym/RollerStabilize-v2 --log-folder runs
+	$(RG) evaluate --env roller_gym/RollerStabilize-v2 --runs runs --algos sac --out results
 
-TASKS := roller_gym/RollerStabilize-v1 roller_gym/RollerHold-v1 roller_gym/RollerBalance-v1 \
-	roller_gym/RollerTrack-v0
+TASKS := roller_gym/RollerStabilize-v2 roller_gym/RollerHold-v2 roller_gym/RollerBalance-v2 \
+	roller_gym/RollerTrack-v1
 SEEDS := 0 1 2 3 4
 # Options of roller-gym train for every run: `make results SEEDS="0 1" TRAIN_ARGS="--steps 2000"`
 # is a smoke run of the whole pipeline in minutes.

@@ -25,7 +25,7 @@ Example::
     import roller_gym
     from roller_gym.agents import LQR, rollout
 
-    env = gym.make("roller_gym/RollerHold-v1")
+    env = gym.make("roller_gym/RollerHold-v2")
     episode = rollout(env, LQR.from_env(env), seed=0)
     print(episode.total_return, episode.success)
 """

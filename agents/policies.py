@@ -146,7 +146,7 @@ def read_config(run_dir: str | Path) -> dict[str, Any]:
         raise FileNotFoundError(
             f"run_dir={str(run_dir)!r} holds no <env name>/args.yml: it is not an experiment "
             "folder of roller-gym train / rl_zoo3.train (they look like runs/sac/"
-            "roller_gym-RollerStabilize-v1_1)")
+            "roller_gym-RollerStabilize-v2_1)")
     params_dir = found[0].parent
     hyperparams = dict(_read_yaml(params_dir / "config.yml"))
     args = _read_yaml(found[0])

@@ -3,16 +3,16 @@
 ``import roller_gym`` registers the tasks with Gymnasium under the namespace
 ``roller_gym``, so that ``gymnasium.make(ID)`` and ``gymnasium.make_vec(ID, num_envs=N)``
 work. ``gymnasium.register_envs(roller_gym)`` is the same import, written so that linters
-keep it; ``gymnasium.make("roller_gym:roller_gym/RollerStabilize-v1")`` imports the
+keep it; ``gymnasium.make("roller_gym:roller_gym/RollerStabilize-v2")`` imports the
 package itself.
 
 ================================  ==========================================  ==============
 ID                                task                                        steps (dt)
 ================================  ==========================================  ==============
-``roller_gym/RollerStabilize-v1``  bring the roller to rest at the bottom      200 (0.05 s)
-``roller_gym/RollerHold-v1``       hold it at rest at a target on the wall     200 (0.05 s)
-``roller_gym/RollerBalance-v1``    swing the mass center up and balance it     400 (0.05 s)
-``roller_gym/RollerTrack-v0``      follow a target moving along the wall       400 (0.05 s)
+``roller_gym/RollerStabilize-v2``  bring the roller to rest at the bottom      200 (0.05 s)
+``roller_gym/RollerHold-v2``       hold it at rest at a target on the wall     200 (0.05 s)
+``roller_gym/RollerBalance-v2``    swing the mass center up and balance it     400 (0.05 s)
+``roller_gym/RollerTrack-v1``      follow a target moving along the wall       400 (0.05 s)
 ``roller_gym/RollerSwing-v0``      keep it swinging at a given amplitude       400 (0.05 s)
 ================================  ==========================================  ==============
 
@@ -64,5 +64,5 @@ for _task in TASKS.values():
         )
 
 def file_name(env_id: str) -> str:
-    """A task ID as a file or folder name: the namespace dropped (``RollerHold-v1``)."""
+    """A task ID as a file or folder name: the namespace dropped (``RollerHold-v2``)."""
     return env_id.split("/")[-1]

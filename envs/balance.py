@@ -1,4 +1,4 @@
-"""roller_gym/RollerBalance-v1: swing the mass center up to an unstable rest position and
+"""roller_gym/RollerBalance-v2: swing the mass center up to an unstable rest position and
 keep it there.
 
 In the preset ``"balance"`` (R = 10 r, e = 0.8 r) the roller has an unstable rest
@@ -32,12 +32,13 @@ index  field                   meaning
 
 In [0, 1] per step, ε the error to the nearer unstable rest position ±φ_b (rad of φ),
 φ*' = 0 and τ* = 0 there:
-``(0.4 tolerance(ε, 0.1 rad, 3 rad) + 0.6 tolerance(ε, 0.1 rad, 0.3 rad))
+``(0.4 tolerance(ε, 0.1 rad, 3 rad) + 0.6 near(ε, 0.3 rad))
 · (0.5 + 0.5 near(φ' − φ*', 5 rad/s)) · (0.8 + 0.2 near((τ − τ*)/max_torque, 1))``
 ``near(x, m) = exp(ln(0.1) (x/m)²)``; ``tolerance(x, b, m)`` is 1 for |x| <= b and
 ``near(|x| − b, m)`` outside; τ* is the torque that holds the roller at rest at the target
-(``info["target_torque"]``). At rest the reward is largest inside the success band, and
-resting one band-width outside it costs about 14 % (see ``envs/task.py``).
+(``info["target_torque"]``). At rest with that torque the reward falls strictly as |ε|
+grows: at the band's edge it keeps 0.86 of the reward on the target, at twice the band
+0.62 (see ``envs/task.py``).
 
 ## Starting state
 
@@ -48,6 +49,15 @@ At rest near the bottom: φ and φ' uniform in ±0.1 (rad, rad/s).
 * Terminated: slip or lift-off during a step, or a step that could not stay finite.
 * Truncated: 400 steps (20 s).
 * ``info["is_success"]``: |ε| <= 0.1 rad and |φ'| <= 0.2 rad/s.
+
+## Version History
+
+* v0: the first version.
+* v1: the reward ranks resting on the target above resting near it (a position term of 3
+  bands' margin).
+* v2: the reward sees the success band: its precision term falls from the target on, so
+  resting at the band's edge keeps 0.86 of the reward on the target and at twice the band
+  0.62 (v1: 1.0 and about 0.99); dynamics unchanged.
 """
 
 from __future__ import annotations
@@ -68,7 +78,7 @@ __all__ = ["BalanceTask"]
 @register
 class BalanceTask(Task):
     name = "RollerBalance"
-    version = 1  # v0's reward did not rank resting on target above resting near it
+    version = 2
     default_scene = "balance"
     default_max_torque = 0.4
     max_episode_steps = 400

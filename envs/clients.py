@@ -24,7 +24,7 @@ __all__ = ["CLIENTS", "Client", "check_caller", "importing_id"]
 
 
 def importing_id(env_id: str) -> str:
-    """``env_id`` in Gymnasium's ``module:ID`` form (``"roller_gym:roller_gym/RollerHold-v1"``):
+    """``env_id`` in Gymnasium's ``module:ID`` form (``"roller_gym:roller_gym/RollerHold-v2"``):
     ``gymnasium.make`` of it imports roller-gym first, in any process."""
     return env_id if ":" in env_id else f"roller_gym:{env_id}"
 

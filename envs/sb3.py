@@ -11,7 +11,7 @@ same episodes as ``DummyVecEnv`` over single environments, and it works under
     from roller_gym.sb3 import RollerVecEnv
     from stable_baselines3 import PPO
 
-    env = RollerVecEnv("roller_gym/RollerStabilize-v1", n_envs=16, seed=0)
+    env = RollerVecEnv("roller_gym/RollerStabilize-v2", n_envs=16, seed=0)
     PPO("MlpPolicy", env).learn(100_000)
 
 Importing this module needs stable-baselines3 (the ``train`` extra).
@@ -50,7 +50,7 @@ class RollerVecEnv(VecEnv):
     """N sub-environments of a roller-gym task as one SB3 ``VecEnv``.
 
     Args:
-        env_id: a registered task ID, e.g. ``"roller_gym/RollerStabilize-v1"``.
+        env_id: a registered task ID, e.g. ``"roller_gym/RollerStabilize-v2"``.
         n_envs: the number of sub-environments.
         seed: the seed of sub-environment 0 (sub-environment i gets ``seed + i``), as
             ``make_vec_env(env_id, n_envs, seed=seed)``; None for fresh seeds.

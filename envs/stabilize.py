@@ -1,4 +1,4 @@
-"""roller_gym/RollerStabilize-v1: bring the roller to rest at the bottom.
+"""roller_gym/RollerStabilize-v2: bring the roller to rest at the bottom.
 
 A roller rolls without slipping inside a fixed cylinder (the scene of
 ``docs/PHYSICS.md``; by default the preset ``"paper"``). A torque drives it. It
@@ -29,12 +29,13 @@ index  field                   meaning
 
 In [0, 1] per step, ε the position error (rad of φ, one turn of ψ either way), φ*' = 0 and
 τ* = 0 at the bottom:
-``(0.4 tolerance(ε, 0.05 rad, 2 rad) + 0.6 tolerance(ε, 0.05 rad, 0.15 rad))
+``(0.4 tolerance(ε, 0.05 rad, 2 rad) + 0.6 near(ε, 0.15 rad))
 · (0.5 + 0.5 near(φ' − φ*', 5 rad/s)) · (0.8 + 0.2 near((τ − τ*)/max_torque, 1))``
 ``near(x, m) = exp(ln(0.1) (x/m)²)``; ``tolerance(x, b, m)`` is 1 for |x| <= b and
 ``near(|x| − b, m)`` outside; τ* is the torque that holds the roller at rest at the target
-(``info["target_torque"]``). At rest the reward is largest inside the success band, and
-resting one band-width outside it costs about 14 % (see ``envs/task.py``).
+(``info["target_torque"]``). At rest with that torque the reward falls strictly as |ε|
+grows: at the band's edge it keeps 0.86 of the reward on the target, at twice the band
+0.62 (see ``envs/task.py``).
 
 ## Starting state
 
@@ -50,9 +51,18 @@ redrawn until the roller rolls there.
 
 ## Arguments
 
-``gymnasium.make("roller_gym/RollerStabilize-v1", scene=..., dt=..., max_torque=..., tolerance=...,
+``gymnasium.make("roller_gym/RollerStabilize-v2", scene=..., dt=..., max_torque=..., tolerance=...,
 integrator=..., substeps=..., randomize=..., render_mode=...)``: see
 :class:`roller_gym.roller_env.RollerEnv`.
+
+## Version History
+
+* v0: the first version.
+* v1: the reward ranks resting on the target above resting near it (a position term of 3
+  bands' margin).
+* v2: the reward sees the success band: its precision term falls from the target on, so
+  resting at the band's edge keeps 0.86 of the reward on the target and at twice the band
+  0.62 (v1: 1.0 and about 0.99); dynamics unchanged.
 """
 
 from __future__ import annotations
@@ -67,7 +77,7 @@ __all__ = ["StabilizeTask"]
 @register
 class StabilizeTask(Task):
     name = "RollerStabilize"
-    version = 1  # v0's reward did not rank resting on target above resting near it
+    version = 2
     reward_threshold = 178.4  # LQR's mean return on seeds 0–99 (187.8) − 5 %
 
     def sample_targets(self, u: np.ndarray, scene: Scene) -> np.ndarray:

@@ -40,13 +40,17 @@ source in Python. The default, shared by Stabilize, Hold, Balance and Track, is
              · (1 − w_v + w_v · near(φ' − φ*', speed_margin))
              · (1 − w_u + w_u · near((τ − τ*) / max_torque, 1))
     position(ε) = (1 − w_p) · tolerance(ε, band, position_margin)
-                  + w_p · tolerance(ε, band, 3 · band)
+                  + w_p · near(ε, 3 · band)
 
 with ε the position error, φ*' the target's rate (0 for a rest position), τ* the torque
 that holds the roller at rest at the target (``info["target_torque"]``), ``band`` the
 success band, w_v = 0.5 (moving with the target), w_u = 0.2 (no torque beyond holding) and
 w_p = 0.6 (precision). ``tolerance`` is 1 inside the band; outside it decays as ``near``
-of the distance to the band. Success: |ε| <= band and |φ' − φ*'| <= success_speed.
+of the distance to the band. The precision term ``near(ε, 3 · band)`` falls from the target
+on, so resting with the holding torque pays strictly less as |ε| grows: at the
+band's edge 0.4 + 0.6 · 0.1^(1/9) = 0.86 of the reward on the target, at twice the band
+0.4 + 0.6 · 0.1^(4/9) = 0.62 (``tests/test_rewards.py`` checks it for every task).
+Success: |ε| <= band and |φ' − φ*'| <= success_speed.
 """
 
 from __future__ import annotations
@@ -422,6 +426,9 @@ def _as_step(step: Any) -> Any:
 # floats and arrays from Python and, compiled, the environments' per-step kernel
 # (:mod:`roller_gym.episode.outcome`).
 
+#: The precision term's margin, in success bands: ``near`` is 0.1 there (module docs).
+PRECISION_MARGIN = 3.0
+
 #: The numbers the default objective reads (:attr:`Task.parameters` of the base class).
 TASK_CONSTANTS = Task.parameters
 
@@ -443,7 +450,7 @@ def step_reward(error, speed_error, control_error, band, position_margin, precis
     """The reward in [0, 1] (formula in the module docs) from the position error ε [rad of φ],
     the speed error φ' − φ*' [rad/s] and the control error (τ − τ*)/max_torque [-]."""
     position = ((1.0 - precision_weight) * rewards.tolerance(error, band, position_margin)
-                + precision_weight * rewards.tolerance(error, band, 3.0 * band))
+                + precision_weight * rewards.near(error, PRECISION_MARGIN * band))
     return (position * rewards.blend(rewards.near(speed_error, speed_margin), speed_weight)
             * rewards.blend(rewards.near(control_error, 1.0), control_weight))
 

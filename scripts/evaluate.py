@@ -1,9 +1,9 @@
 """Evaluate trained agents and the baselines on the same seeded episodes; tables and plots.
 
-    roller-gym evaluate --env roller_gym/RollerStabilize-v1 \\
-        --models runs/sac/roller_gym-RollerStabilize-v1_1
-    roller-gym evaluate --env roller_gym/RollerStabilize-v1 roller_gym/RollerHold-v1 \\
-        roller_gym/RollerBalance-v1 roller_gym/RollerTrack-v0 \\
+    roller-gym evaluate --env roller_gym/RollerStabilize-v2 \\
+        --models runs/sac/roller_gym-RollerStabilize-v2_1
+    roller-gym evaluate --env roller_gym/RollerStabilize-v2 roller_gym/RollerHold-v2 \\
+        roller_gym/RollerBalance-v2 roller_gym/RollerTrack-v1 \\
         --runs runs --out results --report results/REPORT.md
 
 The trained models are experiment folders of ``roller-gym train`` (or of ``python -m
@@ -64,12 +64,12 @@ SUCCESS_TARGET = 0.9
 
 def build_parser() -> argparse.ArgumentParser:
     p = program_parser("evaluate", __doc__)
-    p.add_argument("--env", nargs="+", default=["roller_gym/RollerStabilize-v1"],
+    p.add_argument("--env", nargs="+", default=["roller_gym/RollerStabilize-v2"],
                    choices=roller_gym.ENV_IDS,
-                   help="the task(s) (default roller_gym/RollerStabilize-v1)")
+                   help="the task(s) (default roller_gym/RollerStabilize-v2)")
     p.add_argument("--models", nargs="*", default=[],
                    help="experiment folders of roller-gym train to evaluate (one task), e.g. "
-                        "runs/sac/roller_gym-RollerStabilize-v1_1")
+                        "runs/sac/roller_gym-RollerStabilize-v2_1")
     p.add_argument("--runs", default=None, metavar="LOG_FOLDER",
                    help="for every task, take the latest experiment of each algorithm in this "
                         "log folder of roller-gym train (<LOG_FOLDER>/<algo>/<env name>_<N>)")

@@ -1,8 +1,8 @@
 """Render one episode of a policy to a GIF (or an MP4).
 
-    roller-gym replay runs/sac/roller_gym-RollerStabilize-v1_1   # -> <that folder>/replay.gif
-    roller-gym replay runs/sac/roller_gym-RollerHold-v1_1 --seed 3 --out hold.gif
-    roller-gym replay classical --env roller_gym/RollerBalance-v1 --out balance.gif
+    roller-gym replay runs/sac/roller_gym-RollerStabilize-v2_1   # -> <that folder>/replay.gif
+    roller-gym replay runs/sac/roller_gym-RollerHold-v2_1 --seed 3 --out hold.gif
+    roller-gym replay classical --env roller_gym/RollerBalance-v2 --out balance.gif
 
 The policy is an experiment folder of ``roller-gym train`` (its saved model, in the
 environment it was trained in) or a baseline name (``classical``, ``zero``, ``random``, with

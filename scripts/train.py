@@ -1,8 +1,8 @@
 """Train a stable-baselines3 agent (SAC, TD3 or PPO) on a roller-gym task, with rl-zoo3.
 
-    roller-gym train                            # SAC on roller_gym/RollerStabilize-v1
-    roller-gym train --algo ppo --env roller_gym/RollerHold-v1
-    roller-gym train --algo td3 --env roller_gym/RollerBalance-v1 --steps 50000 --seed 1
+    roller-gym train                            # SAC on roller_gym/RollerStabilize-v2
+    roller-gym train --algo ppo --env roller_gym/RollerHold-v2
+    roller-gym train --algo td3 --env roller_gym/RollerBalance-v2 --steps 50000 --seed 1
     roller-gym train --env-kwargs max_torque=0.6 scene=solid_disc
     roller-gym train --show-command             # the command it runs, and stop
     roller-gym train --algo td3 -- --save-replay-buffer   # after --: rl_zoo3.train's options
@@ -43,8 +43,8 @@ ON_POLICY = ("ppo",)
 def build_parser() -> argparse.ArgumentParser:
     p = program_parser("train", __doc__)
     p.add_argument("--algo", default="sac", choices=ALGOS, help="the algorithm (default sac)")
-    p.add_argument("--env", default="roller_gym/RollerStabilize-v1", choices=roller_gym.ENV_IDS,
-                   help="the task (default roller_gym/RollerStabilize-v1)")
+    p.add_argument("--env", default="roller_gym/RollerStabilize-v2", choices=roller_gym.ENV_IDS,
+                   help="the task (default roller_gym/RollerStabilize-v2)")
     p.add_argument("--steps", type=at_least(1), default=None,
                    help="environment steps, all environments together (default: the "
                         "hyperparameter file's n_timesteps); PPO rounds up to whole rollouts")

@@ -2,7 +2,7 @@
 
 Needs the ``rllib`` extra (its own environment, see README: RLlib pins its Gymnasium)::
 
-    roller-gym train-rllib --algo PPO --env roller_gym/RollerStabilize-v1 --iterations 20
+    roller-gym train-rllib --algo PPO --env roller_gym/RollerStabilize-v2 --iterations 20
     roller-gym train-rllib --algo SAC --num-env-runners 1 --envs-per-runner 4
     roller-gym train-rllib --env-kwarg dt=0.02 --env-kwarg 'randomize={"m": [0.8, 1.2]}'
     roller-gym train-rllib --address HEAD_IP:6379 --num-env-runners 16   # a cluster
@@ -53,7 +53,7 @@ class _DefaultsHelp(argparse.ArgumentDefaultsHelpFormatter):
 def build_parser() -> argparse.ArgumentParser:
     p = program_parser("train-rllib", __doc__.split("\n\n")[0], formatter_class=_DefaultsHelp)
     p.add_argument("--algo", choices=["PPO", "SAC"], default="PPO", help="RLlib's algorithm")
-    p.add_argument("--env", choices=ENV_IDS, default="roller_gym/RollerStabilize-v1",
+    p.add_argument("--env", choices=ENV_IDS, default="roller_gym/RollerStabilize-v2",
                    help="the task")
     p.add_argument("--env-kwarg", action="append", default=[], metavar="KEY=VALUE",
                    help="a keyword argument of gymnasium.make (VALUE is a Python literal if it "

@@ -27,11 +27,11 @@ def _wrapped_difference(a, b):
 
 # -- observation decoding --------------------------------------------------------------
 @pytest.mark.parametrize(("env_id", "scene"), [
-    ("roller_gym/RollerStabilize-v1", None),
-    ("roller_gym/RollerHold-v1", None),
-    ("roller_gym/RollerBalance-v1", None),
-    ("roller_gym/RollerStabilize-v1", "drum"),
-    ("roller_gym/RollerHold-v1", "solid_disc"),
+    ("roller_gym/RollerStabilize-v2", None),
+    ("roller_gym/RollerHold-v2", None),
+    ("roller_gym/RollerBalance-v2", None),
+    ("roller_gym/RollerStabilize-v2", "drum"),
+    ("roller_gym/RollerHold-v2", "solid_disc"),
 ])
 def test_decode_recovers_the_state_the_env_reports(env_id, scene):
     kwargs = {} if scene is None else {"scene": scene}
@@ -58,7 +58,7 @@ def test_decode_recovers_the_state_the_env_reports(env_id, scene):
 def test_decode_picks_the_turn_beyond_one_revolution_of_phi():
     """With R = 10 r, ψ = φ/9: φ = 4 rad and φ = 4 − 2π share cos φ and sin φ, and only
     (cos ψ, sin ψ) tells them apart; φ = 7.5 and −8 rad lie beyond one turn of φ."""
-    env = gym.make("roller_gym/RollerStabilize-v1", scene=Scene(R=1.0))
+    env = gym.make("roller_gym/RollerStabilize-v2", scene=Scene(R=1.0))
     for phi in (4.0, 4.0 - 2 * np.pi, -3.9, 7.5, -8.0):
         obs, _ = env.reset(options={"state": (phi, -2.0)})
         s = decode_observation(obs, env.unwrapped.scene, env.unwrapped.task)
@@ -67,7 +67,7 @@ def test_decode_picks_the_turn_beyond_one_revolution_of_phi():
 
 
 def test_decode_on_the_floor_gives_phi_modulo_one_turn():
-    env = gym.make("roller_gym/RollerStabilize-v1", scene="floor")
+    env = gym.make("roller_gym/RollerStabilize-v2", scene="floor")
     obs, _ = env.reset(options={"state": (5.0, 0.5)})
     s = decode_observation(obs, env.unwrapped.scene, env.unwrapped.task)
     assert _wrapped_difference(s.phi[0], 5.0) < 1e-5
@@ -75,7 +75,7 @@ def test_decode_on_the_floor_gives_phi_modulo_one_turn():
 
 
 def test_decode_takes_batches_and_rejects_wrong_shapes():
-    env = gym.make("roller_gym/RollerHold-v1")
+    env = gym.make("roller_gym/RollerHold-v2")
     observations = np.stack([env.reset(seed=s)[0] for s in range(4)])
     batch = decode_observation(observations, env.unwrapped.scene, env.unwrapped.task)
     single = [decode_observation(o, env.unwrapped.scene, env.unwrapped.task) for o in observations]
@@ -86,7 +86,7 @@ def test_decode_takes_batches_and_rejects_wrong_shapes():
 
 
 # -- the classical controllers -------------------------------------------------------------
-@pytest.mark.parametrize("env_id", ["roller_gym/RollerStabilize-v1", "roller_gym/RollerHold-v1"])
+@pytest.mark.parametrize("env_id", ["roller_gym/RollerStabilize-v2", "roller_gym/RollerHold-v2"])
 def test_lqr_succeeds_in_all_100_seeded_episodes(env_id):
     env = gym.make(env_id)
     policy = LQR.from_env(env, **CLASSICAL[env_id])
@@ -99,7 +99,7 @@ def test_lqr_succeeds_in_all_100_seeded_episodes(env_id):
 
 
 def test_lqr_predict_is_shaped_like_a_stable_baselines3_model():
-    env = gym.make("roller_gym/RollerHold-v1")
+    env = gym.make("roller_gym/RollerHold-v2")
     policy = LQR.from_env(env)
     observations = np.stack([env.reset(seed=s)[0] for s in range(6)])
     actions, state = policy.predict(observations, deterministic=True)
@@ -113,7 +113,7 @@ def test_lqr_predict_is_shaped_like_a_stable_baselines3_model():
 
 
 def test_lqr_holds_the_target_with_the_holding_torque_and_pushes_back_when_off_it():
-    env = gym.make("roller_gym/RollerHold-v1")
+    env = gym.make("roller_gym/RollerHold-v2")
     policy = LQR.from_env(env)
     max_torque = env.unwrapped.task.max_torque
     obs, info = env.reset(seed=3)
@@ -130,8 +130,8 @@ def test_lqr_holds_the_target_with_the_holding_torque_and_pushes_back_when_off_i
 
 
 def test_energy_swing_up_balances_in_every_episode():
-    env = gym.make("roller_gym/RollerBalance-v1")
-    policy = EnergySwingUp.from_env(env, **CLASSICAL["roller_gym/RollerBalance-v1"])
+    env = gym.make("roller_gym/RollerBalance-v2")
+    policy = EnergySwingUp.from_env(env, **CLASSICAL["roller_gym/RollerBalance-v2"])
     episodes = [rollout(env, policy, seed) for seed in range(20)]
     assert all(e.success and not e.terminated for e in episodes)
     # It does swing: the torque limit is below the largest holding torque on the way up.
@@ -139,7 +139,7 @@ def test_energy_swing_up_balances_in_every_episode():
 
 
 def test_baselines_by_name():
-    env = gym.make("roller_gym/RollerBalance-v1")
+    env = gym.make("roller_gym/RollerBalance-v2")
     assert isinstance(baseline("classical", env), EnergySwingUp)
     obs, _ = env.reset(seed=0)
     assert np.all(baseline("zero", env).predict(obs)[0] == 0)
@@ -169,7 +169,7 @@ def _short_run(algo: str, tmp_path_factory) -> tuple:
     if algo not in _RUNS:
         log_folder = tmp_path_factory.mktemp(algo) / "runs"
         run_dir = _train([
-            "--algo", algo, "--env", "roller_gym/RollerStabilize-v1", "--steps", "2000",
+            "--algo", algo, "--env", "roller_gym/RollerStabilize-v2", "--steps", "2000",
             "--log-folder", str(log_folder), "--eval-freq", "1000", "--eval-episodes", "2",
             "--checkpoints", "1",
         ])
@@ -184,9 +184,9 @@ def short_run(request, tmp_path_factory):
 
 def test_short_training_run_completes_and_saves_with_our_hyperparameters(short_run):
     algo, run_dir, log_folder = short_run
-    env_id = "roller_gym/RollerStabilize-v1"
+    env_id = "roller_gym/RollerStabilize-v2"
     # rl-zoo3's layout: <log folder>/<algo>/<env name>_1, no colon, no nested folder per task
-    assert run_dir.parent == log_folder / algo and run_dir.name == "roller_gym-RollerStabilize-v1_1"
+    assert run_dir.parent == log_folder / algo and run_dir.name == "roller_gym-RollerStabilize-v2_1"
     config = read_config(run_dir)
     assert config["algo"] == algo and config["env"] == env_id and config["seed"] == 0
     assert config["trained_steps"] >= 2000 and config["wall_time_s"] > 0
@@ -207,7 +207,7 @@ def test_saved_model_loads_as_rl_zoo3_loads_it(short_run):
     algo, run_dir, log_folder = short_run
     zoo_utils = import_rl_zoo3("rl_zoo3.utils")
     ZOO_ALGOS, get_model_path = zoo_utils.ALGOS, zoo_utils.get_model_path
-    env_id = "roller_gym/RollerStabilize-v1"
+    env_id = "roller_gym/RollerStabilize-v2"
     _, model_path, log_path = get_model_path(0, str(log_folder), algo, EnvironmentName(env_id))
     assert Path(log_path) == run_dir
     reference = ZOO_ALGOS[algo].load(model_path, device="cpu")
@@ -231,7 +231,7 @@ def test_loading_a_run_leaves_gymnasium_unpatched(short_run):
     code = ("import sys, gymnasium as gym\n"
             "from roller_gym.agents import load_policy, rollout\n"
             f"policy = load_policy({str(run_dir)!r}, best=True)\n"
-            "env = gym.make('roller_gym/RollerStabilize-v1')\n"
+            "env = gym.make('roller_gym/RollerStabilize-v2')\n"
             "rollout(env, policy, 0)\n"
             "print('rl_zoo3' in sys.modules, type(env).__module__)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
@@ -257,7 +257,7 @@ def test_normalized_ppo_run_saves_its_statistics_and_reloads_them(tmp_path):
     model = PPO.load(config["model"], device="cpu")
     assert model.num_timesteps == 1024
     assert model._current_progress_remaining == 0.0 and model.lr_schedule(0.0) == 0.0
-    env = gym.make("roller_gym/RollerStabilize-v1")
+    env = gym.make("roller_gym/RollerStabilize-v2")
     normalizer = VecNormalize.load(str(stats), DummyVecEnv([lambda: env]))
     observations = np.stack([env.reset(seed=s)[0] for s in range(20)])
     normalized = normalizer.normalize_obs(observations)

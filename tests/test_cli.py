@@ -110,7 +110,7 @@ def test_evaluate_with_nothing_to_evaluate_says_so(tmp_path):
     pytest.importorskip("matplotlib")
     from roller_gym.scripts.evaluate import main
 
-    with pytest.raises(SystemExit, match="nothing to evaluate on roller_gym/RollerStabilize-v1 "
+    with pytest.raises(SystemExit, match="nothing to evaluate on roller_gym/RollerStabilize-v2 "
                                          r"\(--runs .* holds no run of it\)"):
         main(["--runs", str(tmp_path), "--baselines", "--out", str(tmp_path / "out")])
 
@@ -155,7 +155,7 @@ def test_every_help_works_with_the_base_install_and_names_its_extra(command):
     (["train", "--steps", "10"], "rl_zoo3"),
     (["evaluate", "--baselines", "zero", "--episodes", "1", "--out", "{tmp}"], "matplotlib"),
     (["results", "--runs", "{tmp}"], "matplotlib"),
-    (["replay", "zero", "--env", "roller_gym/RollerStabilize-v1", "--out", "{tmp}/x.gif"],
+    (["replay", "zero", "--env", "roller_gym/RollerStabilize-v2", "--out", "{tmp}/x.gif"],
      "imageio"),
     (["benchmark", "--quick", "--out", "{tmp}"], None),
     (["train-rllib", "--iterations", "1"], "ray"),
@@ -174,7 +174,7 @@ def test_every_command_without_its_extra_says_in_one_line_what_to_install(argv, 
 
 def test_replay_without_pygame_says_in_one_line_what_to_install(tmp_path):
     """pygame is imported only to draw: its absence is reported as one line too."""
-    result = run_cli(["replay", "zero", "--env", "roller_gym/RollerStabilize-v1", "--out",
+    result = run_cli(["replay", "zero", "--env", "roller_gym/RollerStabilize-v2", "--out",
                       str(tmp_path / "x.gif")], blocked=("pygame",))
     assert result.returncode == 1 and "Traceback" not in result.stderr
     (line,) = result.stderr.strip().splitlines()
@@ -211,12 +211,12 @@ def test_train_show_command_run_as_printed_trains_on_the_native_batch(tmp_path):
 
 @NEEDS_RL_ZOO3
 def test_train_evaluate_replay_end_to_end(tmp_path):
-    env_id = "roller_gym/RollerStabilize-v1"
+    env_id = "roller_gym/RollerStabilize-v2"
     roller_gym("train", "--env", env_id, "--steps", "300", "--eval-freq", "150",
                "--eval-episodes", "1", "--verbose", "0", cwd=tmp_path)
     # rl-zoo3's experiment folder: no colon, no folder per namespace.
     (run_dir,) = (tmp_path / "runs" / "sac").iterdir()
-    assert run_dir.name == "roller_gym-RollerStabilize-v1_1"
+    assert run_dir.name == "roller_gym-RollerStabilize-v2_1"
     # trained on the native batch (roller_gym.sb3), which wrote the episode of 200 steps
     assert not (run_dir / "0.monitor.csv").exists()  # (the probe's, of no episode)
     header, columns, *episodes = (run_dir / "batch.monitor.csv").read_text().splitlines()
@@ -226,16 +226,16 @@ def test_train_evaluate_replay_end_to_end(tmp_path):
     roller_gym("evaluate", "--env", env_id, "--runs", "runs", "--episodes", "3",
                "--out", "results", "--report", "RESULTS.md", cwd=tmp_path)
     out = tmp_path / "results"
-    table = (out / "RollerStabilize-v1.md").read_text()
+    table = (out / "RollerStabilize-v2.md").read_text()
     for label in ("SAC", "LQR", "zero torque", "random"):
         assert f"| {label} |" in table
     assert "| SAC | 300 |" in table  # the steps the run trained, read from its model
-    numbers = json.loads((out / "RollerStabilize-v1.json").read_text())
+    numbers = json.loads((out / "RollerStabilize-v2.json").read_text())
     assert [p["name"] for p in numbers["policies"]] == ["sac", "classical", "zero", "random"]
     lqr = numbers["policies"][1]
     assert lqr["success_rate"] == 1.0 and len(lqr["returns"]) == 3
     for plot in ("learning", "trajectories"):
-        assert (out / f"RollerStabilize-v1-{plot}.png").stat().st_size > 10_000
+        assert (out / f"RollerStabilize-v2-{plot}.png").stat().st_size > 10_000
     assert "Target:" in (tmp_path / "RESULTS.md").read_text()
 
     roller_gym("replay", str(run_dir), "--out", "replay.gif", cwd=tmp_path)
@@ -294,7 +294,7 @@ def test_train_passes_env_kwargs_to_rl_zoo3_as_python_literals():
 @NEEDS_RL_ZOO3
 @pytest.mark.parametrize(("item", "message"), [
     ("max_torque=-1", "--env-kwargs: max_torque=-1 is out of range"),
-    ("bogus=3", "--env-kwargs: 'bogus' is not an argument of roller_gym/RollerStabilize-v1; "
+    ("bogus=3", "--env-kwargs: 'bogus' is not an argument of roller_gym/RollerStabilize-v2; "
                 "allowed: scene, dt, max_torque,"),
 ])
 @pytest.mark.parametrize("show", [[], ["--show-command"]])
@@ -378,7 +378,7 @@ def test_rollout_names_the_info_keys_an_env_was_made_without():
     from roller_gym.agents import LQR
     from roller_gym.agents.policies import evaluation_env, rollout
 
-    env_id = "roller_gym/RollerHold-v1"
+    env_id = "roller_gym/RollerHold-v2"
     few = gym.make(env_id, info_keys=["is_success"])
     with pytest.raises(ValueError, match=r"rollout reads the info keys phi, phi_dot, "
                                          r"position_error, torque, target_phi.*info_keys="
@@ -435,7 +435,7 @@ def test_evaluate_prints_a_line_per_stage_on_stderr(tmp_path):
     result = roller_gym("evaluate", "--baselines", "zero", "random", "--episodes", "1",
                         "--out", str(tmp_path / "out"), cwd=tmp_path)
     stages = _stages(result.stderr, "evaluate")
-    env_id = "roller_gym/RollerStabilize-v1"
+    env_id = "roller_gym/RollerStabilize-v2"
     assert stages[0].startswith(f"{env_id}: making the environment")
     assert stages[1:] == [f"{env_id}: zero torque on 1 episodes", f"{env_id}: random on 1 episodes",
                           f"{env_id}: writing the table and plots into {tmp_path / 'out'}/"]

@@ -23,7 +23,7 @@ import pytest
 import roller_gym
 from roller_gym.physics.integrators import PARALLEL_THRESHOLD
 
-TASK = "roller_gym/RollerStabilize-v1"
+TASK = "roller_gym/RollerStabilize-v2"
 
 # The child: a single env and a vector env on all cores, one step each; reports the
 # package's folder, whether it could write there, the package's compiles (numba's events)

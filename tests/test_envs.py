@@ -33,13 +33,13 @@ ROOT = Path(__file__).resolve().parents[1]
 # From the docstrings: steps per episode, default max_torque [N·m], observation size,
 # default preset.
 DOCUMENTED = {
-    "roller_gym/RollerStabilize-v1": {"steps": 200, "max_torque": 0.5, "obs": 5, "scene": "paper",
+    "roller_gym/RollerStabilize-v2": {"steps": 200, "max_torque": 0.5, "obs": 5, "scene": "paper",
                                       "band": 0.05, "margin": 2.0},
-    "roller_gym/RollerHold-v1": {"steps": 200, "max_torque": 1.0, "obs": 9, "scene": "paper",
+    "roller_gym/RollerHold-v2": {"steps": 200, "max_torque": 1.0, "obs": 9, "scene": "paper",
                                  "band": 0.05, "margin": 2.0},
-    "roller_gym/RollerBalance-v1": {"steps": 400, "max_torque": 0.4, "obs": 5, "scene": "balance",
+    "roller_gym/RollerBalance-v2": {"steps": 400, "max_torque": 0.4, "obs": 5, "scene": "balance",
                                     "band": 0.1, "margin": 3.0},
-    "roller_gym/RollerTrack-v0": {"steps": 400, "max_torque": 1.0, "obs": 10, "scene": "paper",
+    "roller_gym/RollerTrack-v1": {"steps": 400, "max_torque": 1.0, "obs": 10, "scene": "paper",
                                   "band": 0.05, "margin": 1.0},
     # an objective of its own: the relative energy error's band and margin
     "roller_gym/RollerSwing-v0": {"steps": 400, "max_torque": 0.1, "obs": 9, "scene": "paper",
@@ -119,7 +119,7 @@ def documented_reward(env_id: str, scene: Scene, info: dict) -> float:
         return wrap(q * (info["phi"] - t)) / q
 
     eps = error(target)
-    if env_id == "roller_gym/RollerBalance-v1":
+    if env_id == "roller_gym/RollerBalance-v2":
         eps = min((error(target), error(-target)), key=abs)
     band = doc["band"]
 
@@ -156,7 +156,7 @@ def test_import_registers_the_ids_and_the_namespace_form_imports_the_package():
         "import gymnasium as gym\n"
         f"ids = {IDS!r}\n"
         "assert not any(i in gym.registry for i in ids)\n"
-        "env = gym.make('roller_gym:roller_gym/RollerHold-v1')\n"
+        "env = gym.make('roller_gym:roller_gym/RollerHold-v2')\n"
         "assert env.unwrapped.task.name == 'RollerHold'\n"
         "assert all(i in gym.registry for i in ids)\n"
         "print([gym.spec(i).max_episode_steps for i in ids])\n"
@@ -239,13 +239,13 @@ def test_observation_entries_match_the_state(env_id):
         assert env.observation_space.contains(obs)
         expected = [math.cos(psi), math.sin(psi), math.cos(phi), math.sin(phi),
                     math.tanh(phi_dot / 10.0)]
-        if env_id in ("roller_gym/RollerHold-v1", "roller_gym/RollerTrack-v0",
+        if env_id in ("roller_gym/RollerHold-v2", "roller_gym/RollerTrack-v1",
                       "roller_gym/RollerSwing-v0"):
             target = info["target_phi"]
             assert info["target_psi"] == pytest.approx(q * target, rel=1e-12)
             expected += [math.cos(q * target), math.sin(q * target), math.cos(target),
                          math.sin(target)]
-        if env_id == "roller_gym/RollerTrack-v0":
+        if env_id == "roller_gym/RollerTrack-v1":
             expected += [math.tanh(info["target_phi_dot"] / 10.0)]
         np.testing.assert_allclose(obs, expected, rtol=0, atol=2e-7)
         if t < 11:
@@ -282,7 +282,7 @@ def test_reset_options_state_and_scene(env_id):
     assert (info["phi"], info["phi_dot"]) == (0.2, -0.3)
     assert (env.unwrapped.phi, env.unwrapped.phi_dot) == (0.2, -0.3)
     assert obs[2] == pytest.approx(math.cos(0.2), abs=1e-7)
-    scene = preset("drum") if env_id == "roller_gym/RollerBalance-v1" else Scene(m=2.0, e=0.02)
+    scene = preset("drum") if env_id == "roller_gym/RollerBalance-v2" else Scene(m=2.0, e=0.02)
     obs, info = env.reset(seed=0, options={"scene": scene, "state": (0.1, 0.0)})
     assert env.unwrapped.scene == scene
     assert info["psi"] == pytest.approx(psi_rate(scene) * 0.1, rel=1e-12)
@@ -299,7 +299,7 @@ def test_reset_options_state_and_scene(env_id):
 
 
 def test_reset_option_target_hold():
-    env = gym.make("roller_gym/RollerHold-v1")
+    env = gym.make("roller_gym/RollerHold-v2")
     scene = env.unwrapped.scene
     q = psi_rate(scene)
     obs, info = env.reset(seed=0, options={"target": 0.2})
@@ -314,7 +314,7 @@ def test_reset_option_target_hold():
     for bad in ("0.2", True, math.nan):  # text and bools are not numbers here
         with pytest.raises(ValueError, match=r"options\['target'\]=.* must be a finite real"):
             env.reset(options={"target": bad})
-    for other in ("roller_gym/RollerStabilize-v1", "roller_gym/RollerBalance-v1"):
+    for other in ("roller_gym/RollerStabilize-v2", "roller_gym/RollerBalance-v2"):
         with pytest.raises(ValueError, match="target"):
             gym.make(other).reset(options={"target": 0.1})
 
@@ -322,7 +322,7 @@ def test_reset_option_target_hold():
 def test_hold_targets_can_be_held():
     """Each drawn target is a rest position whose holding torque m g (r sin ψ + e sin φ)
     is at most 80% of max_torque and whose friction at rest, |tan ψ|, at most 90% of μ."""
-    env = gym.make("roller_gym/RollerHold-v1")
+    env = gym.make("roller_gym/RollerHold-v2")
     scene = env.unwrapped.scene
     m, r, e, g, mu = (float(getattr(scene, n)) for n in ("m", "r", "e", "g", "mu"))
     targets = []
@@ -338,7 +338,7 @@ def test_hold_targets_can_be_held():
 def test_balance_target_is_the_unstable_rest_position():
     """Documented: ψ ≈ ±23°, φ ≈ ±3.66 rad in "balance"; at rest there φ'' = 0 at zero
     torque, d²V/dφ² < 0 (unstable) and the roller still rolls (N > 0, |F| <= μN)."""
-    env = gym.make("roller_gym/RollerBalance-v1")
+    env = gym.make("roller_gym/RollerBalance-v2")
     _, info = env.reset(seed=0)
     scene = env.unwrapped.scene
     phi_b = info["target_phi"]
@@ -357,7 +357,7 @@ def test_balance_target_is_the_unstable_rest_position():
 @pytest.mark.parametrize(
     ("env_id", "scene_name"),
     [(i, "default") for i in IDS]
-    + [(i, s) for i in IDS if i != "roller_gym/RollerBalance-v1"
+    + [(i, s) for i in IDS if i != "roller_gym/RollerBalance-v2"
        for s in ("floor", "drum", "rim_mass")],
 )
 def test_info_forces_and_energy_follow_physics(env_id, scene_name):
@@ -404,7 +404,7 @@ def test_reward_is_the_documented_formula(env_id):
 
 
 def test_success_flag_is_the_documented_band():
-    env = gym.make("roller_gym/RollerStabilize-v1")
+    env = gym.make("roller_gym/RollerStabilize-v2")
     assert env.reset(options={"state": (0.0, 0.0)})[1]["is_success"]
     assert env.reset(options={"state": (0.04, -0.09)})[1]["is_success"]
     assert not env.reset(options={"state": (0.06, 0.0)})[1]["is_success"]
@@ -417,7 +417,7 @@ def test_terminated_when_the_roller_slips():
     scene = preset("paper").replace(mu=0.3)
     ref = model(scene, 0.0, 0.0, 0.5)
     assert abs(ref["friction"]) < 0.3 * ref["normal"]  # the precondition, independently
-    env = gym.make("roller_gym/RollerStabilize-v1", scene=scene)
+    env = gym.make("roller_gym/RollerStabilize-v2", scene=scene)
     _, info = env.reset(seed=0, options={"state": (0.0, 0.0)})
     assert not info["slipping"]
     for _ in range(60):
@@ -438,7 +438,7 @@ def test_terminated_when_the_roller_lifts_off():
     PHYSICS.md. At φ' = 23 rad/s it still rolls on top (N > 0); driven faster, it leaves
     the drum during the step (μ large, so it cannot slip first)."""
     scene = Scene(R=-0.5, e=0.0, k=0.07, mu=100.0)
-    env = gym.make("roller_gym/RollerStabilize-v1", scene=scene)
+    env = gym.make("roller_gym/RollerStabilize-v2", scene=scene)
     _, info = env.reset(seed=0, options={"state": (0.0, 23.0)})
     assert model(scene, 0.0, 23.0, 0.0)["normal"] > 0
     assert not info["lifting"] and info["normal_force"] > 0
@@ -451,12 +451,12 @@ def test_reset_refuses_a_start_state_that_does_not_roll():
     """At φ' = 30 rad/s on top of the drum N < 0 (PHYSICS.md): no episode can start there."""
     scene = Scene(R=-0.5, e=0.0, k=0.07)
     assert model(scene, 0.0, 30.0, 0.0)["normal"] < 0
-    env = gym.make("roller_gym/RollerStabilize-v1", scene=scene)
+    env = gym.make("roller_gym/RollerStabilize-v2", scene=scene)
     with pytest.raises(ValueError, match=r"options\['state'\]=\(0.0, 30.0\).*does not roll"):
         env.reset(seed=0, options={"state": (0.0, 30.0)})
     # (4π, 0) on the paper scene: ψ = π, the top of the cylinder, at rest.
     with pytest.raises(ValueError, match="does not roll"):
-        gym.make("roller_gym/RollerStabilize-v1").reset(options={"state": (4 * math.pi, 0.0)})
+        gym.make("roller_gym/RollerStabilize-v2").reset(options={"state": (4 * math.pi, 0.0)})
 
 
 @pytest.mark.parametrize("env_id", IDS)
@@ -480,27 +480,27 @@ def test_truncated_by_the_time_limit(env_id):
 @pytest.mark.parametrize(
     ("env_id", "kwargs", "message"),
     [
-        ("roller_gym/RollerStabilize-v1", {"dt": 0.0}, "dt=0.0"),
-        ("roller_gym/RollerStabilize-v1", {"dt": -0.05}, "dt=-0.05"),
-        ("roller_gym/RollerStabilize-v1", {"dt": math.inf}, "dt=inf"),
-        ("roller_gym/RollerHold-v1", {"tolerance": math.nan}, "tolerance=nan"),
-        ("roller_gym/RollerHold-v1", {"tolerance": 0.0}, "tolerance=0.0"),
-        ("roller_gym/RollerStabilize-v1", {"integrator": "rk45"}, "integrator='rk45'"),
-        ("roller_gym/RollerStabilize-v1", {"scene": "nope"}, "'nope'"),
-        ("roller_gym/RollerStabilize-v1", {"scene": 3}, "scene=3"),
-        ("roller_gym/RollerStabilize-v1", {"randomize": {"mass": (1.0, 2.0)}}, "'mass'"),
-        ("roller_gym/RollerStabilize-v1", {"randomize": {"m": (2.0, 1.0)}},
+        ("roller_gym/RollerStabilize-v2", {"dt": 0.0}, "dt=0.0"),
+        ("roller_gym/RollerStabilize-v2", {"dt": -0.05}, "dt=-0.05"),
+        ("roller_gym/RollerStabilize-v2", {"dt": math.inf}, "dt=inf"),
+        ("roller_gym/RollerHold-v2", {"tolerance": math.nan}, "tolerance=nan"),
+        ("roller_gym/RollerHold-v2", {"tolerance": 0.0}, "tolerance=0.0"),
+        ("roller_gym/RollerStabilize-v2", {"integrator": "rk45"}, "integrator='rk45'"),
+        ("roller_gym/RollerStabilize-v2", {"scene": "nope"}, "'nope'"),
+        ("roller_gym/RollerStabilize-v2", {"scene": 3}, "scene=3"),
+        ("roller_gym/RollerStabilize-v2", {"randomize": {"mass": (1.0, 2.0)}}, "'mass'"),
+        ("roller_gym/RollerStabilize-v2", {"randomize": {"m": (2.0, 1.0)}},
          "randomize['m']=(2.0, 1.0)"),
-        ("roller_gym/RollerStabilize-v1", {"randomize": {"m": (1.0,)}}, "randomize['m']=(1.0,)"),
-        ("roller_gym/RollerStabilize-v1", {"randomize": {"m": (1.0, math.nan)}}, "randomize['m']"),
-        ("roller_gym/RollerStabilize-v1", {"randomize": {"e": (-0.1, 0.05)}}, "Scene.e=-0.1"),
-        ("roller_gym/RollerStabilize-v1", {"max_torque": 0.0}, "max_torque=0.0"),
-        ("roller_gym/RollerStabilize-v1", {"max_torque": math.nan}, "max_torque=nan"),
-        ("roller_gym/RollerStabilize-v1", {"substeps": 0}, "substeps=0"),
-        ("roller_gym/RollerBalance-v1", {"scene": Scene(R=math.inf, e=0.0)},
+        ("roller_gym/RollerStabilize-v2", {"randomize": {"m": (1.0,)}}, "randomize['m']=(1.0,)"),
+        ("roller_gym/RollerStabilize-v2", {"randomize": {"m": (1.0, math.nan)}}, "randomize['m']"),
+        ("roller_gym/RollerStabilize-v2", {"randomize": {"e": (-0.1, 0.05)}}, "Scene.e=-0.1"),
+        ("roller_gym/RollerStabilize-v2", {"max_torque": 0.0}, "max_torque=0.0"),
+        ("roller_gym/RollerStabilize-v2", {"max_torque": math.nan}, "max_torque=nan"),
+        ("roller_gym/RollerStabilize-v2", {"substeps": 0}, "substeps=0"),
+        ("roller_gym/RollerBalance-v2", {"scene": Scene(R=math.inf, e=0.0)},
          "no unstable rest position"),
-        ("roller_gym/RollerBalance-v1", {"scene": "tight_fit"}, "no unstable rest position"),
-        ("roller_gym/RollerBalance-v1", {"scene": "paper"}, "not reachable"),
+        ("roller_gym/RollerBalance-v2", {"scene": "tight_fit"}, "no unstable rest position"),
+        ("roller_gym/RollerBalance-v2", {"scene": "paper"}, "not reachable"),
     ],
 )
 def test_bad_construction_arguments_raise(env_id, kwargs, message):
@@ -513,12 +513,12 @@ def test_bad_render_mode_raises():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # Gymnasium warns about the mode as well
         with pytest.raises(ValueError, match="render_mode='ansi'"):
-            gym.make("roller_gym/RollerStabilize-v1", render_mode="ansi")
+            gym.make("roller_gym/RollerStabilize-v2", render_mode="ansi")
 
 
 @pytest.mark.parametrize("env_id", IDS)
 def test_scene_argument_object_and_preset(env_id):
-    custom = Scene(m=1.5, e=0.02, k=0.08) if env_id != "roller_gym/RollerBalance-v1" else preset(
+    custom = Scene(m=1.5, e=0.02, k=0.08) if env_id != "roller_gym/RollerBalance-v2" else preset(
         "balance").replace(m=1.5)
     env = gym.make(env_id, scene=custom)
     assert env.unwrapped.scene == custom
@@ -526,7 +526,7 @@ def test_scene_argument_object_and_preset(env_id):
     check_info_physics(env, info, 0.0)
     _, _, _, _, info = env.step(act(0.5))
     check_info_physics(env, info, info["torque"])
-    name = "drum" if env_id == "roller_gym/RollerBalance-v1" else "floor"
+    name = "drum" if env_id == "roller_gym/RollerBalance-v2" else "floor"
     env = gym.make(env_id, scene=name)
     assert env.unwrapped.scene == preset(name)
 
@@ -537,7 +537,7 @@ def _reference(scene, phi, phi_dot, tau, dt):
 
 
 def test_dt_argument_sets_the_control_step():
-    env = gym.make("roller_gym/RollerStabilize-v1", dt=0.02)
+    env = gym.make("roller_gym/RollerStabilize-v2", dt=0.02)
     env.reset(options={"state": (0.3, 0.0)})
     _, _, _, _, info = env.step(act(0.5))
     ref = _reference(env.unwrapped.scene, 0.3, 0.0, 0.25, 0.02)
@@ -560,7 +560,7 @@ def test_integrator_argument_and_tolerance(integrator, tolerances):
     scene = preset("paper")
     substeps = []
     for tol in tolerances:
-        env = gym.make("roller_gym/RollerStabilize-v1", integrator=integrator, tolerance=tol)
+        env = gym.make("roller_gym/RollerStabilize-v2", integrator=integrator, tolerance=tol)
         assert env.unwrapped.config.integrator == integrator
         env.reset(options={"state": (0.5, 2.0)})
         _, _, _, _, info = env.step(act(0.6))
@@ -579,8 +579,8 @@ def test_info_tol_met_is_the_integrators_flag(tol):
     from roller_gym.physics import Stepper
 
     scene = preset("paper")
-    env = gym.make("roller_gym/RollerStabilize-v1", tolerance=tol)
-    vec = gym.make_vec("roller_gym/RollerStabilize-v1", num_envs=3, tolerance=tol)
+    env = gym.make("roller_gym/RollerStabilize-v2", tolerance=tol)
+    vec = gym.make_vec("roller_gym/RollerStabilize-v2", num_envs=3, tolerance=tol)
     env.reset(options={"state": (0.5, 2.0)})
     vec.reset(options={"state": (0.5, 2.0)})
     stepper = Stepper(scene, dt=0.05, tol=tol)
@@ -607,7 +607,7 @@ def test_substeps_argument_is_the_number_of_fixed_substeps(integrator, n):
     """With substeps=n the step is n steps of classical RK4 (or of semi-implicit Euler),
     written here on the φ'' of PHYSICS.md."""
     scene = preset("paper")
-    env = gym.make("roller_gym/RollerStabilize-v1", integrator=integrator, substeps=n)
+    env = gym.make("roller_gym/RollerStabilize-v2", integrator=integrator, substeps=n)
     env.reset(options={"state": (0.4, -1.0)})
     _, _, _, _, info = env.step(act(0.8))
     assert info["substeps"] == n
@@ -629,7 +629,7 @@ def test_substeps_argument_is_the_number_of_fixed_substeps(integrator, n):
 
 @pytest.mark.parametrize("env_id", IDS)
 def test_randomize_draws_scenes_within_the_ranges(env_id):
-    ranges = {"m": (0.8, 1.2), "e": (0.06, 0.09)} if env_id == "roller_gym/RollerBalance-v1" else {
+    ranges = {"m": (0.8, 1.2), "e": (0.06, 0.09)} if env_id == "roller_gym/RollerBalance-v2" else {
         "m": (0.8, 1.2), "e": (0.03, 0.05)}
     env = gym.make(env_id, randomize=ranges)
     base = preset(DOCUMENTED[env_id]["scene"])

@@ -61,10 +61,10 @@ def test_state_matches_the_reference_within_tolerance(scene):
         kwargs["max_torque"] = max_torque
     runs = {}
     for method in (m for m in methods if m in METHODS):
-        env = gym.make("roller_gym/RollerStabilize-v1", integrator=method, **kwargs).unwrapped
+        env = gym.make("roller_gym/RollerStabilize-v2", integrator=method, **kwargs).unwrapped
         env.reset(seed=0, options=options)
         runs[method] = env
-    default = gym.make("roller_gym/RollerStabilize-v1", **kwargs).unwrapped.config
+    default = gym.make("roller_gym/RollerStabilize-v2", **kwargs).unwrapped.config
     assert default.integrator in runs  # the default integrator is among those checked
     first = next(iter(runs.values()))
     scene_obj, dt = first.scene, first.config.dt

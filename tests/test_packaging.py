@@ -69,14 +69,14 @@ def test_wheel_installs_one_import_name_beside_envs_and_agents(fresh_venv):
         tops = {f.parts[0] for f in files if f.suffix == ".py"}
         assert tops == {"roller_gym"}, tops
         gym.register_envs(roller_gym)
-        env = gym.make("roller_gym/RollerHold-v1")
+        env = gym.make("roller_gym/RollerHold-v2")
         episode = rollout(env, controller_for(env), seed=0)
         assert episode.success
-        vec = gym.make_vec("roller_gym/RollerStabilize-v1", num_envs=3)
+        vec = gym.make_vec("roller_gym/RollerStabilize-v2", num_envs=3)
         vec.reset(seed=0)
         vec.step(np.zeros((3, 1), np.float32))
         from roller_gym.agents.hyperparams import config_file
-        assert "roller_gym/RollerStabilize-v1" in config_file("sac").read_text()
+        assert "roller_gym/RollerStabilize-v2" in config_file("sac").read_text()
         print("ok")
     """)
     outside = fresh_venv.parent
@@ -84,11 +84,11 @@ def test_wheel_installs_one_import_name_beside_envs_and_agents(fresh_venv):
     # Uninstalling the other packages leaves roller-gym whole.
     run(sys.executable, "-m", "pip", "--python", python, "uninstall", "-y", "-q", "envs",
         "agents", cwd=outside)
-    check = "import gymnasium as gym, roller_gym; gym.make('roller_gym/RollerTrack-v0')"
+    check = "import gymnasium as gym, roller_gym; gym.make('roller_gym/RollerTrack-v1')"
     run(python, "-c", check, cwd=outside)
     # The no-import form of the ID imports the package itself.
     run(python, "-c", "import gymnasium as gym; "
-        "gym.make('roller_gym:roller_gym/RollerStabilize-v1').reset(seed=0)", cwd=outside)
+        "gym.make('roller_gym:roller_gym/RollerStabilize-v2').reset(seed=0)", cwd=outside)
 
 
 def test_console_command_is_installed(fresh_venv):

@@ -19,7 +19,7 @@ import pytest
 import roller_gym  # noqa: F401  (registers the IDs)
 
 ROOT = Path(__file__).resolve().parents[1]
-IDS = ["roller_gym/RollerStabilize-v1", "roller_gym/RollerHold-v1", "roller_gym/RollerBalance-v1"]
+IDS = ["roller_gym/RollerStabilize-v2", "roller_gym/RollerHold-v2", "roller_gym/RollerBalance-v2"]
 CONTACT_RGB = (220, 30, 30)  # the instant center's marker (envs/rendering.py)
 TARGET_RGB = (30, 160, 60)  # the target contact point, tasks with a target
 
@@ -38,11 +38,11 @@ def test_import_and_stepping_do_not_import_pygame():
     code = (
         "import sys, numpy as np, gymnasium as gym, roller_gym\n"
         "assert 'pygame' not in sys.modules\n"
-        "env = gym.make('roller_gym/RollerHold-v1'); env.reset(seed=0)\n"
+        "env = gym.make('roller_gym/RollerHold-v2'); env.reset(seed=0)\n"
         "env.step(np.zeros(1, np.float32))\n"
-        "vec = gym.make_vec('roller_gym/RollerStabilize-v1', num_envs=2); vec.reset(seed=0)\n"
+        "vec = gym.make_vec('roller_gym/RollerStabilize-v2', num_envs=2); vec.reset(seed=0)\n"
         "assert 'pygame' not in sys.modules\n"
-        "env = gym.make('roller_gym/RollerHold-v1', render_mode='rgb_array'); env.reset(seed=0)\n"
+        "env = gym.make('roller_gym/RollerHold-v2', render_mode='rgb_array'); env.reset(seed=0)\n"
         "env.render()\n"
         "assert 'pygame' in sys.modules\n"
     )
@@ -57,7 +57,7 @@ def test_without_pygame_an_env_asked_for_frames_is_made_and_render_says_what_to_
     fails, saying what to install."""
     code = ("import sys; sys.modules['pygame'] = None\n"
             "import gymnasium as gym, numpy as np, roller_gym\n"
-            "env = gym.make('roller_gym/RollerStabilize-v1', render_mode='rgb_array')\n"
+            "env = gym.make('roller_gym/RollerStabilize-v2', render_mode='rgb_array')\n"
             "env.reset(seed=0); env.step(np.zeros(1, np.float32))\n"
             "try:\n"
             "    env.render()\n"
@@ -88,7 +88,7 @@ def test_rgb_array_frames(env_id):
     env.step(np.array([1.0], np.float32))
     assert np.any(env.render() != before)
     # Only the task with a target draws it.
-    assert (len(pixels_of(first, TARGET_RGB)) > 0) == (env_id == "roller_gym/RollerHold-v1")
+    assert (len(pixels_of(first, TARGET_RGB)) > 0) == (env_id == "roller_gym/RollerHold-v2")
     env.close()
 
 
@@ -96,7 +96,7 @@ def test_rgb_array_frames(env_id):
 def test_contact_marker_follows_psi(phi):
     """ψ = rφ/(R − r) = φ/4 in "paper": the marker moves right of the centre line for
     ψ > 0, left for ψ < 0, and lies below the centre at ψ = 0."""
-    env = gym.make("roller_gym/RollerStabilize-v1", render_mode="rgb_array")
+    env = gym.make("roller_gym/RollerStabilize-v2", render_mode="rgb_array")
     frame = frame_at(env, phi)
     red = pixels_of(frame, CONTACT_RGB)
     assert len(red) > 5
@@ -113,7 +113,7 @@ def test_contact_marker_follows_psi(phi):
 
 
 def test_render_mode_none_warns_and_returns_none():
-    env = gym.make("roller_gym/RollerStabilize-v1")
+    env = gym.make("roller_gym/RollerStabilize-v2")
     env.reset(seed=0)
     with pytest.warns(UserWarning, match="render_mode"):
         assert env.render() is None
@@ -126,13 +126,13 @@ def test_human_mode_headless(monkeypatch, tmp_path):
     monkeypatch.setenv("XDG_RUNTIME_DIR", str(tmp_path))
     import pygame
 
-    env = gym.make("roller_gym/RollerHold-v1", render_mode="human")
+    env = gym.make("roller_gym/RollerHold-v2", render_mode="human")
     env.reset(seed=0, options={"state": (0.3, 0.0), "target": 0.1})
     assert env.render() is None
     surface = pygame.display.get_surface()
     assert surface is not None
     shown = np.transpose(pygame.surfarray.array3d(surface), (1, 0, 2))
-    reference = gym.make("roller_gym/RollerHold-v1", render_mode="rgb_array")
+    reference = gym.make("roller_gym/RollerHold-v2", render_mode="rgb_array")
     reference.reset(seed=0, options={"state": (0.3, 0.0), "target": 0.1})
     np.testing.assert_array_equal(shown, reference.render())
     env.step(np.array([0.5], np.float32))  # renders on step as well
@@ -143,7 +143,7 @@ def test_human_mode_headless(monkeypatch, tmp_path):
 
 
 def test_vector_env_renders_one_frame_per_sub_env():
-    vec = gym.make_vec("roller_gym/RollerStabilize-v1", num_envs=2, render_mode="rgb_array",
+    vec = gym.make_vec("roller_gym/RollerStabilize-v2", num_envs=2, render_mode="rgb_array",
                        scene=["paper", "floor"])
     vec.reset(seed=0)
     frames = vec.render()
@@ -151,7 +151,7 @@ def test_vector_env_renders_one_frame_per_sub_env():
     for f in frames:
         assert f.dtype == np.uint8 and f.ndim == 3 and f.shape[2] == 3
     assert np.any(frames[0] != frames[1])
-    single = gym.make("roller_gym/RollerStabilize-v1", render_mode="rgb_array")
+    single = gym.make("roller_gym/RollerStabilize-v2", render_mode="rgb_array")
     single.reset(seed=0)
     np.testing.assert_array_equal(frames[0], single.render())  # seed 0 + 0, same state
     vec.close()

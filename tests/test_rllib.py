@@ -1,6 +1,6 @@
 """Ray RLlib runs the tasks unchanged: one short PPO iteration of ``scripts/train_rllib.py``.
 
-On a local Ray (2 CPUs), two env runners (remote processes) make roller_gym/RollerStabilize-v1 with
+On a local Ray (2 CPUs), two env runners (remote processes) make roller_gym/RollerStabilize-v2 with
 ``gymnasium.make`` through Ray's registry; one PPO iteration must report a finite episode
 return, and the saved checkpoint must restore to the trained policy: the restored module
 gives the trained module's deterministic actions, which differ from the untrained ones.
@@ -36,7 +36,7 @@ from ray.rllib.utils.metrics import (
 )
 
 SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "train_rllib.py"
-ENV_ID = "roller_gym/RollerStabilize-v1"
+ENV_ID = "roller_gym/RollerStabilize-v2"
 TRAIN_BATCH = 800  # env steps of the iteration: 400 per runner, two or more episodes each
 MAX_TORQUE = 0.3  # not the default (0.5): it must reach the remote runners' environments
 

@@ -146,31 +146,55 @@ def digest(array: np.ndarray) -> str:
 def test_the_tasks_outcomes_are_bit_for_bit_those_recorded():
     """Stabilize, Hold and Track give bit for bit the outcomes recorded before the objective
     became the task's own (tests/data/outcomes.npz: the arrays of the single env and of 5
-    sub-environments, and the digest of those of 2,100). Balance's target, the unstable rest
-    position, comes since from a compiled bisection that agrees with the recording's scipy
-    root to 4.4e-16 rad: its arrays agree to 1e-12, and its digests are not compared."""
+    sub-environments, and the digest of those of 2,100), recorded under the task versions
+    before the rewards that see the success band: every value but the reward is unchanged,
+    and the reward is the task's formula (run in Python) of the recorded step. Balance's
+    target, the unstable rest position, comes since from a compiled bisection that agrees
+    with the recording's scipy root to 4.4e-16 rad: its arrays agree to 1e-12, and its
+    digests are not compared."""
     recorded = np.load(RECORDED)
-    tasks = sorted({key.split("/")[0] for key in recorded.files})
-    env_ids = [i for i in IDS if roller_gym.file_name(i) in tasks]
+    names = sorted({key.split("/")[0] for key in recorded.files})
+    env_ids = {name: next(i for i in IDS if i.split("/")[1].split("-v")[0]
+                          == name.split("-v")[0]) for name in names}
     assert len(env_ids) == 4
-    now = run_outcomes(env_ids)
+    now = run_outcomes(list(env_ids.values()))
     for key in recorded.files:
-        exact = not key.startswith("RollerBalance-v1/")
-        if key.endswith("/digest"):
+        name, rest = key.split("/", 1)
+        env_id = env_ids[name]
+        task = gym.make(env_id).unwrapped.task
+        new_key = f"{roller_gym.file_name(env_id)}/{rest}"
+        got, want = now[new_key.removesuffix("/digest")], recorded[key]
+        exact = not name.startswith("RollerBalance")
+        if rest == "single":  # obs..., reward, terminated: the reward is the new formula
+            info = {k.split("/")[-1]: recorded[k] for k in recorded.files
+                    if k.startswith(f"{name}/single/")}
+            stepped = want[:, -2] != 0.0  # a reset's row holds reward 0, a step's more
+            assert stepped.sum() >= 150
+            expected = np.where(stepped, task.step_reward(info), 0.0)
+            np.testing.assert_allclose(got[:, -2], expected, rtol=1e-12, err_msg=key)
+            got, want = np.delete(got, -2, axis=1), np.delete(want, -2, axis=1)
+        elif rest == "vec5/reward":
+            info = {k.split("/")[-1]: recorded[k][1:] for k in recorded.files
+                    if k.startswith(f"{name}/vec5/") and k.count("/") == 2}
+            expected = np.where(want != 0.0, task.step_reward(info), 0.0)  # 0: a reset
+            np.testing.assert_allclose(got, expected, rtol=1e-12, err_msg=key)
+            continue
+        elif rest == "vec2100/reward/digest":
+            continue  # the reward changed: the formula is checked on the two above
+        if rest.endswith("/digest"):
             if exact:
-                assert digest(now[key[:-len("/digest")]]) == str(recorded[key]), key
+                assert digest(got) == str(want), key
         elif exact:
-            np.testing.assert_array_equal(now[key], recorded[key], err_msg=key)
+            np.testing.assert_array_equal(got, want, err_msg=key)
         else:
-            np.testing.assert_allclose(now[key], recorded[key], rtol=1e-12, atol=1e-12,
-                                       err_msg=key)
+            np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12, err_msg=key)
 
 
 # -- no stale kernels ---------------------------------------------------------------------
 PROBE = textwrap.dedent("""
     import gymnasium as gym, numpy as np, roller_gym
     assert roller_gym.__file__.startswith({root!r}), roller_gym.__file__
-    env = gym.make("roller_gym/RollerStabilize-v1", integrator="euler", substeps=8)
+    env = gym.make("roller_gym/RollerStabilize-v2", integrator="euler", substeps=8)
     env.reset(seed=0)
     _, reward, _, _, info = env.step(np.array([0.3], np.float32))
     print(repr(float(reward)), repr(float(env.unwrapped.task.step_reward(info))))
@@ -210,10 +234,10 @@ def test_editing_an_inlined_source_recompiles_the_kernels(tmp_path):
 def test_the_id_decides_the_task():
     """A ``task=`` that names another task than the ID's is refused, naming both; the ID's
     own task (by name or ID) is accepted."""
-    stabilize = "roller_gym/RollerStabilize-v1"
+    stabilize = "roller_gym/RollerStabilize-v2"
     for make in (gym.make, lambda i, **kw: gym.make_vec(i, num_envs=2, **kw)):
         with pytest.raises(ValueError, match=r"task='RollerHold' contradicts the ID "
-                                             r"roller_gym/RollerStabilize-v1.*RollerHold-v1"):
+                                             r"roller_gym/RollerStabilize-v2.*RollerHold-v2"):
             make(stabilize, task="RollerHold")
         env = make(stabilize, task=stabilize)
         assert type(env.unwrapped.task).name == "RollerStabilize"

@@ -61,7 +61,7 @@ def test_steps_to_threshold():
 
 def _synthetic_results(tmp_path):
     """A results file of two tasks, SAC with five seeds, the baselines: answers known."""
-    tasks = {"roller_gym/RollerStabilize-v1": 100.0, "roller_gym/RollerHold-v1": 200.0}
+    tasks = {"roller_gym/RollerStabilize-v2": 100.0, "roller_gym/RollerHold-v2": 200.0}
     evaluations = []
     for task, classical in tasks.items():
         for name, ret in (("classical", classical), ("zero", 10.0), ("random", 1.0)):
@@ -88,13 +88,13 @@ def test_the_results_page_reports_what_the_synthetic_runs_hold(tmp_path):
     results_mod = pytest.importorskip("roller_gym.scripts.results")
     data = _synthetic_results(tmp_path)
     summary = results_mod.summarize(data, ["sac"])
-    stab = summary["tasks"]["roller_gym/RollerStabilize-v1"]["algos"]["sac"]
+    stab = summary["tasks"]["roller_gym/RollerStabilize-v2"]["algos"]["sac"]
     # IQM of 97, 99, 100, 101, 150: the middle three (one trimmed each side of five)
     assert stab["return_iqm"][0] == pytest.approx((99 + 100 + 101) / 3)
     assert stab["steps_to_threshold"] == [200.0] * 5  # the first evaluation at ≥ 95
-    met, sentence = results_mod.target(summary["tasks"]["roller_gym/RollerStabilize-v1"])
+    met, sentence = results_mod.target(summary["tasks"]["roller_gym/RollerStabilize-v2"])
     assert met is True
-    met, sentence = results_mod.target(summary["tasks"]["roller_gym/RollerHold-v1"])
+    met, sentence = results_mod.target(summary["tasks"]["roller_gym/RollerHold-v2"])
     assert met is False and "short by 40%" in sentence  # success 50 % against 90 %
     report = tmp_path / "RESULTS.md"
     results_mod.render(data, report, tmp_path, ["sac"])

@@ -19,6 +19,7 @@ from roller_gym.agents import controller_for, rollout
 from roller_gym.physics import Scene, contact, holding_torque
 from roller_gym.task import (
     OBSERVATION_FIELDS,
+    PRECISION_MARGIN,
     TASKS,
     Task,
     hold_range,
@@ -59,7 +60,8 @@ def test_docstring_reward_and_success_are_the_declared_numbers(task):
     band, margin = task.success_band, task.position_margin
     w = task.precision_weight
     stated = (f"``({1 - w:g} tolerance(ε, {band:g} rad, {margin:g} rad) + {w:g} "
-              f"tolerance(ε, {band:g} rad, {3 * band:.3g} rad))")
+              f"near(ε, {PRECISION_MARGIN * band:.3g} rad))")
+    assert f"* v{task.version}: " in doc.split("## Version History")[1]
     assert stated in " ".join(doc.split()), stated
     assert (f"(0.5 + 0.5 near(φ' − φ*', {task.speed_margin:g} rad/s))" in doc
             and task.speed_weight == 0.5 and task.control_weight == 0.2)
@@ -89,7 +91,7 @@ def test_the_registry_refuses_a_duplicate_name_and_unknown_fields():
         register(type("Odd", (Task,), {"name": "RollerOdd", "observation": ("cos_psi", "x")}))
     assert "RollerOdd" not in TASKS
     with pytest.raises(ValueError, match="not a registered task"):
-        gym.make("roller_gym/RollerHold-v1", task="RollerNope")
+        gym.make("roller_gym/RollerHold-v2", task="RollerNope")
 
 
 def test_a_new_task_through_the_registry_alone():
@@ -130,7 +132,7 @@ def test_observation_fields_are_declared_once():
 
 
 # -- RollerTrack ---------------------------------------------------------------------------
-TRACK = "roller_gym/RollerTrack-v0"
+TRACK = "roller_gym/RollerTrack-v1"
 
 
 def test_track_target_moves_smoothly_inside_the_holdable_range():

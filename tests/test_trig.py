@@ -264,7 +264,7 @@ for method, sub, tol in (("rk8", None, 1e-8), ("rk4", None, 1e-8), ("rk8", 3, 1e
 # the single environment's step: compiled, one call on packed buffers; interpreted, two calls
 import gymnasium as gym
 import roller_gym
-env = gym.make("roller_gym/RollerHold-v1", tolerance=1e-6)
+env = gym.make("roller_gym/RollerHold-v2", tolerance=1e-6)
 (obs, info), reward, terminated, rows = env.reset(seed=2), 0.0, False, []
 for a in (None, 0.3, -0.8, 0.5):
     if a is not None:

@@ -109,11 +109,11 @@ def test_per_env_scenes_and_autoreset_after_termination():
     scenes = ["paper", slippery, "floor"]
     sign = np.where((np.arange(24) // 4) % 2 == 0, 1.0, -1.0)
     actions = np.repeat(sign[:, None, None], 3, axis=1).astype(np.float32)
-    flags = lockstep("roller_gym/RollerStabilize-v1", 0, actions, {"scene": scenes},
+    flags = lockstep("roller_gym/RollerStabilize-v2", 0, actions, {"scene": scenes},
                      [{"scene": s} for s in scenes])
     terminated = np.array([te for te, _ in flags])
     assert terminated[:, 1].any() and not terminated[:, [0, 2]].any()
-    vec = gym.make_vec("roller_gym/RollerStabilize-v1", num_envs=3, scene=scenes)
+    vec = gym.make_vec("roller_gym/RollerStabilize-v2", num_envs=3, scene=scenes)
     obs, _ = vec.reset(seed=0)
     assert vec.unwrapped.scenes == [preset("paper"), slippery, preset("floor")]
     assert obs[2, 0] == 1.0 and obs[2, 1] == 0.0  # ψ stays 0 on the floor
@@ -125,28 +125,28 @@ def test_batch_scene_and_randomize_match_single_envs():
     scene from the sub-environment's own generator, as the single env seeded s + i."""
     batch = Scene.stack([preset("paper"), preset("paper").replace(m=2.0, e=0.02)])
     actions = np.random.default_rng(1).uniform(-1, 1, (6, 2, 1)).astype(np.float32)
-    lockstep("roller_gym/RollerHold-v1", 3, actions, {"scene": batch},
+    lockstep("roller_gym/RollerHold-v2", 3, actions, {"scene": batch},
              [{"scene": batch.item(0)}, {"scene": batch.item(1)}])
     ranges = {"m": (0.8, 1.2), "k": (0.08, 0.12)}
-    lockstep("roller_gym/RollerStabilize-v1", 11, actions[:, :2], {"randomize": ranges,
+    lockstep("roller_gym/RollerStabilize-v2", 11, actions[:, :2], {"randomize": ranges,
                                                         "max_episode_steps": 3},
              [{"randomize": ranges, "max_episode_steps": 3}] * 2)
-    vec = gym.make_vec("roller_gym/RollerStabilize-v1", num_envs=3, randomize=ranges)
+    vec = gym.make_vec("roller_gym/RollerStabilize-v2", num_envs=3, randomize=ranges)
     vec.reset(seed=11)
     drawn = vec.unwrapped.scenes
     assert len({float(s.m) for s in drawn}) == 3
     for i, s in enumerate(drawn):
-        single = gym.make("roller_gym/RollerStabilize-v1", randomize=ranges)
+        single = gym.make("roller_gym/RollerStabilize-v2", randomize=ranges)
         single.reset(seed=11 + i)
         assert single.unwrapped.scene == s
         assert 0.8 <= float(s.m) <= 1.2 and 0.08 <= float(s.k) <= 0.12
 
 
 def test_seed_list_and_reproducibility():
-    vec = gym.make_vec("roller_gym/RollerHold-v1", num_envs=3)
+    vec = gym.make_vec("roller_gym/RollerHold-v2", num_envs=3)
     obs_a, _ = vec.reset(seed=[4, 9, 2])
     for i, s in enumerate((4, 9, 2)):
-        o, _ = gym.make("roller_gym/RollerHold-v1").reset(seed=s)
+        o, _ = gym.make("roller_gym/RollerHold-v2").reset(seed=s)
         np.testing.assert_array_equal(obs_a[i], o)
     a = np.full((3, 1), 0.5, np.float32)
     run1 = [vec.reset(seed=1)[0]] + [vec.step(a)[0] for _ in range(3)]
@@ -157,7 +157,7 @@ def test_seed_list_and_reproducibility():
 
 
 def test_actions_are_clipped_and_nonfinite_rejected():
-    vec = gym.make_vec("roller_gym/RollerStabilize-v1", num_envs=2)
+    vec = gym.make_vec("roller_gym/RollerStabilize-v2", num_envs=2)
     vec.reset(seed=0, options={"state": (0.0, 0.0)})
     _, _, _, _, info = vec.step(np.array([[3.0], [-0.5]], np.float32))
     np.testing.assert_allclose(info["torque"], [0.5, -0.25])
@@ -171,7 +171,7 @@ def test_actions_are_clipped_and_nonfinite_rejected():
 
 
 def test_reset_options_and_mask():
-    vec = gym.make_vec("roller_gym/RollerStabilize-v1", num_envs=2)
+    vec = gym.make_vec("roller_gym/RollerStabilize-v2", num_envs=2)
     _, info = vec.reset(seed=0, options={"state": (0.2, 0.1)})
     np.testing.assert_array_equal(info["phi"], [0.2, 0.2])
     np.testing.assert_array_equal(info["phi_dot"], [0.1, 0.1])
@@ -193,13 +193,13 @@ def test_reset_options_and_mask():
 )
 def test_bad_vector_arguments_raise(kwargs, message):
     with pytest.raises(ValueError) as excinfo:
-        gym.make_vec("roller_gym/RollerStabilize-v1", **kwargs)
+        gym.make_vec("roller_gym/RollerStabilize-v2", **kwargs)
     assert message in str(excinfo.value)
 
 
 def test_balance_rejects_a_sub_scene_without_an_unstable_rest_position():
     with pytest.raises(ValueError, match="no unstable rest position"):
-        gym.make_vec("roller_gym/RollerBalance-v1", num_envs=2, scene=["balance", "tight_fit"])
+        gym.make_vec("roller_gym/RollerBalance-v2", num_envs=2, scene=["balance", "tight_fit"])
 
 
 def test_info_keys_choose_what_the_info_holds():
@@ -269,7 +269,7 @@ def test_what_a_step_returns_never_changes_afterwards(mode):
     """Episode starts (autoreset, or reset with a mask) write the new episodes' state into the
     environment; the observation, reward, flags and info a caller already holds stay as they
     were (Hold draws a new target per episode, so a shared target array would show)."""
-    env = gym.make_vec("roller_gym/RollerHold-v1", num_envs=6, max_episode_steps=3,
+    env = gym.make_vec("roller_gym/RollerHold-v2", num_envs=6, max_episode_steps=3,
                        autoreset_mode=mode)
     rng = np.random.default_rng(2)
     held = [env.reset(seed=1)]
@@ -304,8 +304,8 @@ def test_what_a_caller_does_to_the_returned_arrays_never_changes_the_environment
             value[...] = ~value if value.dtype == bool else value + 1
 
     kwargs = {"num_envs": 5, "max_episode_steps": 3, "autoreset_mode": mode}
-    vandal = gym.make_vec("roller_gym/RollerHold-v1", **kwargs)
-    twin = gym.make_vec("roller_gym/RollerHold-v1", **kwargs)
+    vandal = gym.make_vec("roller_gym/RollerHold-v2", **kwargs)
+    twin = gym.make_vec("roller_gym/RollerHold-v2", **kwargs)
     rng = np.random.default_rng(4)
     ours, theirs = vandal.reset(seed=3), twin.reset(seed=3)
     ended = 0
@@ -350,7 +350,7 @@ def test_reseeding_mid_run_restarts_the_streams_of_later_autoresets():
     """Autoresets after ``reset(seed=...)`` follow the new seeds (the vector env draws its
     next starts ahead of need: a reseed must not leave the old seeds' starts in use), as
     single environments reseeded the same way."""
-    env_id, n, length = "roller_gym/RollerHold-v1", 3, 3
+    env_id, n, length = "roller_gym/RollerHold-v2", 3, 3
     rng = np.random.default_rng(2)
     vec = gym.make_vec(env_id, num_envs=n, max_episode_steps=length)
     singles = [gym.make(env_id, max_episode_steps=length) for _ in range(n)]
@@ -378,7 +378,7 @@ def test_a_batch_on_all_cores_matches_single_envs(integrator):
     still reproduce the single environments with their seeds, across autoresets."""
     from roller_gym.physics.integrators import CHUNK, PARALLEL_THRESHOLD
 
-    env_id, n, length = "roller_gym/RollerHold-v1", PARALLEL_THRESHOLD + 37, 4
+    env_id, n, length = "roller_gym/RollerHold-v2", PARALLEL_THRESHOLD + 37, 4
     vec = gym.make_vec(env_id, num_envs=n, max_episode_steps=length, integrator=integrator)
     assert vec.unwrapped._stepper.parallel
     watched = [0, CHUNK - 1, CHUNK, n - 1]
@@ -408,7 +408,7 @@ def test_a_batch_on_all_cores_matches_single_envs(integrator):
 def test_a_scene_option_lasts_one_episode_as_in_the_single_env():
     """``reset(options={"scene": ...})`` sets the scene of that episode only: the next start
     (an explicit reset or an autoreset) goes back to the base scene, in both environments."""
-    env_id, n, length = "roller_gym/RollerStabilize-v1", 2, 3
+    env_id, n, length = "roller_gym/RollerStabilize-v2", 2, 3
     vec = gym.make_vec(env_id, num_envs=n, max_episode_steps=length)
     singles = [gym.make(env_id, max_episode_steps=length) for _ in range(n)]
     obs, _ = vec.reset(seed=5)
@@ -433,7 +433,7 @@ def test_a_scene_option_lasts_one_episode_as_in_the_single_env():
 def test_a_target_option_resets_sub_environments_that_share_a_scene():
     """``reset(options={"target": x})`` of several sub-environments of one shared scene gives
     each the single environment's target for x."""
-    env_id, n = "roller_gym/RollerHold-v1", 3
+    env_id, n = "roller_gym/RollerHold-v2", 3
     vec = gym.make_vec(env_id, num_envs=n)
     single = gym.make(env_id)
     vec.reset(seed=1)
@@ -452,7 +452,7 @@ def test_a_pickled_scheme_is_its_row_of_the_table():
 
     for s in SCHEMES.values():
         assert pickle.loads(pickle.dumps(s)) is s
-    vec = gym.make_vec("roller_gym/RollerStabilize-v1", num_envs=4)
+    vec = gym.make_vec("roller_gym/RollerStabilize-v2", num_envs=4)
     assert pickle.loads(pickle.dumps(vec)).unwrapped._stepper.scheme is SCHEMES["taylor"]
 
 
@@ -461,7 +461,7 @@ def test_a_moving_target_has_the_same_bits_alone_and_in_a_batch(n):
     """RollerTrack's target is a function of the step count, evaluated alone (the single
     env, numbers) and for a batch (arrays, here of 1 and of 70): the target, its holding
     torque and the reward agree bit for bit over an episode."""
-    env_id = "roller_gym/RollerTrack-v0"
+    env_id = "roller_gym/RollerTrack-v1"
     vec = gym.make_vec(env_id, num_envs=n)
     single = gym.make(env_id)
     vec.reset(seed=1)
@@ -483,14 +483,14 @@ def test_a_moving_target_has_the_same_bits_alone_and_in_a_batch(n):
 def test_a_sub_environment_never_started_cannot_be_stepped():
     """A first reset with a reset_mask starts only the masked sub-environments: step()
     refuses, naming the others, until a reset has started them too."""
-    vec = gym.make_vec("roller_gym/RollerStabilize-v1", num_envs=4)
+    vec = gym.make_vec("roller_gym/RollerStabilize-v2", num_envs=4)
     vec.reset(seed=0, options={"reset_mask": np.array([True, False, True, False])})
     a = np.zeros((4, 1), np.float32)
     with pytest.raises(RuntimeError, match=r"sub-environments \[1, 3\] have not started"):
         vec.step(a)
     vec.reset(seed=0, options={"reset_mask": np.array([False, True, False, True])})
     obs = vec.step(a)[0]
-    reference = gym.make_vec("roller_gym/RollerStabilize-v1", num_envs=4)
+    reference = gym.make_vec("roller_gym/RollerStabilize-v2", num_envs=4)
     reference.reset(seed=0)
     np.testing.assert_array_equal(obs, reference.step(a)[0])
 
@@ -498,7 +498,7 @@ def test_a_sub_environment_never_started_cannot_be_stepped():
 def test_disabled_autoreset_refuses_to_step_an_ended_episode():
     """With autoreset_mode=DISABLED an ended episode waits for reset(reset_mask): stepping
     it before (as Gymnasium's SyncVectorEnv refuses to) raises, naming it."""
-    vec = gym.make_vec("roller_gym/RollerStabilize-v1", num_envs=3, max_episode_steps=2,
+    vec = gym.make_vec("roller_gym/RollerStabilize-v2", num_envs=3, max_episode_steps=2,
                        autoreset_mode=AutoresetMode.DISABLED)
     vec.reset(seed=0, options={"reset_mask": np.array([True, True, True])})
     a = np.zeros((3, 1), np.float32)
@@ -517,7 +517,7 @@ def test_each_info_key_has_a_mask_of_its_own(mode):
     """The info's ``_key`` masks (of a reset, a step, and SAME_STEP's final info) are arrays
     of their own, as Gymnasium's vector envs give them (its ``_add_info`` writes into them):
     writing into ``info["_phi"]`` leaves ``info["_energy"]`` as it was."""
-    vec = gym.make_vec("roller_gym/RollerStabilize-v1", num_envs=3, max_episode_steps=1,
+    vec = gym.make_vec("roller_gym/RollerStabilize-v2", num_envs=3, max_episode_steps=1,
                        autoreset_mode=mode)
     infos = [vec.reset(seed=0)[1], vec.step(np.zeros((3, 1), np.float32))[4]]
     if mode == AutoresetMode.SAME_STEP:

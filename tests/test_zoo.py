@@ -127,7 +127,7 @@ def test_python_m_rl_zoo3_train_uses_the_shipped_file(tmp_path):
     rl-zoo3's enjoy replays the run with the episode roller_gym's rollout gives."""
     from stable_baselines3 import TD3
 
-    algo, env_id, env_name = "td3", "roller_gym/RollerHold-v1", "roller_gym-RollerHold-v1"
+    algo, env_id, env_name = "td3", "roller_gym/RollerHold-v2", "roller_gym-RollerHold-v2"
     with as_file(config_file(algo)) as conf:
         subprocess.run(
             [sys.executable, "-m", "rl_zoo3.train", "--algo", algo, "--env", env_id,

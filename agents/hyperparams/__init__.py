@@ -4,7 +4,7 @@ The trained agents' hyperparameters live in rl-baselines3-zoo's YAML format, one
 algorithm next to this module (``sac.yml``, ``td3.yml``, ``ppo.yml``), keyed by task ID. They
 are the only copy: ``roller-gym train`` passes the file to rl-zoo3, and so can you::
 
-    python -m rl_zoo3.train --algo sac --env roller_gym/RollerStabilize-v1 \\
+    python -m rl_zoo3.train --algo sac --env roller_gym/RollerStabilize-v2 \\
         --gym-packages roller_gym -conf PATH
 
 where PATH is ``str(config_file("sac"))``; ``roller-gym train --show-command`` prints the
@@ -73,15 +73,15 @@ def load_config(algo: str) -> dict[str, dict[str, Any]]:
 CLASSICAL: dict[str, dict[str, float]] = {
     # LQR weights (Bryson's rule): acceptable error 0.1 rad, speed 1 rad/s, torque 0.5 N·m.
     # The return is flat around them (±0.3% over a 4 x 4 x 3 grid of scales).
-    "roller_gym/RollerStabilize-v1": {
+    "roller_gym/RollerStabilize-v2": {
         "position_scale": 0.1, "speed_scale": 1.0, "torque_scale": 0.5,
     },
-    "roller_gym/RollerHold-v1": {"position_scale": 0.1, "speed_scale": 1.0, "torque_scale": 0.5},
-    "roller_gym/RollerTrack-v0": {
+    "roller_gym/RollerHold-v2": {"position_scale": 0.1, "speed_scale": 1.0, "torque_scale": 0.5},
+    "roller_gym/RollerTrack-v1": {
         "position_scale": 0.1, "speed_scale": 1.0, "torque_scale": 0.5,
     },
     # Swing-up: energy gain [N·m·s/(J·rad)]; LQR handover within 0.5 rad and 1.5 rad/s.
-    "roller_gym/RollerBalance-v1": {
+    "roller_gym/RollerBalance-v2": {
         "energy_gain": 20.0,
         "capture_angle": 0.5,
         "capture_speed": 1.5,
@@ -97,7 +97,7 @@ def hyperparams(algo: str, env_id: str) -> dict[str, Any]:
 
     Args:
         algo: ``"sac"``, ``"td3"`` or ``"ppo"``.
-        env_id: a task ID, e.g. ``"roller_gym/RollerStabilize-v1"``.
+        env_id: a task ID, e.g. ``"roller_gym/RollerStabilize-v2"``.
 
     Raises:
         ValueError: no entry for the pair; the message lists the known tasks.

@@ -28,7 +28,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-TASK = "roller_gym/RollerStabilize-v1"
+TASK = "roller_gym/RollerStabilize-v2"
 #: What each case builds and steps once, a Python expression run in the child (``gym`` is
 #: gymnasium; ``roller_gym`` is imported before the import mark, except for Pendulum-v1).
 CASES = {

@@ -134,7 +134,7 @@ def plot_throughput(results: Results, path: Path) -> None:
     sizes = sorted(vector, key=int)
     names = ["ours", "kernel", "CartPoleVectorEnv",
              *sorted({k for v in vector.values() for k in v if "Pendulum" in k})]
-    labels = {"ours": "roller_gym/RollerStabilize-v1 (make_vec)",
+    labels = {"ours": "roller_gym/RollerStabilize-v2 (make_vec)",
               "kernel": "its physics kernel alone", "CartPoleVectorEnv": "CartPoleVectorEnv"}
     fig, ax = plt.subplots(figsize=(7.5, 4.2))
     width = 0.8 / len(names)

@@ -289,7 +289,7 @@ def section_environments(results: Results) -> list[str]:
     env, cfg = results["environments"], results["config"]
     return [
         "## 3. The environments' error", "",
-        "State error of `gymnasium.make(\"roller_gym/RollerStabilize-v1\")` itself over "
+        "State error of `gymnasium.make(\"roller_gym/RollerStabilize-v2\")` itself over "
         f"the {cfg['horizon_s']:g}-s reference episode of the default scene (default settings, "
         f"stepped through the environment): φ {fmt_err(env['env_error'][0])} rad, φ' "
         f"{fmt_err(env['env_error'][1])} rad/s. The vector environment "

@@ -28,7 +28,7 @@ from roller_gym.physics.integrators import INPUT_FIELDS, ROWS
 
 _INPUTS = [ROWS.index(f) for f in INPUT_FIELDS]  # a stepper table's rows of φ, φ' and τ
 
-TASK = "roller_gym/RollerStabilize-v1"
+TASK = "roller_gym/RollerStabilize-v2"
 #: The physics' share of a vector step is timed by replaying every REPLAY_EVERY-th step,
 #: the fastest of SHARE_REPEATS repeats on each side (a whole episode against a few of its
 #: steps: with fewer, the two fastest scatter by several points on a shared machine).

@@ -439,11 +439,11 @@ def measure_energy(cfg: Config, result: SceneResult) -> None:
 # -- Part 3: the environments' error ---------------------------------------------------------
 def env_episode_error(ref: np.ndarray, torques: np.ndarray) -> tuple[float, float]:
     """The state error (φ [rad], φ' [rad/s]) of
-    ``gymnasium.make("roller_gym/RollerStabilize-v1")`` at default settings over the reference
+    ``gymnasium.make("roller_gym/RollerStabilize-v2")`` at default settings over the reference
     episode: the same start (rest at φ = 0) and the same torques, through the env."""
     import gymnasium as gym
 
-    env = gym.make("roller_gym/RollerStabilize-v1")
+    env = gym.make("roller_gym/RollerStabilize-v2")
     base = env.unwrapped
     base.reset(seed=SEED, options={"state": (0.0, 0.0)})
     states = [(0.0, 0.0)]
@@ -459,7 +459,7 @@ def vector_episode_error(ref: np.ndarray, torques: np.ndarray, n: int) -> tuple[
     episode, up to the first step at which one terminates (autoreset would restart it)."""
     import gymnasium as gym
 
-    env = gym.make_vec("roller_gym/RollerStabilize-v1", num_envs=n)
+    env = gym.make_vec("roller_gym/RollerStabilize-v2", num_envs=n)
     env.reset(seed=SEED, options={"state": (0.0, 0.0)})
     base = env.unwrapped
     worst = np.zeros(2)
