@@ -1,24 +1,31 @@
-"""The construction arguments every roller environment takes, checked in one place.
+"""The construction arguments every roller environment takes: declared, documented and checked
+once.
 
-Both the single environment (:mod:`roller_gym.roller_env`) and the native vector environment
-(:mod:`roller_gym.vector_env`) build their settings here, so they accept the same keywords with
-the same errors, draw scenes the same way and turn actions into torques the same way.
+:class:`Settings` is the one signature: its fields, defaults and documentation are the
+keywords of ``gymnasium.make`` and ``gymnasium.make_vec`` for every task ID, of
+:class:`roller_gym.roller_env.RollerEnv` and of :class:`roller_gym.vector_env.RollerVectorEnv`
+(:func:`takes_settings` gives both classes that signature and those docs), and each keyword
+keeps its name down to the physics (``Stepper(integrator=..., tolerance=...)``).
+:meth:`EnvConfig.build` checks them, so both environments accept the same keywords with the
+same errors, draw scenes the same way and turn actions into torques the same way.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, fields
-from typing import Any
+import inspect
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import MISSING, dataclass, field, fields
+from typing import Any, TypeVar
 
 import numpy as np
 from roller_gym import feasibility, validation
 from roller_gym.episode import INFO_KEYS
-from roller_gym.physics import METHODS, Scene, preset
-from roller_gym.physics.integrators import MAX_SUBSTEPS
+from roller_gym.physics import INTEGRATORS, Scene, preset
+from roller_gym.physics.integrators import DEFAULT_INTEGRATOR, MAX_SUBSTEPS
 from roller_gym.task import Task
 
-__all__ = ["DEFAULT_DT", "DEFAULT_TOLERANCE", "EnvConfig", "resolve_scene"]
+__all__ = ["DEFAULT_DT", "DEFAULT_TOLERANCE", "EnvConfig", "Settings", "resolve_scene",
+           "takes_settings"]
 
 #: The control step [s] (as Gymnasium's Pendulum).
 DEFAULT_DT = 0.05
@@ -43,6 +50,93 @@ def resolve_scene(scene: Scene | str | None, default: str) -> Scene:
     )
 
 
+def _doc(text: str) -> dict[str, str]:
+    return {"doc": text}
+
+
+@dataclass(frozen=True, kw_only=True)
+class Settings:
+    """The keywords every roller environment takes, as given (:meth:`EnvConfig.build` checks
+    them). Each field's documentation is :func:`setting_docs`."""
+
+    scene: Scene | str | Sequence[Scene | str] | None = field(default=None, metadata=_doc(
+        "an :class:`roller_gym.Scene` or a preset's name (``roller_gym.PRESETS``); default: "
+        "the task's preset. The vector environment also takes a sequence of them (one per "
+        "sub-environment) or a batch Scene of ``num_envs`` rollers."))
+    dt: float = field(default=DEFAULT_DT, metadata=_doc(
+        "the control step [s]; the torque is constant over it."))
+    max_torque: float | None = field(default=None, metadata=_doc(
+        "the torque [N·m] an action of ±1 applies; default: the task's."))
+    tolerance: float = field(default=DEFAULT_TOLERANCE, metadata=_doc(
+        "the integrator's target state error per control step (φ [rad], φ' [rad/s]); it "
+        "sets the number of substeps."))
+    integrator: str = field(default=DEFAULT_INTEGRATOR, metadata=_doc(
+        "``\"taylor\"`` (the series of the motion to degree 18, its substeps chosen from "
+        "its own error estimate; the default and the fastest), ``\"rk8\"`` and ``\"rk4\"`` "
+        "(error-controlled Runge–Kutta), ``\"euler\"`` (semi-implicit, Pendulum's scheme), "
+        "``\"midpoint\"`` (implicit, energy-stable) or ``\"dop853\"`` (scipy's adaptive, "
+        "slow: a reference; the single environment only)."))
+    substeps: int | None = field(default=None, metadata=_doc(
+        "a fixed number of substeps per control step instead of the automatic rule."))
+    randomize: Mapping[str, tuple[float, float]] | None = field(default=None, metadata=_doc(
+        "``{field: (low, high)}``: Scene fields drawn uniformly at each reset (domain "
+        "randomization), e.g. ``{\"m\": (0.8, 1.2), \"e\": (0.03, 0.05)}``. At "
+        "construction the task is proven posable in every scene of the box of ranges "
+        "(:mod:`roller_gym.feasibility`), so no later reset can fail on a drawn scene; "
+        "otherwise a ``ValueError`` names the field and a feasible part of its range. "
+        "Default: the task's own ranges (``Task.scene_ranges``: none but for the tasks "
+        "whose scene varies unobserved); ``{}`` fixes the scene."))
+    render_mode: str | None = field(default=None, metadata=_doc(
+        "``\"human\"`` or ``\"rgb_array\"`` (the vector environment: ``\"rgb_array\"``), "
+        "or None."))
+    info_keys: Sequence[str] | None = field(default=None, metadata=_doc(
+        "the keys of the step's and reset's info, among :data:`roller_gym.episode.INFO_KEYS` "
+        "(default None: all of them). Building the info is a notable share of a single "
+        "environment's step; ask only for what you read (e.g. ``[\"is_success\"]``) to "
+        "step faster. Reward and termination are the same whatever the keys."))
+
+    @classmethod
+    def of(cls, owner: str, keywords: Mapping[str, Any]) -> Settings:
+        """The settings from ``owner``'s keywords, naming an unknown one and what is allowed."""
+        names = [f.name for f in fields(cls)]
+        unknown = [key for key in keywords if key not in names]
+        if unknown:
+            raise TypeError(f"{owner} got an unexpected keyword argument {unknown[0]!r}; "
+                            f"allowed: {', '.join(names)}")
+        return cls(**keywords)
+
+
+def setting_docs(indent: str = "        ") -> str:
+    """The ``Args`` lines of :class:`Settings`' fields, wrapped as a docstring's."""
+    import textwrap
+
+    lines = []
+    for f in fields(Settings):
+        lines += textwrap.wrap(f"{f.name}: {f.metadata['doc']}", 91 - len(indent),
+                               initial_indent="", subsequent_indent="    ")
+    return "\n".join(indent + line for line in lines)
+
+
+_Env = TypeVar("_Env", bound=type)
+
+
+def takes_settings(before: Sequence[str], after: Sequence[str] = ()) -> Callable[[_Env], _Env]:
+    """Class decorator: the class's signature is its ``__init__``'s parameters ``before``,
+    then every :class:`Settings` field (keyword, with its default), then ``after``; its
+    docstring's ``{settings}`` becomes the fields' documentation (:func:`setting_docs`)."""
+    def decorate(cls: _Env) -> _Env:
+        own = inspect.signature(cls.__init__).parameters
+        params = [p for name, p in own.items() if name in before]
+        params += [inspect.Parameter(f.name, inspect.Parameter.KEYWORD_ONLY,
+                                     default=None if f.default is MISSING else f.default,
+                                     annotation=f.type) for f in fields(Settings)]
+        params += [own[name].replace(kind=inspect.Parameter.KEYWORD_ONLY) for name in after]
+        cls.__signature__ = inspect.Signature(params, return_annotation=None)
+        cls.__doc__ = cls.__doc__.replace("{settings}", setting_docs().lstrip())
+        return cls
+    return decorate
+
+
 @dataclass(frozen=True)
 class EnvConfig:
     """Checked construction arguments (see :class:`roller_gym.roller_env.RollerEnv` for each)."""
@@ -61,29 +155,26 @@ class EnvConfig:
     def build(
         cls,
         task_class: type[Task],
+        settings: Settings,
         *,
-        scene: Scene | str | None,
-        dt: float,
-        max_torque: float | None,
-        tolerance: float,
-        integrator: str,
-        substeps: int | None,
-        randomize: Mapping[str, tuple[float, float]] | None,
-        render_mode: str | None,
         render_modes: list[str],
-        info_keys: Sequence[str] | None = None,
         scenes: Sequence[Scene] | None = None,
     ) -> EnvConfig:
-        """The checked arguments; ``scenes`` (the vector env's, one per sub-environment)
-        replaces ``scene`` in the checks: each distinct one is checked, ``randomize``'s range
-        proof included, and an error names its first sub-environment."""
+        """The checked ``settings``; ``scenes`` (the vector env's, one per sub-environment)
+        replaces ``settings.scene`` in the checks: each distinct one is checked,
+        ``randomize``'s range proof included, and an error names its first sub-environment."""
+        scene, dt, max_torque, tolerance = (settings.scene, settings.dt, settings.max_torque,
+                                            settings.tolerance)
+        integrator, substeps, randomize = (settings.integrator, settings.substeps,
+                                           settings.randomize)
+        render_mode, info_keys = settings.render_mode, settings.info_keys
         if max_torque is not None:
             max_torque = validation.real("max_torque", max_torque, positive=True, unit="N·m")
         task = task_class(max_torque)
         scene = resolve_scene(scene, task.default_scene)
         dt = validation.real("dt", dt, positive=True, unit="s")
         tolerance = validation.real("tolerance", tolerance, positive=True)
-        integrator = validation.choice("integrator", integrator, tuple(METHODS))
+        integrator = validation.choice("integrator", integrator, tuple(INTEGRATORS))
         if substeps is not None:
             substeps = validation.count("substeps", substeps, high=MAX_SUBSTEPS)
         render_mode = validation.choice("render_mode", render_mode, (*render_modes, None))
@@ -100,7 +191,8 @@ class EnvConfig:
                 reason = task.infeasible(one)
                 if reason is not None:
                     raise ValueError(reason)
-                ranges = check_randomize(task, one, dt, randomize)
+                ranges = check_randomize(task, one, dt, task.scene_ranges if randomize is None
+                                         else randomize)
             except ValueError as exc:
                 if scenes is None:
                     raise

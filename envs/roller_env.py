@@ -9,7 +9,7 @@ rendering.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable
 from itertools import compress
 from typing import Any, ClassVar
 
@@ -17,78 +17,41 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 from roller_gym import episode, validation
-from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig
+from roller_gym.config import EnvConfig, Settings, takes_settings
 from roller_gym.episode import INFO_KEYS, INFO_ROW, OutcomeKernel
 from roller_gym.episode.record import C
 from roller_gym.physics import Scene
-from roller_gym.physics.integrators import DEFAULT_METHOD, Stepper
+from roller_gym.physics.integrators import Stepper
 from roller_gym.task import Task, get_task, psi_rate, wrap_rate
 
 __all__ = ["RollerEnv"]
 
 
 
+@takes_settings(before=("task",))
 class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
     """A roller driven by a torque, rolling without slipping on a fixed surface.
 
     Args:
         task: the task: a name of the registry (``"RollerHold"``, see
             :data:`roller_gym.task.TASKS`), its ID, or its class.
-        scene: an :class:`roller_gym.Scene` or a preset's name (``roller_gym.PRESETS``);
-            default: the task's preset.
-        dt: the control step [s]; the torque is constant over it.
-        max_torque: the torque [N·m] an action of ±1 applies; default: the task's.
-        tolerance: the integrator's target state error per control step (φ [rad],
-            φ' [rad/s]); it sets the number of substeps.
-        integrator: ``"taylor"`` (the series of the motion to degree 18, its substeps
-            chosen from its own error estimate; the default and the fastest), ``"rk8"`` and
-            ``"rk4"`` (error-controlled Runge–Kutta), ``"euler"`` (semi-implicit, Pendulum's
-            scheme), ``"midpoint"`` (implicit, energy-stable) or ``"dop853"`` (scipy's
-            adaptive, slow: a reference).
-        substeps: a fixed number of substeps per control step instead of the automatic rule.
-        randomize: ``{field: (low, high)}``: Scene fields drawn uniformly at each reset
-            (domain randomization), e.g. ``{"m": (0.8, 1.2), "e": (0.03, 0.05)}``. At
-            construction the task is proven posable in every scene of the box of ranges
-            (:mod:`roller_gym.feasibility`), so no later reset can fail on a drawn scene;
-            otherwise a ``ValueError`` names the field and a feasible part of its range.
-        render_mode: ``"human"``, ``"rgb_array"`` or None.
-        info_keys: the keys of the step's and reset's info, among
-            :data:`roller_gym.episode.INFO_KEYS` (default None: all of them). Building the
-            info is a notable share of a single environment's step; ask only for what you
-            read (e.g. ``["is_success"]``) to step faster. Reward and termination are the
-            same whatever the keys.
+        {settings}
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array"], "render_fps": 20}
 
-    def __init__(
-        self,
-        task: str | type[Task] = "RollerStabilize",
-        scene: Scene | str | None = None,
-        dt: float = DEFAULT_DT,
-        max_torque: float | None = None,
-        tolerance: float = DEFAULT_TOLERANCE,
-        integrator: str = DEFAULT_METHOD,
-        substeps: int | None = None,
-        randomize: Mapping[str, tuple[float, float]] | None = None,
-        render_mode: str | None = None,
-        info_keys: Sequence[str] | None = None,
-    ) -> None:
-        self.config = EnvConfig.build(
-            get_task(task), scene=scene, dt=dt, max_torque=max_torque, tolerance=tolerance,
-            integrator=integrator, substeps=substeps, randomize=randomize,
-            render_mode=render_mode, render_modes=self.metadata["render_modes"],
-            info_keys=info_keys,
-        )
+    def __init__(self, task: str | type[Task] = "RollerStabilize", **settings: Any) -> None:
+        self.config = EnvConfig.build(get_task(task), Settings.of("RollerEnv", settings),
+                                      render_modes=self.metadata["render_modes"])
         self.task = self.config.task
         self._outcome = OutcomeKernel(self.task, 1)
-        self.render_mode = render_mode
+        self.render_mode = self.config.render_mode
         self.action_space = spaces.Box(-1.0, 1.0, (1,), np.float32)
         size = self.task.observation_size
         self.observation_space = spaces.Box(-1.0, 1.0, (size,), np.float32)
         cfg = self.config
-        self._stepper = Stepper(cfg.scene, method=cfg.integrator, dt=cfg.dt,
-                                tol=cfg.tolerance, substeps=cfg.substeps or None)
+        self._stepper = Stepper(cfg.scene, integrator=cfg.integrator, dt=cfg.dt,
+                                tolerance=cfg.tolerance, substeps=cfg.substeps or None)
         self._link()
         self._set_scene(cfg.scene)
         self._set_target(self.task.default_target(self.scene), 0.0)

@@ -28,7 +28,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium.vector import AutoresetMode
 from roller_gym.episode import INFO_KEYS, vector_seeds
-from roller_gym.physics.integrators import DEFAULT_METHOD
+from roller_gym.physics.integrators import DEFAULT_INTEGRATOR
 from roller_gym.vector_env import BATCH_INTEGRATORS
 from stable_baselines3.common.vec_env import DummyVecEnv
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices
@@ -221,7 +221,7 @@ def from_env_fns(env_fns: list[Any], **vec_env_kwargs: Any) -> VecEnv:
         probe.close()
         if (wrappers <= _PLAIN_WRAPPERS and spec is not None
                 and spec.id.startswith("roller_gym/")
-                and spec.kwargs.get("integrator", DEFAULT_METHOD) in BATCH_INTEGRATORS):
+                and spec.kwargs.get("integrator", DEFAULT_INTEGRATOR) in BATCH_INTEGRATORS):
             if probe_file is not None:  # the probe's own Monitor file: never written to
                 probe_file.unlink(missing_ok=True)
             kwargs = {k: v for k, v in spec.kwargs.items() if k != "render_mode"}

@@ -191,6 +191,9 @@ class Task:
     default_scene: ClassVar[str] = "paper"
     #: The torque [N·m] an action of ±1 asks for, by default.
     default_max_torque: ClassVar[float] = 0.5
+    #: The Scene fields drawn per episode when ``randomize`` is not given, ``{field: (low,
+    #: high)}`` (a task whose scene varies and is not observed); None: the scene is fixed.
+    scene_ranges: ClassVar[dict[str, tuple[float, float]] | None] = None
     max_episode_steps: ClassVar[int] = 200
     reward_threshold: ClassVar[float]
     position_margin: ClassVar[float] = 2.0  # rad of φ

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, ClassVar
 
 import numba
@@ -34,15 +34,15 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 from roller_gym import clients, episode, validation
-from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE, EnvConfig, resolve_scene
+from roller_gym.config import EnvConfig, Settings, resolve_scene, takes_settings
 from roller_gym.physics import Scene
-from roller_gym.physics.integrators import DEFAULT_METHOD, METHODS, BatchStepper
+from roller_gym.physics.integrators import INTEGRATORS, BatchStepper
 from roller_gym.task import Task, get_task, psi_rate, wrap_rate
 
 __all__ = ["RollerVectorEnv"]
 
 #: The integrators of the batch: all but scipy's DOP853, a reference for one roller.
-BATCH_INTEGRATORS = tuple(m for m in METHODS if m != "dop853")
+BATCH_INTEGRATORS = tuple(m for m in INTEGRATORS if m != "dop853")
 
 _ROW = {name: i for i, name in enumerate(episode.OUTCOME_ROWS)}
 _FLAG = {name: i for i, name in enumerate(episode.FLAG_ROWS)}
@@ -167,19 +167,18 @@ def _autoreset_mode(value: AutoresetMode | str) -> AutoresetMode:
                      "(or its name, e.g. 'next_step')")
 
 
+@takes_settings(before=("num_envs", "task"),
+                after=("max_episode_steps", "autoreset_mode"))
 class RollerVectorEnv(VectorEnv):
     """N rollers, each with its own scene, target and random stream.
 
     Args:
         num_envs: the number of sub-environments.
         task: the task (a name of the registry, its ID, or its class).
-        scene: one Scene or preset name for all, or a sequence of them (one per
-            sub-environment), or a batch Scene of ``num_envs`` rollers.
+        {settings}
         max_episode_steps: truncation; default the task's.
         autoreset_mode: ``AutoresetMode.NEXT_STEP`` (default), ``SAME_STEP`` or
             ``DISABLED`` (or their names as strings), as in Gymnasium's vector envs.
-        dt, max_torque, tolerance, integrator, substeps, randomize, render_mode, info_keys:
-            as in :class:`roller_gym.roller_env.RollerEnv`, for every sub-environment.
     """
 
     # The per-step numbers the outcome takes besides the integrator's (episode.CONTEXT_FIELDS)
@@ -201,43 +200,30 @@ class RollerVectorEnv(VectorEnv):
         self,
         num_envs: int = 1,
         task: str | type[Task] = "RollerStabilize",
-        scene: Scene | str | Sequence[Scene | str] | None = None,
-        dt: float = DEFAULT_DT,
-        max_torque: float | None = None,
-        tolerance: float = DEFAULT_TOLERANCE,
-        integrator: str = DEFAULT_METHOD,
-        substeps: int | None = None,
-        randomize: Mapping[str, tuple[float, float]] | None = None,
-        render_mode: str | None = None,
+        *,
         max_episode_steps: int | None = None,
         autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
-        info_keys: Sequence[str] | None = None,
+        **settings: Any,
     ) -> None:
         num_envs = validation.count("num_envs", num_envs)
+        given = Settings.of("RollerVectorEnv", settings)
         _check_memory(num_envs)
         try:
-            self._build(num_envs, task, scene, dt, max_torque, tolerance, integrator, substeps,
-                        randomize, render_mode, max_episode_steps, autoreset_mode, info_keys)
+            self._build(num_envs, task, given, max_episode_steps, autoreset_mode)
         except MemoryError:
             raise ValueError(f"num_envs={num_envs} is too many: the arrays of that many "
                              "sub-environments could not be allocated (out of memory); use "
                              "fewer") from None
 
-    def _build(self, num_envs: int, task: str | type[Task], scene: Any, dt: float,
-               max_torque: float | None, tolerance: float, integrator: str,
-               substeps: int | None, randomize: Mapping[str, tuple[float, float]] | None,
-               render_mode: str | None, max_episode_steps: int | None,
-               autoreset_mode: AutoresetMode | str, info_keys: Sequence[str] | None) -> None:
+    def _build(self, num_envs: int, task: str | type[Task], settings: Settings,
+               max_episode_steps: int | None, autoreset_mode: AutoresetMode | str) -> None:
+        scene, integrator = settings.scene, settings.integrator
         per_env = self._per_env_scenes(scene, num_envs)
         task_class = get_task(task)
         resolved = [resolve_scene(s, task_class.default_scene) for s in per_env]
         self.config = EnvConfig.build(
-            task_class, scene=None if per_env else scene, dt=dt, max_torque=max_torque,
-            tolerance=tolerance, integrator=integrator, substeps=substeps,
-            randomize=randomize, render_mode=render_mode,
-            render_modes=self.metadata["render_modes"], info_keys=info_keys,
-            scenes=resolved or None,
-        )
+            task_class, replace(settings, scene=None) if per_env else settings,
+            render_modes=self.metadata["render_modes"], scenes=resolved or None)
         if integrator not in BATCH_INTEGRATORS:
             raise ValueError(f"integrator={integrator!r} is a reference for the single "
                              "environment; the vector environment takes one of "
@@ -250,7 +236,7 @@ class RollerVectorEnv(VectorEnv):
         else:
             self._base = self.config.scene
         self.num_envs = num_envs
-        self.render_mode = render_mode
+        self.render_mode = self.config.render_mode
         self.max_episode_steps = (task.max_episode_steps if max_episode_steps is None else
                                   validation.count("max_episode_steps", max_episode_steps))
         self.single_action_space = spaces.Box(-1.0, 1.0, (1,), np.float32)
@@ -260,8 +246,8 @@ class RollerVectorEnv(VectorEnv):
         self.observation_space = batch_space(self.single_observation_space, num_envs)
 
         cfg = self.config
-        self._stepper = BatchStepper(num_envs, method=cfg.integrator, dt=cfg.dt,
-                                     tol=cfg.tolerance, substeps=cfg.substeps or None)
+        self._stepper = BatchStepper(num_envs, integrator=cfg.integrator, dt=cfg.dt,
+                                     tolerance=cfg.tolerance, substeps=cfg.substeps or None)
         self._scene = self._base  # a scalar Scene while every sub-environment shares it
         self._option_scene = np.zeros(num_envs, dtype=bool)  # in an episode of a scene option
         self._stepper.set_scenes(self._scene)

@@ -49,7 +49,7 @@ def _rhs_only(count, phi, w, tau, table):
 
 def batch(num: int, rng: np.random.Generator) -> dict[str, float]:
     scene = preset("paper")
-    stepper = integ.BatchStepper(num, method=METHOD, dt=DT, tol=TOL)
+    stepper = integ.BatchStepper(num, integrator=METHOD, dt=DT, tolerance=TOL)
     stepper.set_scenes(scene)
     phi, w = rng.uniform(-0.3, 0.3, num), rng.uniform(-1.0, 1.0, num)
     tau = rng.uniform(-0.5, 0.5, num)
@@ -77,7 +77,7 @@ def batch(num: int, rng: np.random.Generator) -> dict[str, float]:
 def scalar(rng: np.random.Generator) -> dict[str, float]:
     import gymnasium as gym
 
-    stepper = integ.Stepper(preset("paper"), method=METHOD, dt=DT, tol=TOL)
+    stepper = integ.Stepper(preset("paper"), integrator=METHOD, dt=DT, tolerance=TOL)
     torques = rng.uniform(-0.5, 0.5, 2000).tolist()
     substeps = []
 
@@ -108,7 +108,7 @@ def scalar(rng: np.random.Generator) -> dict[str, float]:
 
 
 def trajectory_substeps(name: str, phi0: float, steps: int = 200) -> float:
-    stepper = integ.Stepper(preset(name), method=METHOD, dt=DT, tol=TOL)
+    stepper = integ.Stepper(preset(name), integrator=METHOD, dt=DT, tolerance=TOL)
     phi, w, total = phi0, 0.0, 0
     for _ in range(steps):
         out = stepper.advance(phi, w, 0.0)
@@ -118,7 +118,7 @@ def trajectory_substeps(name: str, phi0: float, steps: int = 200) -> float:
 
 def main() -> None:
     rng = np.random.default_rng(0)
-    print(f"default settings: paper, dt={DT} s, tol={TOL}, {METHOD}")
+    print(f"default settings: paper, dt={DT} s, tolerance={TOL}, {METHOD}")
     for num in (4096, 65536):
         r = batch(num, rng)
         line = (f"batch {num:>6}: kernel {r['kernel_ns']:7.1f} ns/roller-step, its RHS calls "

@@ -357,7 +357,7 @@ def test_quick_run_writes_the_results_with_machine_versions_and_command(wp, quic
     paper = results["scenes"][0]
     assert paper["steps"] == round(results["config"]["horizon_s"] / results["settings"]["dt"])
     default = paper["runs"][paper["default"]]
-    assert default["family"] == f"{wp.DEFAULT_METHOD} auto"
+    assert default["family"] == f"{wp.DEFAULT_INTEGRATOR} auto"
     assert default["finite"] and 0 < default["error"][0] < 1e-6
     env = results["environments"]
     assert env["vector_error_envs"] == results["config"]["vector_error_envs"]
@@ -421,7 +421,7 @@ def step_through(scene: Scene, torques: np.ndarray, dt: float) -> float:
     """φ [rad] at the end of the torques, stepped by the default integrator from rest."""
     phi, phi_dot = 0.0, 0.0
     for tau in torques:
-        r = integ.step(scene, phi, phi_dot, float(tau), dt, tol=1e-8)
+        r = integ.step(scene, phi, phi_dot, float(tau), dt, tolerance=1e-8)
         phi, phi_dot = r.phi, r.phi_dot
     return phi
 
@@ -436,8 +436,8 @@ def test_stepper_episode_matches_the_reference(wp) -> None:
     scene, dt = preset("paper"), wp.DT
     torques = [float(t) for t in wp.episode_torques(40, seed=1)]
     ref = _reference(wp, scene, np.array(torques), dt)
-    fine = integ.Stepper(scene, dt=dt, tol=wp.DEFAULT_TOL)
-    coarse = integ.Stepper(scene, method="euler", dt=dt, tol=1e-8, substeps=1)
+    fine = integ.Stepper(scene, dt=dt, tolerance=wp.DEFAULT_TOL)
+    coarse = integ.Stepper(scene, integrator="euler", dt=dt, tolerance=1e-8, substeps=1)
     err_fine = wp.global_error(wp.run_kernel(fine, torques).states, ref)
     err_coarse = wp.global_error(wp.run_kernel(coarse, torques).states, ref)
     assert err_fine[0] <= 100 * wp.DEFAULT_TOL, err_fine
@@ -544,11 +544,11 @@ def test_cost_row_gives_the_least_fixed_count_of_a_linear_scan() -> None:
         return max(abs(res.phi - ref[0]), abs(res.phi_dot - ref[1]))
 
     scan = next(n for n in range(1, 1000)
-                if err(integ.step(scene, phi, w, tau, dt, method="rk4", substeps=n)) <= tol)
+                if err(integ.step(scene, phi, w, tau, dt, integrator="rk4", substeps=n)) <= tol)
     assert scan & (scan - 1)  # not a power of two: the bisection decided it
     batch = Scene.stack([scene])
     a = [np.array([x]) for x in (phi, w, tau)]
-    auto = integ.step(batch, *a, dt, method="rk4", tol=tol)
+    auto = integ.step(batch, *a, dt, integrator="rk4", tolerance=tol)
     row = cost.compare(batch, *a, auto, ref.reshape(2, 1), np.zeros(1), "rk4", tol)
     assert row["measured"] == 1 and row["fixed_substeps"]["max"] == scan
     per_auto, per_fixed = 7, 4  # the pair's 8 stages, the first the last substep's end; RK4's 4

@@ -532,7 +532,7 @@ def test_scene_argument_object_and_preset(env_id):
 
 
 def _reference(scene, phi, phi_dot, tau, dt):
-    r = roller_gym.physics.step(scene, phi, phi_dot, tau, dt, method="dop853", tol=1e-13)
+    r = roller_gym.physics.step(scene, phi, phi_dot, tau, dt, integrator="dop853", tolerance=1e-13)
     return np.array([r.phi, r.phi_dot])
 
 
@@ -555,7 +555,7 @@ def test_dt_argument_sets_the_control_step():
 def test_integrator_argument_and_tolerance(integrator, tolerances):
     """Each integrator meets its tolerance on one step against DOP853 at 1e-13, and a
     tighter tolerance takes more substeps."""
-    if integrator not in roller_gym.physics.METHODS:
+    if integrator not in roller_gym.physics.INTEGRATORS:
         pytest.skip(f"{integrator} is not an integrator here")
     scene = preset("paper")
     substeps = []
@@ -583,7 +583,7 @@ def test_info_tol_met_is_the_integrators_flag(tol):
     vec = gym.make_vec("roller_gym/RollerStabilize-v2", num_envs=3, tolerance=tol)
     env.reset(options={"state": (0.5, 2.0)})
     vec.reset(options={"state": (0.5, 2.0)})
-    stepper = Stepper(scene, dt=0.05, tol=tol)
+    stepper = Stepper(scene, dt=0.05, tolerance=tol)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", RuntimeWarning)
         info = env.step(act(0.6))[4]
@@ -715,3 +715,32 @@ def test_subproc_vec_env_matches_dummy_vec_env(env_id):
     finally:
         sub.close()
         dummy.close()
+
+
+def test_one_construction_signature_from_gym_make_down_to_the_physics():
+    """RollerEnv, RollerVectorEnv and both entry points of every ID take the keywords of
+    roller_gym.config.Settings, with its defaults and its documentation; the physics'
+    steppers take the integrator and its tolerance under the same names."""
+    import dataclasses
+    import inspect
+
+    from roller_gym.config import Settings, setting_docs
+    from roller_gym.physics.integrators import BatchStepper, Stepper
+    from roller_gym.roller_env import RollerEnv
+    from roller_gym.vector_env import RollerVectorEnv
+
+    declared = {f.name: f.default for f in dataclasses.fields(Settings)}
+    spec = gym.spec("roller_gym/RollerStabilize-v2")
+    for maker in (RollerEnv, RollerVectorEnv, spec.entry_point, spec.vector_entry_point):
+        params = inspect.signature(maker).parameters
+        assert {name: params[name].default for name in declared} == declared, maker
+    for cls in (RollerEnv, RollerVectorEnv):
+        assert setting_docs().strip() in cls.__doc__
+    for stepper in (Stepper, BatchStepper):
+        names = inspect.signature(stepper).parameters
+        assert {"integrator", "tolerance", "dt", "substeps"} <= set(names)
+    env = gym.make("roller_gym/RollerStabilize-v2", integrator="rk4", tolerance=1e-6)
+    stepper = env.unwrapped._stepper
+    assert (stepper.integrator, stepper.tolerance) == ("rk4", 1e-6)
+    with pytest.raises(TypeError, match=r"'tol'.*allowed: scene, dt"):
+        RollerVectorEnv(2, tol=1e-6)

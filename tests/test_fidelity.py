@@ -1,5 +1,5 @@
 """Fidelity: over 10 s of seeded random torques, the environment's state against
-a reference integration, ``roller_gym.physics.step(..., method="dop853", tol=1e-13)`` per
+a reference integration, ``roller_gym.physics.step(..., integrator="dop853", tolerance=1e-13)`` per
 control step under the same torque sequence.
 
 ``tolerance`` is the target state error per control step (φ [rad], φ' [rad/s]), so:
@@ -31,7 +31,7 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 import pytest
-from roller_gym.physics import METHODS, step
+from roller_gym.physics import INTEGRATORS, step
 
 REF_TOL = 1e-13
 STEPS = 200  # 10 s at dt = 0.05 s
@@ -60,7 +60,7 @@ def test_state_matches_the_reference_within_tolerance(scene):
     if max_torque is not None:
         kwargs["max_torque"] = max_torque
     runs = {}
-    for method in (m for m in methods if m in METHODS):
+    for method in (m for m in methods if m in INTEGRATORS):
         env = gym.make("roller_gym/RollerStabilize-v2", integrator=method, **kwargs).unwrapped
         env.reset(seed=0, options=options)
         runs[method] = env
@@ -88,7 +88,7 @@ def test_state_matches_the_reference_within_tolerance(scene):
         tau = torques.pop()
         phi0 = np.array([before[m][0] for m in live] + [ref[0]])
         w0 = np.array([before[m][1] for m in live] + [ref[1]])
-        r = step(scene_obj, phi0, w0, tau, dt, method="dop853", tol=REF_TOL)
+        r = step(scene_obj, phi0, w0, tau, dt, integrator="dop853", tolerance=REF_TOL)
         assert r.finite.all()
         ref = np.array([r.phi[-1], r.phi_dot[-1]])
         for j, m in enumerate(live):

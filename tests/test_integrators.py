@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 from roller_gym.bench.cost import adversarial_sample, smallest_fixed_counts
 from roller_gym.physics import (
-    METHODS,
+    INTEGRATORS,
     PRESETS,
     Scene,
     analysis,
@@ -51,7 +51,8 @@ def test_scheme_table_rows_are_consistent():
     substep function has tolerances checked here; each Runge–Kutta pair satisfies the order
     conditions Σb = 1, Σbc = 1/2, Σbc² = 1/3, Σbc³ = 1/4, Σb a c = 1/6 (c = row sums of A), and
     its error weights sum to 0 (they compare two solutions of the same step)."""
-    assert integrators.DEFAULT_METHOD == "taylor" and set(METHODS) == set(integrators.SCHEMES)
+    assert integrators.DEFAULT_INTEGRATOR == "taylor"
+    assert set(INTEGRATORS) == set(integrators.SCHEMES)
     for name, row in integrators.SCHEMES.items():
         assert row.name == name
         assert (row.substep is None) == (name == "dop853")
@@ -129,7 +130,7 @@ def test_error_per_control_step_is_within_tol(method, name, cases):
     checked = 0
     for tol in TOLS[method]:
         for state, ref in cases[name]:
-            result = step(scene, *state, DT, method=method, tol=tol)
+            result = step(scene, *state, DT, integrator=method, tolerance=tol)
             assert result.finite
             if result.substeps >= integrators.MAX_SUBSTEPS:
                 assert result.substeps == integrators.MAX_SUBSTEPS
@@ -142,12 +143,13 @@ def test_error_per_control_step_is_within_tol(method, name, cases):
 
 @pytest.mark.parametrize("name", list(PRESETS))
 def test_dop853_reference_is_converged(name, cases):
-    """step(method="dop853", tol=1e-13), the test's own reference (max step dt/50) and RK4 at
-    a fixed 20,000 substeps (error ~ (λh)^4 ≈ 1e-13 or less) agree to 1e-10 on every preset."""
+    """step(integrator="dop853", tolerance=1e-13), the test's own reference (max step
+    dt/50) and RK4 at a fixed 20,000 substeps (error ~ (λh)^4 ≈ 1e-13 or less) agree to
+    1e-10 on every preset."""
     scene = PRESETS[name]
     for state, ref in cases[name][:3]:
-        own = step(scene, *state, DT, method="dop853", tol=1e-13)
-        fine = step(scene, *state, DT, method="rk4", substeps=20_000)
+        own = step(scene, *state, DT, integrator="dop853", tolerance=1e-13)
+        fine = step(scene, *state, DT, integrator="rk4", substeps=20_000)
         assert error(own, ref) <= 1e-10
         assert error(fine, ref) <= 1e-10
 
@@ -166,7 +168,7 @@ def test_observed_order_of_convergence(method, name):
         "midpoint": (DT, (10, 20, 40)), "euler": (DT, (100, 200, 400)),
     }[method]
     ref = reference(scene, *state, dt=dt)
-    errors = [error(step(scene, *state, dt, method=method, substeps=n), ref) for n in counts]
+    errors = [error(step(scene, *state, dt, integrator=method, substeps=n), ref) for n in counts]
     assert errors[-1] > 1e-13  # above rounding
     order = math.log(errors[0] / errors[-1]) / math.log(counts[-1] / counts[0])
     slack = {"rk8": 0.5, "taylor": 1.0}.get(method, 0.2)
@@ -200,7 +202,7 @@ def test_one_substep_is_the_textbook_scheme(method, name):
     """With substeps=1 the step is one step of the scheme as defined (with damping)."""
     scene = preset(name).replace(damping=0.03)
     for phi, w, torque in meaningful_states(scene, np.random.default_rng(11), 5):
-        out = step(scene, phi, w, torque, DT, method=method, substeps=1)
+        out = step(scene, phi, w, torque, DT, integrator=method, substeps=1)
         ref = _scheme_one_substep(scene, phi, w, torque, DT, method)
         assert out.phi == pytest.approx(ref[0], rel=1e-14, abs=1e-14)
         assert out.phi_dot == pytest.approx(ref[1], rel=1e-14, abs=1e-14)
@@ -229,7 +231,7 @@ def test_one_midpoint_substep_solves_the_midpoint_equations(name):
     h = DT / 10
     solved = 0
     for phi, w, torque in meaningful_states(scene, np.random.default_rng(12), 5):
-        out = step(scene, phi, w, torque, h, method="midpoint", substeps=1)
+        out = step(scene, phi, w, torque, h, integrator="midpoint", substeps=1)
         if not out.finite:
             assert (out.phi, out.phi_dot) == (phi, w)
             continue
@@ -256,8 +258,9 @@ def test_an_easy_scene_takes_fewer_substeps_than_a_stiff_one(method):
                 hard = predicted_substeps(preset(stiff), speed, DT, tol, method)
                 assert easy < hard or hard == integrators.MAX_SUBSTEPS == easy, (stiff, tol)
     # and the steps actually taken from rest:
-    easy = step(preset("solid_disc"), 0.3, 0.0, 0.0, DT, method=method, tol=TOLS[method][-1])
-    hard = step(preset("tight_fit"), 0.003, 0.0, 0.0, DT, method=method, tol=TOLS[method][-1])
+    loose = TOLS[method][-1]
+    easy = step(preset("solid_disc"), 0.3, 0.0, 0.0, DT, integrator=method, tolerance=loose)
+    hard = step(preset("tight_fit"), 0.003, 0.0, 0.0, DT, integrator=method, tolerance=loose)
     assert easy.substeps < hard.substeps
 
 
@@ -278,12 +281,12 @@ def test_step_rejects_bad_arguments():
     scene = preset("paper")
     with pytest.raises(ValueError, match=r"dt=0\.0"):
         step(scene, 0.0, 0.0, 0.0, 0.0)
-    with pytest.raises(ValueError, match="tol=-1"):
-        step(scene, 0.0, 0.0, 0.0, DT, tol=-1e-9)
+    with pytest.raises(ValueError, match="tolerance=-1"):
+        step(scene, 0.0, 0.0, 0.0, DT, tolerance=-1e-9)
     with pytest.raises(ValueError, match="substeps=0"):
         step(scene, 0.0, 0.0, 0.0, DT, substeps=0)
     with pytest.raises(ValueError, match="'leapfrog'"):
-        step(scene, 0.0, 0.0, 0.0, DT, method="leapfrog")
+        step(scene, 0.0, 0.0, 0.0, DT, integrator="leapfrog")
     with pytest.raises(ValueError, match="dop853"):
         predicted_substeps(scene, 0.0, DT, 1e-9, "dop853")
 
@@ -304,8 +307,8 @@ def test_concentric_roller_agrees_with_the_general_equation(method):
         concentric = preset(base).replace(e=0.0, damping=0.02)
         general = concentric.replace(e=1e-300)
         for state in ((0.4, 1.5, 0.2), (-2.0, -4.0, -0.3)):
-            a = step(concentric, *state, DT, method=method, tol=tol)
-            b = step(general, *state, DT, method=method, tol=tol)
+            a = step(concentric, *state, DT, integrator=method, tolerance=tol)
+            b = step(general, *state, DT, integrator=method, tolerance=tol)
             assert a.substeps == b.substeps
             assert abs(a.phi - b.phi) <= 1e-14 * (1 + abs(a.phi))
             assert abs(a.phi_dot - b.phi_dot) <= 1e-14 * (1 + abs(a.phi_dot))
@@ -324,9 +327,9 @@ def test_batch_step_equals_single_steps_exactly(method):
     states = [meaningful_states(s, rng, 1)[0] for s in scenes]
     phi, w, tau = (np.array(x) for x in zip(*states, strict=True))
     tol = TOLS[method][0]
-    out = step(batch, phi, w, tau, DT, method=method, tol=tol)
+    out = step(batch, phi, w, tau, DT, integrator=method, tolerance=tol)
     for i, scene in enumerate(scenes):
-        one = step(scene, phi[i], w[i], tau[i], DT, method=method, tol=tol)
+        one = step(scene, phi[i], w[i], tau[i], DT, integrator=method, tolerance=tol)
         for field in ("phi", "phi_dot", "phi_ddot", "substeps", "finite", "energy",
                       "normal_force", "friction_force", "liftoff_margin", "slip_margin",
                       "error_estimate", "tol_met"):
@@ -341,9 +344,9 @@ def test_large_parallel_batch_equals_single_steps_exactly():
     scene = Scene(m=rng.uniform(0.5, 2, n), e=rng.uniform(0, 0.08, n),
                   k=rng.uniform(0.03, 0.08, n), R=rng.choice([0.3, 1.0, math.inf, -0.5], n))
     phi, w, tau = rng.uniform(-1, 1, n), rng.uniform(-3, 3, n), rng.uniform(-0.3, 0.3, n)
-    out = step(scene, phi, w, tau, DT, tol=1e-7)
+    out = step(scene, phi, w, tau, DT, tolerance=1e-7)
     for i in rng.choice(n, 200, replace=False):
-        one = step(scene.item(i), phi[i], w[i], tau[i], DT, tol=1e-7)
+        one = step(scene.item(i), phi[i], w[i], tau[i], DT, tolerance=1e-7)
         assert out.phi[i] == one.phi and out.phi_dot[i] == one.phi_dot
         assert out.substeps[i] == one.substeps
 
@@ -363,7 +366,7 @@ def test_dop853_batch_matches_single_references():
     scenes = list(PRESETS.values())
     batch = Scene.stack(scenes)
     phi = np.linspace(-0.5, 0.5, len(scenes))
-    out = step(batch, phi, 1.0, 0.1, DT, method="dop853", tol=1e-13)
+    out = step(batch, phi, 1.0, 0.1, DT, integrator="dop853", tolerance=1e-13)
     for i, scene in enumerate(scenes):
         ref = reference(scene, phi[i], 1.0, 0.1)
         assert abs(out.phi[i] - ref[0]) <= 1e-10 and abs(out.phi_dot[i] - ref[1]) <= 1e-10
@@ -379,7 +382,7 @@ def test_step_reports_the_end_state_and_the_worst_margins(name):
     than the minimum along the DOP853 trajectory (sampled densely) by more than 1e-6."""
     scene = preset(name)
     for state in meaningful_states(scene, np.random.default_rng(7), 4):
-        out = step(scene, *state, DT, tol=1e-10)
+        out = step(scene, *state, DT, tolerance=1e-10)
         acc = analysis.acceleration(scene, out.phi, out.phi_dot, state[2])
         end = analysis.contact(scene, out.phi, out.phi_dot, state[2])
         start = analysis.contact(scene, state[0], state[1], state[2])
@@ -404,7 +407,8 @@ def test_step_reports_the_end_state_and_the_worst_margins(name):
 
 def _run(scene: Scene, phi, w, torque, steps, method, tol=1e-9, substeps=0):
     """Many control steps through a Stepper; the trajectory's φ and φ' (steps + 1 each)."""
-    stepper = integrators.Stepper(scene, method=method, dt=DT, tol=tol, substeps=substeps or None)
+    stepper = integrators.Stepper(scene, integrator=method, dt=DT, tolerance=tol,
+                                  substeps=substeps or None)
     phis, ws = np.empty(steps + 1), np.empty(steps + 1)
     phis[0], ws[0] = phi, w
     for i in range(steps):
@@ -548,7 +552,7 @@ def test_hard_scenes_stay_within_tol(name, method):
     tol = 1e-7
     rng = np.random.default_rng(list(HARD).index(name))
     for state in meaningful_states(scene, rng, 3 if name == "R=1.001r" else 4):
-        out = step(scene, *state, DT, method=method, tol=tol)
+        out = step(scene, *state, DT, integrator=method, tolerance=tol)
         assert out.finite
         assert out.tol_met, (state, out.substeps)
         assert error(out, reference(scene, *state)) <= tol, state
@@ -560,7 +564,7 @@ def test_rim_mass_through_the_dip_of_j_i():
     scene = HARD["e=0.999r,k=0.01r"]
     w0 = math.sqrt(2 * analysis.energy(scene, 1.0, 0.0) / analysis.moment_of_inertia(scene, 0.0))
     for method in ("rk4", "rk8", "taylor"):
-        out = step(scene, -0.01, w0, 0.0, DT, method=method, tol=1e-7)
+        out = step(scene, -0.01, w0, 0.0, DT, integrator=method, tolerance=1e-7)
         assert out.tol_met, method
         assert error(out, reference(scene, -0.01, w0, 0.0)) <= 1e-7
         assert abs(out.energy - analysis.energy(scene, -0.01, w0)) <= 1e-6
@@ -613,7 +617,7 @@ def test_a_step_that_cannot_stay_finite_reports_nan_and_keeps_the_state(state, m
     state before the step, every other float field NaN (so it never reads as a lift-off)."""
     scene = preset("paper")
     with np.errstate(all="ignore"):
-        out = step(scene, *state, DT, method=method, tol=1e-6)
+        out = step(scene, *state, DT, integrator=method, tolerance=1e-6)
     assert out.finite is False
     assert (out.phi, out.phi_dot) == state[:2]
     for field in NAN_FIELDS:
@@ -629,7 +633,7 @@ def test_failure_semantics_for_huge_dt_and_gravity(method):
     cases = [(preset("paper"), 1e6), (preset("paper").replace(g=1e300), DT)]
     for scene, dt in cases:
         with np.errstate(all="ignore"):
-            out = step(scene, 0.3, 1.0, 0.1, dt, method=method, tol=1e-6)
+            out = step(scene, 0.3, 1.0, 0.1, dt, integrator=method, tolerance=1e-6)
         if out.finite:
             assert all(math.isfinite(getattr(out, f)) for f in NAN_FIELDS)
         else:
@@ -637,8 +641,8 @@ def test_failure_semantics_for_huge_dt_and_gravity(method):
             assert all(math.isnan(getattr(out, f)) for f in NAN_FIELDS)
     batch = Scene.stack([preset("paper"), preset("paper").replace(g=1e300)])
     with np.errstate(all="ignore"):
-        out = step(batch, 0.3, 1.0, 0.1, DT, method=method, tol=1e-6)
-    alone = step(preset("paper"), 0.3, 1.0, 0.1, DT, method=method, tol=1e-6)
+        out = step(batch, 0.3, 1.0, 0.1, DT, integrator=method, tolerance=1e-6)
+    alone = step(preset("paper"), 0.3, 1.0, 0.1, DT, integrator=method, tolerance=1e-6)
     assert out.finite[0] and out.phi[0] == alone.phi
 
 
@@ -703,7 +707,7 @@ def test_adversarial_steps_stay_within_tol(method, adversarial):
     most 1 % report tol_met False (measured: one rk4 step at 1e-8, at 8e-4 tol)."""
     scene, phi, w, tau, ref, uncertainty = adversarial
     for tol in (1e-6, 1e-8):
-        out = step(scene, phi, w, tau, DT, method=method, tol=tol)
+        out = step(scene, phi, w, tau, DT, integrator=method, tolerance=tol)
         err = np.maximum(np.abs(out.phi - ref[0]), np.abs(out.phi_dot - ref[1]))
         checked = uncertainty <= tol / 10
         assert checked.sum() >= 450, checked.sum()
@@ -739,7 +743,7 @@ def test_spikes_of_phi_ddot_stay_within_tol_and_budget(name, method):
     budget (measured: rk8 7444 and 5606 substeps, rk4 52757 and 41080)."""
     scene, state, tol = SPIKES[name]
     ref = reference(scene, *state)
-    out = step(scene, *state, DT, method=method, tol=tol)
+    out = step(scene, *state, DT, integrator=method, tolerance=tol)
     assert out.finite and out.tol_met
     assert error(out, ref) <= tol
     assert out.substeps <= integrators.MAX_SUBSTEPS // 2, out.substeps
@@ -751,7 +755,7 @@ def _smallest_fixed_count(scene, state, tol, method="rk8", dt=DT):
     ref = reference(scene, *state, dt=dt)
 
     def meets(_index, counts):
-        return np.array([error(step(scene, *state, dt, method=method, substeps=int(n)), ref)
+        return np.array([error(step(scene, *state, dt, integrator=method, substeps=int(n)), ref)
                          <= tol for n in counts])
 
     (n,) = smallest_fixed_counts(meets, 1, most=2**17)
@@ -765,7 +769,7 @@ def test_smallest_fixed_count_is_the_least_count_meeting_tol():
     scene, state, tol = preset("paper"), (0.7, 2.0, 0.3), 1e-10
     ref = reference(scene, *state)
     scan = next(n for n in range(1, 1000)
-                if error(step(scene, *state, DT, method="rk4", substeps=n), ref) <= tol)
+                if error(step(scene, *state, DT, integrator="rk4", substeps=n), ref) <= tol)
     assert scan > 8 and scan & (scan - 1)  # not a power of two: the bisection is exercised
     assert _smallest_fixed_count(scene, state, tol, method="rk4") == scan
 
@@ -779,7 +783,7 @@ def test_tiny_k_rim_scene_takes_about_as_few_substeps_as_needed(method):
                   k=0.0023095850796728754)
     state, tol = (-2.6465, 1.8617, 3.9163), 1e-9
     smallest = _smallest_fixed_count(scene, state, tol, method=method, dt=0.01)
-    sub = step(scene, *state, 0.01, method=method, tol=tol)
+    sub = step(scene, *state, 0.01, integrator=method, tolerance=tol)
     assert sub.substeps <= 4 * smallest, (sub.substeps, smallest)
     assert error(sub, reference(scene, *state, dt=0.01)) <= tol
 
@@ -804,7 +808,7 @@ def test_rim_mass_cost_follows_its_trajectory(method):
     scene's worst point took 7× with rk8)."""
     scene, tol = preset("rim_mass"), 1e-8
     scheme = integrators.scheme(method)
-    stepper = integrators.Stepper(scene, method=method, dt=DT, tol=tol)
+    stepper = integrators.Stepper(scene, integrator=method, dt=DT, tolerance=tol)
     state = (0.02, 0.0, 0.0)
     adaptive, smallest = [], []
     for _ in range(20):
@@ -824,13 +828,13 @@ def test_euler_past_its_substep_cap_reports_the_tolerance_unmet():
     substeps: it takes that many, and its error against DOP853, over tol, is reported as
     tol_met=False with a warning (the same step at tol 1e-4 is within its prediction)."""
     scene, state = preset("paper"), (0.5, 2.0, 0.3)
-    stepper = integrators.Stepper(scene, method="euler", dt=DT, tol=1e-8)
+    stepper = integrators.Stepper(scene, integrator="euler", dt=DT, tolerance=1e-8)
     with pytest.warns(RuntimeWarning, match="of the 200000 substeps a step may take"):
         out = dict(zip(integrators.STEP_FIELDS, stepper.advance(*state), strict=True))
     assert out["substeps"] == integrators.MAX_SUBSTEPS == 200_000
     assert out["finite"] and not out["tol_met"]
     assert error(StepResultView(out), reference(scene, *state)) > 1e-8
-    loose = step(scene, *state, DT, method="euler", tol=1e-4)
+    loose = step(scene, *state, DT, integrator="euler", tolerance=1e-4)
     assert loose.tol_met and loose.substeps < integrators.MAX_SUBSTEPS
 
 
@@ -838,8 +842,8 @@ def test_unreachable_tolerance_is_flagged_and_warned_not_looped():
     """tol = 1e-16 cannot be met in float64 at |φ| ~ 1: the step ends (at most
     2·MAX_SUBSTEPS substeps), reports tol_met=False, and the Stepper warns once."""
     scene = preset("tight_fit")
-    stepper = integrators.Stepper(scene, dt=DT, tol=1e-16)
-    with pytest.warns(RuntimeWarning, match="tol=1e-16"):
+    stepper = integrators.Stepper(scene, dt=DT, tolerance=1e-16)
+    with pytest.warns(RuntimeWarning, match="tolerance=1e-16"):
         out = stepper.advance(1.0, 3.0, 0.0)
     fields = dict(zip(integrators.STEP_FIELDS, out, strict=True))
     assert fields["finite"] and not fields["tol_met"]
@@ -866,11 +870,11 @@ def test_scalar_and_batch_steppers_agree_bit_for_bit(method, substeps):
     scene = Scene(m=params[0], r=params[1], R=params[2], e=params[3], k=params[4],
                   damping=params[6])
     phi, w, tau = phi, w / 10, tau / 10  # keep the low-order schemes' counts moderate
-    batch = integrators.BatchStepper(n, method=method, dt=DT, tol=1e-5, substeps=substeps)
+    batch = integrators.BatchStepper(n, integrator=method, dt=DT, tolerance=1e-5, substeps=substeps)
     batch.set_scenes(scene)
     picks = np.random.default_rng(1).choice(n, 25, replace=False)
-    ones = {int(i): integrators.Stepper(scene.item(int(i)), method=method, dt=DT, tol=1e-5,
-                                        substeps=substeps) for i in picks}
+    ones = {int(i): integrators.Stepper(scene.item(int(i)), integrator=method, dt=DT,
+                                        tolerance=1e-5, substeps=substeps) for i in picks}
     states = {i: (float(phi[i]), float(w[i])) for i in ones}
     for _ in range(3):
         with np.errstate(all="ignore"), warnings.catch_warnings():
@@ -965,13 +969,13 @@ def test_rk4_error_control_is_a_5_4_pair_step():
     for i in range(s + 1):
         k[i] = f(y0 + DT * a[i] @ k)
     y1 = y0 + DT * b @ k
-    one = integrators.Stepper(scene, method="rk4", dt=DT, tol=1e-8, substeps=1)
+    one = integrators.Stepper(scene, integrator="rk4", dt=DT, tolerance=1e-8, substeps=1)
     one._tab = tab  # one substep of the error-control pair
     out = integrators.StepResult(*one.advance(phi, w, tau))
     assert out.phi == pytest.approx(y1[0], rel=1e-14)
     assert out.phi_dot == pytest.approx(y1[1], rel=1e-14)
     assert out.error_estimate == pytest.approx(np.max(np.abs(DT * tab[s + 2] @ k)), rel=1e-9)
-    classical = step(scene, phi, w, tau, DT, method="rk4", substeps=1)  # fixed substeps
+    classical = step(scene, phi, w, tau, DT, integrator="rk4", substeps=1)  # fixed substeps
     assert abs(classical.phi - out.phi) > 1e3 * abs(out.phi) * 1e-16
 
 
@@ -1027,7 +1031,7 @@ def test_pickled_batch_stepper_keeps_its_padded_rows_and_its_steps():
     padded again (``row_table``), and it takes the same step as the original."""
     import pickle
 
-    stepper = integrators.BatchStepper(4096, dt=DT, tol=1e-8)
+    stepper = integrators.BatchStepper(4096, dt=DT, tolerance=1e-8)
     stepper.set_scenes(preset("paper"))
     phi, w = np.linspace(-1, 1, 4096), np.linspace(2, -2, 4096)
     stepper.run(phi, w, 0.1 * w)  # a carried substep size to continue from
@@ -1049,8 +1053,8 @@ def rim_mass_dip():
     tau = rng.uniform(-1, 1, n) * scene.m * scene.g * scene.r
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        ref = step(scene, phi, w, tau, dt, method="dop853", tol=1e-13)
-        ref12 = step(scene, phi, w, tau, dt, method="dop853", tol=1e-12)
+        ref = step(scene, phi, w, tau, dt, integrator="dop853", tolerance=1e-13)
+        ref12 = step(scene, phi, w, tau, dt, integrator="dop853", tolerance=1e-12)
     uncertainty = np.maximum(np.abs(ref.phi - ref12.phi), np.abs(ref.phi_dot - ref12.phi_dot))
     return scene, (phi, w, tau, dt), ref, uncertainty
 
@@ -1060,7 +1064,7 @@ def _dip_errors(rim_mass_dip, method, tol):
     scene, (phi, w, tau, dt), ref, uncertainty = rim_mass_dip
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        out = step(scene, phi, w, tau, dt, method=method, tol=tol)
+        out = step(scene, phi, w, tau, dt, integrator=method, tolerance=tol)
     err = np.maximum(np.abs(out.phi - ref.phi), np.abs(out.phi_dot - ref.phi_dot))
     return err, uncertainty <= tol / 10, out
 
@@ -1099,17 +1103,17 @@ def test_a_step_ending_past_the_domain_of_the_sines_is_failed(method):
     ordinary step, 50 rad on."""
     scene, domain = Scene(R=math.inf, e=0.0), trig.DOMAIN
     assert domain == 2.0**50 and math.isnan(trig.sin(domain * 1.01))
-    out = step(scene, domain - 10.0, 1000.0, 0.0, DT, method=method)
+    out = step(scene, domain - 10.0, 1000.0, 0.0, DT, integrator=method)
     assert not out.finite and (out.phi, out.phi_dot) == (domain - 10.0, 1000.0)
     assert math.isnan(out.energy) and math.isnan(out.normal_force)
-    inside = step(scene, domain - 100.0, 1000.0, 0.0, DT, method=method)
+    inside = step(scene, domain - 100.0, 1000.0, 0.0, DT, integrator=method)
     assert inside.finite and abs(inside.phi - (domain - 50.0)) <= 1.0
 
 
 def test_taylor_at_rest_over_a_huge_step_stays_finite():
     """At rest at the bottom with no torque every coefficient past the first is 0: the
     substep is the whole step, however long (2e19 s: h¹⁷ overflows), and nothing changes."""
-    out = step(preset("paper"), 0.0, 0.0, 0.0, 2e19, method="taylor", tol=1e-9)
+    out = step(preset("paper"), 0.0, 0.0, 0.0, 2e19, integrator="taylor", tolerance=1e-9)
     assert out.finite and out.tol_met
     assert (out.phi, out.phi_dot, out.error_estimate) == (0.0, 0.0, 0.0)
 
@@ -1121,7 +1125,7 @@ def test_a_tolerance_below_rounding_is_reported_out_of_reach(method):
     scene, state = preset("paper"), (1.0, 3.0, 0.0)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        out = step(scene, *state, 0.01, method=method, tol=1e-20)
+        out = step(scene, *state, 0.01, integrator=method, tolerance=1e-20)
     assert out.finite and not out.tol_met
     assert error(out, reference(scene, *state, dt=0.01)) <= 1e-10
 
@@ -1135,7 +1139,7 @@ def test_taylor_does_not_flag_a_reachable_tolerance():
     n = 300
     phi, w = rng.uniform(-3, 3, n), rng.uniform(-60, 60, n)
     tau = rng.uniform(-1, 1, n) * scene.m * scene.g * scene.r
-    out = step(scene, phi, w, tau, 0.02, method="taylor", tol=1e-10)
+    out = step(scene, phi, w, tau, 0.02, integrator="taylor", tolerance=1e-10)
     assert out.finite.all() and out.tol_met.all(), int((~out.tol_met).sum())
 
 
@@ -1146,11 +1150,11 @@ def test_dop853_reports_tol_met_only_where_scipy_kept_the_tolerance():
     for tol, kept in ((1e-8, True), (1e-15, False)):
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            out = step(scene, 0.3, 0.5, 0.1, DT, method="dop853", tol=tol)
+            out = step(scene, 0.3, 0.5, 0.1, DT, integrator="dop853", tolerance=tol)
         loosened = any("rtol" in str(w.message) for w in caught)
         assert loosened == (not kept)  # scipy's own account of what it did
         assert out.finite and bool(out.tol_met) == kept
-        others = step(scene, 0.3, 0.5, 0.1, DT, method="rk8", tol=tol)
+        others = step(scene, 0.3, 0.5, 0.1, DT, integrator="rk8", tolerance=tol)
         assert bool(others.tol_met) == kept
 
 
@@ -1161,13 +1165,13 @@ def test_a_carried_substep_size_never_fails_a_step_that_a_fresh_one_passes():
     scene = PRESETS["rim_mass"]
     first = (2.939902186110369, 4.969354228348603, -0.04551300450597362)
     second = (0.03250393038817867, 2.83564580148128, 0.22713056202077542)
-    fresh = integrators.Stepper(scene, method="rk8", dt=0.05, tol=1e-6)
+    fresh = integrators.Stepper(scene, integrator="rk8", dt=0.05, tolerance=1e-6)
     expected = fresh.advance(*second)
     ref = reference(scene, *second[:2], second[2])
     assert expected[4] and max(abs(expected[0] - ref[0]), abs(expected[1] - ref[1])) <= 1e-6
     for method in ("rk8", "rk4"):
         rng = np.random.default_rng(5)
-        stepper = integrators.Stepper(scene, method=method, dt=0.05, tol=1e-6)
+        stepper = integrators.Stepper(scene, integrator=method, dt=0.05, tolerance=1e-6)
         states = [first, second] + [(rng.uniform(-6, 6), rng.uniform(-8, 8),
                                      rng.uniform(-0.3, 0.3)) for _ in range(30)]
         for state in states:
@@ -1188,6 +1192,6 @@ def test_no_step_takes_more_substeps_than_the_documented_budget(method, case):
     reach (it took 400,001 at tol 1e-300 and 385,786 at R = 1.000001 r)."""
     scene, tol = ((PRESETS["paper"], 1e-300) if case == "tolerance 1e-300" else
                   (Scene(R=0.1000001), 1e-8))
-    out = step(scene, 0.4, 1.0, 0.2, DT, method=method, tol=tol)
+    out = step(scene, 0.4, 1.0, 0.2, DT, integrator=method, tolerance=tol)
     assert out.substeps <= integrators.MAX_SUBSTEPS
     assert out.finite

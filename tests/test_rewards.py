@@ -258,9 +258,9 @@ def test_a_step_and_its_outcome_in_one_call_are_the_two_calls(method):
         for way in ("fused", "two calls", "bound"):
             kernel = episode.OutcomeKernel(task, n)
             if n == 1:
-                stepper = integ.Stepper(scene, method=method, dt=0.05, tol=tol)
+                stepper = integ.Stepper(scene, integrator=method, dt=0.05, tolerance=tol)
             else:
-                stepper = integ.BatchStepper(n, method=method, dt=0.05, tol=tol)
+                stepper = integ.BatchStepper(n, integrator=method, dt=0.05, tolerance=tol)
                 stepper.set_scenes(scene)
             context = np.linspace(0.1, 0.6, len(episode.CONTEXT_FIELDS))[:, None]
             kernel.context[:] = context

@@ -230,7 +230,7 @@ def test_the_accept_loops_of_the_adaptive_kernel_run_in_simd_lanes():
     io = np.zeros((len(integ.ROWS), 4))
     io[: len(integ.SCENE_FIELDS)] = integ.scene_arrays(preset("paper"), 4)
     sch = integ.SCHEMES["rk8"]
-    cfg = integ.Stepper(preset("paper"), method="rk8", dt=0.05, tol=1e-8)._cfg
+    cfg = integ.Stepper(preset("paper"), integrator="rk8", dt=0.05, tolerance=1e-8)._cfg
     assert dict(zip(integ.CFG_FIELDS, cfg, strict=True))["tol_share"] == sch.tol_share
     fn(io, 0, 4, sch.tableau, cfg)
     assert io[integ._ROW["finite"]].all()

@@ -137,7 +137,7 @@ def references(scene: Scene, phi: np.ndarray, w: np.ndarray, tau: np.ndarray, dt
         for group in np.array_split(order, max(1, math.ceil(n / REFERENCE_GROUP))):
             with np.errstate(all="ignore"):
                 res = integ.step(_take(scene, group), phi[group], w[group], tau[group], dt,
-                                 method="dop853", tol=rtol)
+                                 integrator="dop853", tolerance=rtol)
             out[0, group] = np.where(res.finite, res.phi, np.nan)
             out[1, group] = np.where(res.finite, res.phi_dot, np.nan)
         runs.append(out)
@@ -160,7 +160,7 @@ def fixed_errors(scene: Scene, phi: np.ndarray, w: np.ndarray, tau: np.ndarray,
     for n in np.unique(counts):
         idx = np.flatnonzero(counts == n)
         with np.errstate(all="ignore"):
-            res = integ.step(_take(scene, idx), phi[idx], w[idx], tau[idx], dt, method=method,
+            res = integ.step(_take(scene, idx), phi[idx], w[idx], tau[idx], dt, integrator=method,
                              substeps=int(n))
         err[idx] = _errors(res, ref[:, idx])
     return err
@@ -288,7 +288,7 @@ def carried_steps(traj: Trajectories, method: str, tol: float, dt: float = DT
     proposed substep size from its step to the next, as the environments step: the results
     of the steps after the first (flattened, step-major), whose first substeps were carried."""
     steps, _, n = traj.states.shape
-    stepper = integ.BatchStepper(n, method=method, dt=dt, tol=tol)
+    stepper = integ.BatchStepper(n, integrator=method, dt=dt, tolerance=tol)
     stepper.set_scenes(traj.scene)
     out = []
     for i in range(steps - 1):
@@ -328,7 +328,7 @@ def measure(cfg: CostConfig, command: str = "",
             progress(f"cost {method} tol {tol:.0e}: automatic against smallest fixed counts")
             t1 = time.perf_counter()
             with np.errstate(all="ignore"):
-                auto = integ.step(scene, phi, w, tau, DT, method=method, tol=tol)
+                auto = integ.step(scene, phi, w, tau, DT, integrator=method, tolerance=tol)
             row = compare(scene, phi, w, tau, auto, ref, unc, method, tol)
             rows.append({"variant": "stateless", **row})
             carried = carried_steps(traj, method, tol)

@@ -128,7 +128,7 @@ def section_method(results: Results) -> list[str]:
         "which is what `tol` bounds.",
         "- **Cost**: best-of-repeats wall time of the episode, per simulated second (a Python "
         "loop of one call per control step: `integrators.Stepper.advance`, the stepper the "
-        "environment steps with, `integrators.step(method='dop853')`, "
+        "environment steps with, `integrators.step(integrator='dop853')`, "
         "`mujoco.mj_step(model, data, n)`). `steps/s` = control steps per second of the "
         "physics alone, the ceiling of an environment's steps/s.",
         "- **Families**: `euler` = semi-implicit Euler with n fixed substeps (n = 1 is "

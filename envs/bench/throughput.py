@@ -249,7 +249,7 @@ def measure_arithmetic(stepper: Any, base: Any, tau: np.ndarray, repeats: int) -
     x[integ._TI_PHI], x[integ._TI_W], x[integ._TI_TAU] = base.phi, base.phi_dot, tau
     x[integ._TI_REST], x[integ._TI_FLOOR] = stepper.dt, 1e-12 * stepper.dt
     lanes = np.empty(integ._T_WIDTH * n)
-    rate = stepper.tol * scheme.tol_share / stepper.dt
+    rate = stepper.tolerance * scheme.tol_share / stepper.dt
 
     def expand() -> None:
         for _ in range(20):

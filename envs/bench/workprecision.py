@@ -63,7 +63,7 @@ __all__ = ["SCENES", "SCENE_NOTES", "Config", "episode_torques", "global_error",
 DT = float(DEFAULT_DT)
 DEFAULT_TOL = float(DEFAULT_TOLERANCE)
 MAX_TORQUE = float(Task.default_max_torque)
-DEFAULT_METHOD: str = inspect.signature(RollerEnv).parameters["integrator"].default
+DEFAULT_INTEGRATOR: str = inspect.signature(RollerEnv).parameters["integrator"].default
 #: The reference: DOP853 at rtol = atol = REFERENCE_TOL.
 REFERENCE_TOL = 1e-13
 #: The bound [rad] on the 10-s episode's state error.
@@ -197,7 +197,7 @@ def run_dop853(scene: Scene, torques: Sequence[float], dt: float, tol: float,
     phi, w = phi0, phi_dot0
     states[0] = phi, w
     for i, tau in enumerate(torques):
-        res = integ.step(scene, phi, w, tau, dt, method="dop853", tol=tol)
+        res = integ.step(scene, phi, w, tau, dt, integrator="dop853", tolerance=tol)
         if not res.finite:
             states[i + 1:] = np.nan
             return Trajectory(states, subs, False)
@@ -342,7 +342,7 @@ def build_runs(cfg: Config, name: str, scene: Scene, torques: list[float]) -> li
         auto = family.endswith("auto")
         for x in settings:
             tol, n = (x, None) if auto else (DEFAULT_TOL, int(x))
-            stepper = Stepper(scene, method=method, dt=DT, tol=tol, substeps=n)
+            stepper = Stepper(scene, integrator=method, dt=DT, tolerance=tol, substeps=n)
             runs.append(Run(
                 name, family, f"tol {tol:.0e}" if auto else f"×{n}",
                 lambda s=stepper: run_kernel(s, torques), stepper=stepper, setting=x, tol=tol,
@@ -384,7 +384,7 @@ def measure_scene(cfg: Config, name: str) -> SceneResult:
             run.local = local_error(run.stepper, ref.states, tq)
         elif run.sim is not None:
             run.local = mujoco_local_error(run.sim, ref.states, tq, DT)
-    default = next(r for r in runs if r.family == f"{DEFAULT_METHOD} auto"
+    default = next(r for r in runs if r.family == f"{DEFAULT_INTEGRATOR} auto"
                    and r.tol == DEFAULT_TOL)
     return SceneResult(name, scene, torques, ref, ref_seconds, floor, runs, default,
                        predictable_s=horizon_ok)
@@ -416,10 +416,10 @@ def measure_energy(cfg: Config, result: SceneResult) -> None:
         ("midpoint ×10", "midpoint", DEFAULT_TOL, 10),
         ("rk4 ×10", "rk4", DEFAULT_TOL, 10),
         ("rk8 ×4", "rk8", DEFAULT_TOL, 4),
-        (f"{DEFAULT_METHOD} auto tol {DEFAULT_TOL:.0e} (default)", DEFAULT_METHOD,
+        (f"{DEFAULT_INTEGRATOR} auto tol {DEFAULT_TOL:.0e} (default)", DEFAULT_INTEGRATOR,
          DEFAULT_TOL, None),
     ):
-        stepper = Stepper(scene, method=method, dt=DT, tol=tol, substeps=n)
+        stepper = Stepper(scene, integrator=method, dt=DT, tolerance=tol, substeps=n)
         t0 = time.perf_counter()
         traj = run_kernel(stepper, zeros, phi0, w0)
         seconds = time.perf_counter() - t0
@@ -536,7 +536,7 @@ def settings() -> dict[str, Any]:
     settings (SI units: s, N·m, rad)."""
     tuned = mjr.tuned(1.0)  # per unit timestep
     return {
-        "dt": DT, "tolerance": DEFAULT_TOL, "method": DEFAULT_METHOD,
+        "dt": DT, "tolerance": DEFAULT_TOL, "method": DEFAULT_INTEGRATOR,
         "max_torque": MAX_TORQUE, "reference_tol": REFERENCE_TOL,
         "target_error": TARGET_ERROR, "seed": SEED, "slow_s": SLOW_S,
         "parallel_threshold": integ.PARALLEL_THRESHOLD,
@@ -566,7 +566,8 @@ def measure(cfg: Config, command: str, progress: Callable[[str], None] = timing.
     mujoco.set_mju_user_warning(lambda _msg: None)  # divergence is detected from mjData
     progress("compiling (or loading) the kernels")  # compilation is not what is measured
     for method in ("rk4", "rk8", "taylor", "euler", "midpoint"):
-        Stepper(SCENES["paper"], method=method, dt=DT, tol=DEFAULT_TOL).advance(0.1, 0.0, 0.0)
+        Stepper(SCENES["paper"], integrator=method, dt=DT,
+                tolerance=DEFAULT_TOL).advance(0.1, 0.0, 0.0)
     results = []
     for name in cfg.scenes:
         t0 = time.perf_counter()

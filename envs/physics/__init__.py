@@ -23,7 +23,7 @@ from roller_gym.physics import analysis, compiling
 from roller_gym.physics.analysis import *  # noqa: F403  (its __all__: kinematics, contact, energy, ...)
 from roller_gym.physics.forms import FORMS
 from roller_gym.physics.integrators import (
-    METHODS,
+    INTEGRATORS,
     SCHEMES,
     BatchStepper,
     Stepper,
@@ -38,7 +38,7 @@ compiling.install()
 __all__ = [
     *analysis.__all__,
     "FORMS",
-    "METHODS",
+    "INTEGRATORS",
     "SCHEMES",
     "BatchStepper",
     "Stepper",

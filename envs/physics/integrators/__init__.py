@@ -2,7 +2,7 @@
 kernels and the steppers that run them. Why each rule is what it is, what was measured and
 what was tried: ``docs/INTEGRATORS.md``.
 
-**Schemes** (:data:`SCHEMES`, one :class:`Scheme` row each; the ``method`` argument is its
+**Schemes** (:data:`SCHEMES`, one :class:`Scheme` row each; the ``integrator`` argument is its
 key): ``"taylor"`` (the default: the Taylor series of the motion to degree 18, its substep
 size chosen after expanding), ``"rk8"`` (Dormand–Prince 8(5,3)) and ``"rk4"``
 (Bogacki–Shampine 5(4); classical RK4 with fixed ``substeps``) under error control;
@@ -49,7 +49,13 @@ from roller_gym.physics.integrators.rules import (
     PARALLEL_THRESHOLD,
     ROUNDOFF_FACTOR,
 )
-from roller_gym.physics.integrators.schemes import DEFAULT_METHOD, METHODS, SCHEMES, Scheme, scheme
+from roller_gym.physics.integrators.schemes import (
+    DEFAULT_INTEGRATOR,
+    INTEGRATORS,
+    SCHEMES,
+    Scheme,
+    scheme,
+)
 from roller_gym.physics.integrators.steppers import (
     CONTACT_FIELDS,
     BatchStepper,
@@ -89,10 +95,10 @@ __all__ = [
     "CFG_FIELDS",
     "CHUNK",
     "CONTACT_FIELDS",
-    "DEFAULT_METHOD",
+    "DEFAULT_INTEGRATOR",
     "INPUT_FIELDS",
+    "INTEGRATORS",
     "MAX_SUBSTEPS",
-    "METHODS",
     "PARALLEL_THRESHOLD",
     "ROUNDING_SHARE",
     "ROUNDOFF_FACTOR",

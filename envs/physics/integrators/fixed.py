@@ -18,7 +18,7 @@ from roller_gym.physics.integrators.layout import (
     _CF_STABLE,
     _CF_SUBSTEPS,
     _CF_SWEEP,
-    _CF_TOL,
+    _CF_TOLERANCE,
     _E,
     _G,
     _K,
@@ -88,7 +88,7 @@ def _midpoint_substep(phi, w, tau, m, r, kappa, e, k, g, c, h):
 def _fixed_steps(io, cfg, substep):
     """The loop of a fixed-substep scheme around its ``substep`` function: each roller on its
     own, n equal substeps."""
-    dt, tol, nfixed = cfg[_CF_DT], cfg[_CF_TOL], int(cfg[_CF_SUBSTEPS])
+    dt, tol, nfixed = cfg[_CF_DT], cfg[_CF_TOLERANCE], int(cfg[_CF_SUBSTEPS])
     for col in range(io.shape[1]):
         m, r, kappa, e = io[_M, col], io[_RR, col], io[_KAPPA, col], io[_E, col]
         k, g, c, mu = io[_K, col], io[_G, col], io[_C, col], io[_MU, col]

@@ -45,7 +45,7 @@ class StepResult:
         error_estimate: the sum of the accepted substeps' estimated errors
             (max of |Δφ| [rad], |Δφ'| [rad/s]); NaN for fixed schemes and DOP853.
         tol_met: False where the accepted substeps' error estimates add up to more than the
-            scheme's share of ``tol`` (substeps accepted at float64 rounding or past the
+            scheme's share of ``tolerance`` (substeps accepted at float64 rounding or past the
             budget: the tolerance was out of reach and is not verified); for euler and
             midpoint, where the predicted substeps were more than ``MAX_SUBSTEPS``; for
             DOP853, where scipy failed or raised rtol = ``tol`` to its floor, 100 ε.
@@ -92,11 +92,11 @@ _H_NEXT = _ROW["h_next"]
 _OUT = _PHI  # the outputs are the last rows, in STEP_FIELDS order
 assert ROWS[_OUT:] == STEP_FIELDS
 #: A stepper's settings, as the kernels read them from its float64 array ``cfg``: the control
-#: step [s], ``tol``, the fixed substeps (0: automatic), and its scheme's controller halvings,
+#: step [s], ``tolerance``, the fixed substeps (0: automatic), and its scheme's controller halvings,
 #: order, constant, stable step, sweep exponent and tol_share (:class:`Scheme`).
-CFG_FIELDS = ("dt", "tol", "substeps", "halvings", "order", "constant", "stable_step",
+CFG_FIELDS = ("dt", "tolerance", "substeps", "halvings", "order", "constant", "stable_step",
               "sweep_exponent", "tol_share")
-(_CF_DT, _CF_TOL, _CF_SUBSTEPS, _CF_HALVINGS, _CF_ORDER, _CF_CONSTANT, _CF_STABLE, _CF_SWEEP,
+(_CF_DT, _CF_TOLERANCE, _CF_SUBSTEPS, _CF_HALVINGS, _CF_ORDER, _CF_CONSTANT, _CF_STABLE, _CF_SWEEP,
  _CF_SHARE) = range(len(CFG_FIELDS))
 
 

@@ -11,7 +11,7 @@ import numpy as np
 from roller_gym.physics import equations as eq
 from roller_gym.physics.integrators.layout import (
     _CF_DT,
-    _CF_TOL,
+    _CF_TOLERANCE,
     _PHI_IN,
     _ROW,
     _TAU,
@@ -24,7 +24,7 @@ from scipy.integrate import solve_ivp
 
 def _dop853_kernel(io: np.ndarray, tab: None, cfg: np.ndarray) -> None:
     """scipy's DOP853 on the whole batch as one system (margins at the start and the end)."""
-    dt, tol = float(cfg[_CF_DT]), float(cfg[_CF_TOL])
+    dt, tol = float(cfg[_CF_DT]), float(cfg[_CF_TOLERANCE])
     n = io.shape[1]
     m, r, kappa, e, k, g, c, mu = (io[_ROW[f]] for f in SCENE_FIELDS)
     phi, w, tau = io[_PHI_IN], io[_W_IN], io[_TAU]

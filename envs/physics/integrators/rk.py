@@ -23,7 +23,7 @@ from roller_gym.physics.integrators.layout import (
     _CF_STABLE,
     _CF_SUBSTEPS,
     _CF_SWEEP,
-    _CF_TOL,
+    _CF_TOLERANCE,
     _E,
     _G,
     _H_NEXT,
@@ -195,7 +195,7 @@ def _rk_chunk(io, lo, hi, tab, cfg):
     """
     n = hi - lo
     s = tab.shape[0] - 3
-    dt, tol = cfg[_CF_DT], cfg[_CF_TOL]
+    dt, tol = cfg[_CF_DT], cfg[_CF_TOLERANCE]
     nfixed, halvings = int(cfg[_CF_SUBSTEPS]), int(cfg[_CF_HALVINGS])
     share = tol * cfg[_CF_SHARE]  # the error the accepted substeps' estimates may add up to
     fixed = nfixed > 0
@@ -315,7 +315,7 @@ def _rk_one(io, tab, cfg):
     in the same order, without its lanes (bit for bit the same result, at a fraction of the
     latency). What :class:`Stepper` runs."""
     s = tab.shape[0] - 3
-    dt, tol = cfg[_CF_DT], cfg[_CF_TOL]
+    dt, tol = cfg[_CF_DT], cfg[_CF_TOLERANCE]
     nfixed, halvings = int(cfg[_CF_SUBSTEPS]), int(cfg[_CF_HALVINGS])
     share = tol * cfg[_CF_SHARE]
     fixed = nfixed > 0

@@ -1,6 +1,6 @@
-"""The table of schemes, :data:`SCHEMES` (one :class:`Scheme` row each; the ``method``
-argument is its key), the default :data:`DEFAULT_METHOD`, each scheme's compiled kernels,
-and the check of a step's arguments (dt, tol, substeps).
+"""The table of schemes, :data:`SCHEMES` (one :class:`Scheme` row each; the ``integrator``
+argument is its key), the default :data:`DEFAULT_INTEGRATOR`, each scheme's compiled kernels,
+and the check of a step's arguments (dt, tolerance, substeps).
 """
 
 from __future__ import annotations
@@ -42,7 +42,7 @@ class Scheme:
     """One integration scheme: a row of :data:`SCHEMES`.
 
     Attributes:
-        name: its name, the ``method`` argument.
+        name: its name, the ``integrator`` argument.
         order: its order of accuracy.
         stable_step: the largest λh per substep (λ the fastest rate), inside its stability
             region with room to spare (``math.inf``: A-stable).
@@ -63,12 +63,12 @@ class Scheme:
         fixed_tableau: the coefficients its fixed substeps (``substeps=n``) take, where they
             differ from ``tableau`` (rk4: classical RK4; under error control,
             Bogacki–Shampine 5(4)).
-        constant: C of the substep prediction n = (C (λ dt)^(p+1) / tol)^(1/p), calibrated
+        constant: C of the substep prediction n = (C (λ dt)^(p+1) / tolerance)^(1/p), calibrated
             on the presets (for the adaptive schemes only the first step-size guess).
         sweep_exponent: the exponent of re/(k² + (r − e)²) in the prediction's sweep rate.
         halvings: the adaptive controller takes the 2^halvings-th root of the error ratio
             (2 or 3: the kernel takes it as square roots, which vectorize).
-        tol_share: the share of ``tol`` the accepted substeps' error estimates may add up to
+        tol_share: the share of ``tolerance`` the accepted substeps' error estimates may add up to
             (below 1: room for what the estimates miss, measured in the tests; each row's
             value and what it was measured against: ``docs/INTEGRATORS.md``).
     """
@@ -125,9 +125,9 @@ _SCHEME_LIST = (
 )
 #: The schemes by name.
 SCHEMES: dict[str, Scheme] = {s.name: s for s in _SCHEME_LIST}
-#: The schemes by name (the ``method`` arguments are its keys).
-METHODS = SCHEMES
-DEFAULT_METHOD = "taylor"
+#: The schemes by name (the ``integrator`` arguments are its keys).
+INTEGRATORS = SCHEMES
+DEFAULT_INTEGRATOR = "taylor"
 
 _KERNELS: dict[str, tuple[Callable, Callable]] = {}
 
@@ -145,19 +145,21 @@ def _kernels(scheme: Scheme) -> tuple[Callable, Callable]:
     return _KERNELS[scheme.name]
 
 
-def scheme(method: str) -> Scheme:
-    """The row of :data:`SCHEMES` called ``method``."""
+def scheme(integrator: str) -> Scheme:
+    """The row of :data:`SCHEMES` called ``integrator``."""
     try:
-        return SCHEMES[method]
+        return SCHEMES[integrator]
     except (KeyError, TypeError):
-        raise ValueError(f"unknown integrator {method!r}; allowed: {', '.join(METHODS)}") from None
+        raise ValueError(f"unknown integrator {integrator!r}; allowed: "
+                         f"{', '.join(INTEGRATORS)}") from None
 
 
-def _check_step_args(dt: float, tol: float, substeps: int | None) -> None:
+def _check_step_args(dt: float, tolerance: float, substeps: int | None) -> None:
     if not (isinstance(dt, int | float | np.floating) and math.isfinite(dt) and dt > 0):
         raise ValueError(f"dt={dt!r} [s] must be finite and > 0")
-    if not (isinstance(tol, int | float | np.floating) and math.isfinite(tol) and tol > 0):
-        raise ValueError(f"tol={tol!r} must be finite and > 0")
+    if not (isinstance(tolerance, int | float | np.floating) and math.isfinite(tolerance)
+            and tolerance > 0):
+        raise ValueError(f"tolerance={tolerance!r} must be finite and > 0")
     if substeps is not None and not (
         isinstance(substeps, int | np.integer) and 1 <= substeps <= MAX_SUBSTEPS
     ):

@@ -43,24 +43,27 @@ from roller_gym.physics.integrators.rules import (
     _jit,
     _substeps,
 )
-from roller_gym.physics.integrators.schemes import DEFAULT_METHOD, _check_step_args, scheme
+from roller_gym.physics.integrators.schemes import DEFAULT_INTEGRATOR, _check_step_args, scheme
 from roller_gym.physics.packed import pack
 from roller_gym.physics.scene import Scene
 
 
 class _Base:
-    def __init__(self, num: int, method: str, dt: float, tol: float,
+    def __init__(self, num: int, integrator: str, dt: float, tolerance: float,
                  substeps: int | None) -> None:
-        _check_step_args(dt, tol, substeps)
-        self.scheme = scheme(method)
+        _check_step_args(dt, tolerance, substeps)
+        self.scheme = scheme(integrator)
         if substeps is not None and self.scheme.substep is None:
-            raise ValueError(f"substeps={substeps!r}: method={method!r} chooses its own steps")
-        self.method, self.dt, self.tol, self.substeps = method, float(dt), float(tol), substeps
+            raise ValueError(f"substeps={substeps!r}: integrator={integrator!r} chooses its "
+                             "own steps")
+        self.integrator, self.dt, self.substeps = integrator, float(dt), substeps
+        self.tolerance = float(tolerance)
         self._serial, self._parallel = self.scheme.kernels()
         tab = self.scheme.pair(substeps is not None)
         self._tab = tab if tab is not None else np.zeros((1, 1))
         sch = self.scheme
-        settings = {"dt": dt, "tol": tol, "substeps": substeps or 0, "halvings": sch.halvings,
+        settings = {"dt": dt, "tolerance": tolerance, "substeps": substeps or 0,
+                    "halvings": sch.halvings,
                     "order": sch.order, "constant": sch.constant, "stable_step": sch.stable_step,
                     "sweep_exponent": sch.sweep_exponent, "tol_share": sch.tol_share}
         self._cfg = np.array([settings[name] for name in CFG_FIELDS], dtype=float)
@@ -102,10 +105,11 @@ class _Base:
         if not self._warned:
             self._warned = True
             warnings.warn(
-                f"tol={self.tol!r} is out of reach for some step (method {self.method!r}, "
+                f"tolerance={self.tolerance!r} is out of reach for some step (integrator "
+                f"{self.integrator!r}, "
                 f"dt={self.dt!r}: of float64's rounding, or of the {MAX_SUBSTEPS} substeps a "
-                "step may take): those steps report tol_met=False; a looser tol or a more "
-                "accurate method avoids this", RuntimeWarning, stacklevel=stacklevel)
+                "step may take): those steps report tol_met=False; a looser tolerance or a more "
+                "accurate integrator avoids this", RuntimeWarning, stacklevel=stacklevel)
 
 
 @numba.extending.register_jitable
@@ -137,15 +141,15 @@ class Stepper(_Base):
 
     Args:
         scene: a scalar :class:`Scene`.
-        method: a name of :data:`SCHEMES` (default ``"taylor"``).
+        integrator: a name of :data:`SCHEMES` (default ``"taylor"``).
         dt: the control step [s].
-        tol: the state error allowed per control step (φ in rad, φ' in rad/s).
+        tolerance: the state error allowed per control step (φ in rad, φ' in rad/s).
         substeps: a fixed count of equal substeps instead of the error control.
     """
 
-    def __init__(self, scene: Scene, *, method: str = DEFAULT_METHOD, dt: float, tol: float,
-                 substeps: int | None = None) -> None:
-        super().__init__(1, method, dt, tol, substeps)
+    def __init__(self, scene: Scene, *, integrator: str = DEFAULT_INTEGRATOR, dt: float,
+                 tolerance: float, substeps: int | None = None) -> None:
+        super().__init__(1, integrator, dt, tolerance, substeps)
         self._link()
         self.set_scene(scene)
 
@@ -243,16 +247,16 @@ class BatchStepper(_Base):
 
     Args:
         num: the number of rollers.
-        method, dt, tol, substeps: as for :class:`Stepper`.
+        integrator, dt, tolerance, substeps: as for :class:`Stepper`.
 
     Set the rollers' scenes with :meth:`set_scenes` before the first :meth:`advance`.
     """
 
-    def __init__(self, num: int, *, method: str = DEFAULT_METHOD, dt: float, tol: float,
-                 substeps: int | None = None) -> None:
+    def __init__(self, num: int, *, integrator: str = DEFAULT_INTEGRATOR, dt: float,
+                 tolerance: float, substeps: int | None = None) -> None:
         if not (isinstance(num, int | np.integer) and num >= 1):
             raise ValueError(f"num={num!r} must be an integer >= 1")
-        super().__init__(int(num), method, dt, tol, substeps)
+        super().__init__(int(num), integrator, dt, tolerance, substeps)
         self.num = int(num)
         self._io[: len(SCENE_FIELDS)] = np.nan  # no scene yet
         self._unset = True  # some roller has no scene (checked where scenes are set)
@@ -396,8 +400,8 @@ def step(
     tau: float | np.ndarray,
     dt: float,
     *,
-    method: str = DEFAULT_METHOD,
-    tol: float = 1e-9,
+    integrator: str = DEFAULT_INTEGRATOR,
+    tolerance: float = 1e-9,
     substeps: int | None = None,
 ) -> StepResult:
     """Advance the roller(s) over ``dt`` seconds at constant torque ``tau``.
@@ -408,22 +412,22 @@ def step(
         phi_dot: φ' [rad/s].
         tau: the drive torque [N·m], constant over the step.
         dt: the control step [s].
-        method: a name of :data:`SCHEMES`.
-        tol: the state error allowed per control step (φ in rad, φ' in rad/s); for
+        integrator: a name of :data:`SCHEMES`.
+        tolerance: the state error allowed per control step (φ in rad, φ' in rad/s); for
             ``"dop853"`` its rtol and atol.
         substeps: a fixed number of equal substeps instead of the error control.
 
     Returns:
         A :class:`StepResult`; arrays of the broadcast shape, or scalars for scalar input.
     """
-    _check_step_args(dt, tol, substeps)
+    _check_step_args(dt, tolerance, substeps)
     params = (*scene.params, scene.mu)
     scalar = all(np.ndim(x) == 0 for x in (phi, phi_dot, tau, *params))
     arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (phi, phi_dot, tau,
                                                                          *params)))
     shape = arrays[0].shape
     n = max(1, int(np.prod(shape)))
-    stepper = BatchStepper(n, method=method, dt=dt, tol=tol, substeps=substeps)
+    stepper = BatchStepper(n, integrator=integrator, dt=dt, tolerance=tolerance, substeps=substeps)
     stepper._put_scenes([a.reshape(-1) for a in arrays[3:]], slice(None))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
@@ -434,7 +438,8 @@ def step(
 
 
 def predicted_substeps(
-    scene: Scene, phi_dot: float | np.ndarray, dt: float, tol: float, method: str = DEFAULT_METHOD
+    scene: Scene, phi_dot: float | np.ndarray, dt: float, tolerance: float,
+    integrator: str = DEFAULT_INTEGRATOR,
 ) -> np.ndarray | int:
     """The substeps the prediction asks for at speed |φ'|: with λ the sum of
 
@@ -444,17 +449,17 @@ def predicted_substeps(
       (|φ'|/s)(1 + (re/(k² + (r − e)²))^x) (x the scheme's ``sweep_exponent``),
     * the damping rate c/J_min,
 
-    a scheme of order p takes n = ceil((C (λ dt)^(p+1) / tol)^(1/p)) substeps, and at least
+    a scheme of order p takes n = ceil((C (λ dt)^(p+1) / tolerance)^(1/p)) substeps, and at least
     λ dt / stable_step. The fixed-substep schemes take n; the adaptive ones start from dt/n.
     """
-    sch = scheme(method)
+    sch = scheme(integrator)
     if sch.substep is None:
-        raise ValueError(f"method={method!r} chooses its own steps; no prediction is made")
-    _check_step_args(dt, tol, None)
+        raise ValueError(f"integrator={integrator!r} chooses its own steps; no prediction is made")
+    _check_step_args(dt, tolerance, None)
     arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (phi_dot, *scene.params)))
     flat = [a.reshape(-1) for a in arrays]
     out = np.array([
-        _substeps(abs(v[0]), *v[1:], dt, tol, sch.order, sch.constant, sch.stable_step,
+        _substeps(abs(v[0]), *v[1:], dt, tolerance, sch.order, sch.constant, sch.stable_step,
                   sch.sweep_exponent) for v in zip(*flat, strict=True)
     ])
     return int(out[0]) if arrays[0].ndim == 0 else out.reshape(arrays[0].shape)

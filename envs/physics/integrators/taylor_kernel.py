@@ -19,7 +19,7 @@ from roller_gym.physics.integrators.layout import (
     _CF_DT,
     _CF_SHARE,
     _CF_SUBSTEPS,
-    _CF_TOL,
+    _CF_TOLERANCE,
     _E,
     _G,
     _H_NEXT,
@@ -49,7 +49,7 @@ from roller_gym.physics.integrators.rules import (
     _write,
 )
 
-#: ``"taylor"``: the share of ``tol`` float64 rounding may take: where its substeps'
+#: ``"taylor"``: the share of ``tolerance`` float64 rounding may take: where its substeps'
 #: rounding (TAYLOR_ROUNDING ε max(|φ|, |φ'|) each) adds up to more, the tolerance is
 #: reported out of reach (``tol_met=False``).
 ROUNDING_SHARE = 0.5
@@ -151,7 +151,7 @@ def _taylor_chunk(io, lo, hi, tab, cfg):
     (``cfg`` as for :func:`_rk_chunk`; ``tab`` unused): the running rollers in lanes
     0..na−1, as there."""
     n = hi - lo
-    dt, tol, nfixed = cfg[_CF_DT], cfg[_CF_TOL], cfg[_CF_SUBSTEPS]
+    dt, tol, nfixed = cfg[_CF_DT], cfg[_CF_TOLERANCE], cfg[_CF_SUBSTEPS]
     share = tol * cfg[_CF_SHARE]
     hfixed = dt / nfixed if nfixed > 0 else 0.0
     nf = len(SCENE_FIELDS)
@@ -217,7 +217,7 @@ def _taylor_chunk(io, lo, hi, tab, cfg):
 def _taylor_one(io, tab, cfg):
     """One roller (column 0 of ``io``) with ``"taylor"``: :func:`_taylor_chunk`'s arithmetic
     without lanes (bit for bit the same result)."""
-    dt, tol, nfixed = cfg[_CF_DT], cfg[_CF_TOL], cfg[_CF_SUBSTEPS]
+    dt, tol, nfixed = cfg[_CF_DT], cfg[_CF_TOLERANCE], cfg[_CF_SUBSTEPS]
     share = tol * cfg[_CF_SHARE]
     hfixed = dt / nfixed if nfixed > 0 else 0.0
     m, r, kappa, e = io[_M, 0], io[_RR, 0], io[_KAPPA, 0], io[_E, 0]
