@@ -198,7 +198,7 @@ def summarize(results: dict[str, Any], algos: list[str]) -> dict[str, Any]:
                 "return_iqm": stats.interval(returns),
                 "success_iqm": stats.interval(success),
                 "steps_to_threshold": steps,
-                "steps_median": (stats.interval(np.array(steps), statistic=np.median)
+                "steps_median": (stats.interval(np.array(steps), statistic=stats.median_batch)
                                  if steps else None),
                 "poi_vs_classical": stats.probability_of_improvement(returns[:, None],
                                                                      np.array([[classical]])),
@@ -276,7 +276,7 @@ def plot(results: dict[str, Any], summary: dict[str, Any], folder: Path) -> None
             n = min(len(e["curve"]["timesteps"]) for e in runs)
             t = np.array(runs[0]["curve"]["timesteps"][:n])
             means = np.array([np.mean(e["curve"]["returns"][:n], axis=1) for e in runs])
-            band = np.array([stats.interval(means[:, j], reps=500) for j in range(n)])
+            band = np.array([stats.interval(means[:, j]) for j in range(n)])
             ax.plot(t, band[:, 0], color=colors[algo], label=f"{algo.upper()} (IQM)")
             ax.fill_between(t, band[:, 1], band[:, 2], color=colors[algo], alpha=0.2)
         base = summary["tasks"][task]["baselines"]
