@@ -33,6 +33,7 @@ from collections.abc import Callable, Mapping, Sequence
 from fractions import Fraction
 
 import numpy as np
+from rliable import metrics
 
 __all__ = [
     "CONFIDENCE",
@@ -75,8 +76,8 @@ def median_batch(x: np.ndarray) -> np.ndarray:
 
 
 def iqm(scores: np.ndarray) -> float:
-    """The interquartile mean of all entries of ``scores`` (runs × tasks)."""
-    return float(iqm_batch(np.asarray(scores, dtype=float)[None])[0])
+    """The interquartile mean of all entries of ``scores`` (runs × tasks): rliable's."""
+    return float(metrics.aggregate_iqm(np.asarray(scores, dtype=float)))
 
 
 def _multisets(n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -188,9 +189,9 @@ def probability_of_improvement(x: np.ndarray, y: np.ndarray, seed: int = 0,
         raise ValueError(f"x and y: {x.shape[1]} and {y.shape[1]} tasks (columns); they must "
                          "have the same tasks")
     tasks = x.shape[1]
-    est, lo, hi = bootstrap([*x.T, *y.T], lambda r: _poi_batch(_stacked(r[:tasks]),
-                                                               _stacked(r[tasks:])), seed, reps)
-    return float(est[0]), float(lo[0]), float(hi[0])
+    _, lo, hi = bootstrap([*x.T, *y.T], lambda r: _poi_batch(_stacked(r[:tasks]),
+                                                             _stacked(r[tasks:])), seed, reps)
+    return float(metrics.probability_of_improvement(x, y)), float(lo[0]), float(hi[0])
 
 
 def steps_to_threshold(timesteps: np.ndarray, returns: np.ndarray, threshold: float) -> float:
