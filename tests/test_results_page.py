@@ -153,3 +153,21 @@ def test_a_task_file_of_another_format_is_refused_with_its_name(tmp_path):
     (tmp_path / "tasks" / "RollerHold-v1.json").write_text(json.dumps({"format": 1}))
     with pytest.raises(SystemExit, match=r"RollerHold-v1\.json: format 1, not 2"):
         results_page.load(tmp_path)
+
+
+def test_the_threshold_is_calibrated_on_its_own_seeds_apart_from_the_evaluation():
+    import gymnasium as gym
+    from roller_gym.agents.policies import baseline, rollout
+    from roller_gym.scripts import results
+
+    assert set(results.CALIBRATION_SEEDS).isdisjoint(range(100))  # the evaluation's seeds
+    seeds = range(10_000, 10_002)
+    got = results.calibrate(TASK, seeds)
+    env = gym.make(TASK)
+    returns = [rollout(env, baseline("classical", env, seed=0), s).total_return for s in seeds]
+    assert got["classical_return"] == pytest.approx(np.mean(returns), rel=1e-12)
+    assert got["value"] == pytest.approx(0.95 * np.mean(returns), rel=1e-12)
+    assert got["calibration_seeds"] == [10_000, 10_001]
+    assert got["registered"] == gym.spec(TASK).reward_threshold
+    evaluated = [rollout(env, baseline("classical", env, seed=0), s).total_return for s in (0, 1)]
+    assert not np.allclose(returns, evaluated)  # other episodes than the evaluation's first
