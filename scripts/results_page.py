@@ -201,7 +201,10 @@ def _fmt(iv: list[float | None], pct: bool = False, digits: int = 1) -> str:
 
 
 def _k(steps: float | None) -> str:
-    return "never" if steps is None else f"{steps / 1000:.0f}k"
+    """Training steps in thousands (one decimal below 10k), or "never"."""
+    if steps is None:
+        return "never"
+    return f"{steps / 1000:.{0 if steps >= 10_000 else 1}f}k"
 
 
 def _seeds(span: list[int] | None) -> str:
