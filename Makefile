@@ -32,18 +32,27 @@ run: $(STAMP)  ## train the default agent (SAC, rl-zoo3) on the default task, ev
 TASKS := roller_gym/RollerStabilize-v2 roller_gym/RollerHold-v2 roller_gym/RollerBalance-v2 \
 	roller_gym/RollerTrack-v1
 SEEDS := 0 1 2 3 4
-# Options of roller-gym train for every run: `make results SEEDS="0 1" TRAIN_ARGS="--steps 2000"`
-# is a smoke run of the whole pipeline in minutes.
+# Options of roller-gym train for every run: `make results SEEDS="0 1" TASKS="roller_gym/RollerHold-v2"
+# TRAIN_ARGS="--steps 2000" RESULTS_OUT=/tmp/smoke RESULTS_PAGE=/tmp/smoke/RESULTS.md` is a
+# smoke run of the whole pipeline in minutes.
 TRAIN_ARGS ?=
-# One seed's trainings, all tasks and algorithms, into runs/results/seed<S>.
-TRAIN_SEED = for env in $(TASKS); do for algo in sac td3 ppo; do \
-	$(RG) train --algo $$algo --env $$env --seed $$0 --log-folder runs/results/seed$$0 \
-	--verbose 0 --checkpoints 0 $(TRAIN_ARGS) || exit 1; done; done
-results: $(STAMP)  ## train SAC, TD3 and PPO with 5 seeds on every task (two processes), evaluate, write docs/RESULTS.md
-	rm -rf runs/results
-	start=$$(date +%s); \
-	printf '%s\n' $(SEEDS) | xargs -P 2 -n 1 sh -c '$(TRAIN_SEED)' && \
-	$(RG) results --runs runs/results --env $(TASKS) --train-wall-s $$(( $$(date +%s) - start ))
+# Where the task files (<RESULTS_OUT>/tasks/<task>.json), the summary and the figures go, and
+# the page rendered from every task file there.
+RESULTS_OUT ?= docs/results
+RESULTS_PAGE ?= docs/RESULTS.md
+# One seed's ($$0) trainings of one task ($$1), every algorithm, into runs/results/<task>/seed<S>.
+TRAIN_SEED = for algo in sac td3 ppo; do \
+	$(RG) train --algo $$algo --env $$1 --seed $$0 --log-folder runs/results/$${1\#*/}/seed$$0 \
+	--verbose 0 --checkpoints 0 $(TRAIN_ARGS) || exit 1; done
+# One task at a time, a piece of the round on its own (5 seeds x 3 algorithms, two processes):
+# train, evaluate into its task file, render the page from every task file in RESULTS_OUT.
+results: $(STAMP)  ## train SAC, TD3 and PPO with 5 seeds on each of TASKS in turn, evaluate, write docs/RESULTS.md
+	for env in $(TASKS); do \
+	runs=runs/results/$${env#*/}; rm -rf $$runs; start=$$(date +%s); \
+	printf '%s\n' $(SEEDS) | xargs -P 2 -I SEED sh -c '$(TRAIN_SEED)' SEED $$env && \
+	$(RG) results --runs $$runs --env $$env --out $(RESULTS_OUT) --report $(RESULTS_PAGE) \
+	--train-wall-s $$(( $$(date +%s) - start )) || exit 1; \
+	done
 
 # The suite runs on every core (pytest-xdist), one test file per worker at a time, so that a
 # file's module-scoped references are computed once.

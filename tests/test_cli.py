@@ -444,29 +444,25 @@ def test_evaluate_prints_a_line_per_stage_on_stderr(tmp_path):
 
 def test_results_says_it_found_no_runs_before_evaluating_anything(tmp_path):
     pytest.importorskip("rliable")
-    result = roller_gym("results", "--runs", str(tmp_path), "--results",
-                        str(tmp_path / "r" / "results.json"), "--report",
-                        str(tmp_path / "RESULTS.md"), check=False)
+    env_id = "roller_gym/RollerHold-v2"
+    result = roller_gym("results", "--runs", str(tmp_path), "--env", env_id, "--out",
+                        str(tmp_path / "r"), "--report", str(tmp_path / "RESULTS.md"),
+                        check=False)
     assert result.returncode == 1 and "Traceback" not in result.stderr
-    assert _stages(result.stderr, "results") == [f"finding the runs under {tmp_path}"]
-    assert f"--runs {str(tmp_path)!r}: no trained runs found" in result.stderr
-    assert not (tmp_path / "r" / "results.json").exists()
+    assert _stages(result.stderr, "results") == [f"{env_id}: finding the runs under {tmp_path}"]
+    assert f"--runs {str(tmp_path)!r}: no trained runs of {env_id} found" in result.stderr
+    assert not (tmp_path / "r" / "tasks").exists()
 
 
 def test_results_render_prints_its_stage(tmp_path):
     pytest.importorskip("rliable")
-    source = Path(__file__).resolve().parents[1] / "docs" / "results" / "results.json"
-    results = json.loads(source.read_text())  # one task and SAC: rliable's bootstraps take time
-    task = next(iter(results["tasks"]))
-    results["tasks"] = {task: results["tasks"][task]}
-    results["evaluations"] = [e for e in results["evaluations"]
-                              if e["env"] == task and e["name"] in ("sac", "classical", "zero",
-                                                                    "random")]
-    (tmp_path / "r").mkdir()
-    (tmp_path / "r" / "results.json").write_text(json.dumps(results))
+    source = Path(__file__).resolve().parents[1] / "docs" / "results" / "tasks"
+    (tmp_path / "r" / "tasks").mkdir(parents=True)
+    name = "RollerHold-v2.json"  # one task: the page's bootstraps take time
+    (tmp_path / "r" / "tasks" / name).write_text((source / name).read_text())
     report = tmp_path / "RESULTS.md"
-    result = roller_gym("results", "--render", "--results", str(tmp_path / "r" / "results.json"),
-                        "--report", str(report), "--algos", "sac")
+    result = roller_gym("results", "--render-only", "--out", str(tmp_path / "r"),
+                        "--report", str(report))
     assert _stages(result.stderr, "results") == [
-        f"rendering {report} and its plots (rliable's bootstrap intervals)"]
+        f"rendering {report} and its plots from the task files under {tmp_path / 'r' / 'tasks'}/"]
     assert report.read_text().startswith("# Results")

@@ -1,0 +1,173 @@
+"""The results page (roller_gym.scripts.results_page) on constructed task files whose answers
+are worked out here by hand, and the committed page against its stored files."""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("rliable")
+results_page = pytest.importorskip("roller_gym.scripts.results_page")
+
+DOCS = Path(__file__).resolve().parents[1] / "docs"
+TASK = "roller_gym/RollerHold-v2"
+
+
+def _run(name, seed, ret, success, means=(0.0, 200.0, 200.0), last=(1.0, 1.0, 1.0)):
+    """A run's evaluation: 10 episodes per periodic evaluation, with these mean returns and
+    (in the last three) these success rates."""
+    successes = [[False] * 10] * (len(means) - 3) + [[i < 10 * x for i in range(10)]
+                                                     for x in last]
+    return {"env": TASK, "name": name, "seed": seed, "run_dir": "runs/x", "return_mean": ret,
+            "success_rate": success, "final_error_mean": 0.01 * (seed + 1),
+            "trained_steps": 1000 * len(means), "wall_time_s": 600.0, "evaluation_s": 6.0,
+            "curve": {"timesteps": [1000 * (i + 1) for i in range(len(means))],
+                      "returns": [[m - 1.0, m + 1.0] for m in means],
+                      "successes": successes}}
+
+
+def _record(runs, threshold=190.0):
+    baselines = [{"env": TASK, "name": n, "return_mean": r, "success_rate": x,
+                  "evaluation_s": 1.0}
+                 for n, r, x in (("classical", 200.0, 1.0), ("zero", 10.0, 0.0),
+                                 ("random", 1.0, 0.0))]
+    return {"format": results_page.FORMAT, "task": TASK, "date": "2026-01-01T00:00:00+00:00",
+            "command": "roller-gym results", "machine": "x86_64, 2 CPU cores, Linux",
+            "versions": {"numpy": "2.4.6"}, "episodes": 100, "evaluation_seeds": [0, 99],
+            "reward_threshold": {"value": threshold, "classical_return": 200.0,
+                                 "calibration_seeds": [10000, 10099], "registered": 184.1},
+            "classical": "LQR", "success_band": 0.05, "evaluation_s": 60.0,
+            "train_wall_s": 3600.0, "evaluations": baselines + runs}
+
+
+def _algo(summary, algo):
+    return summary["tasks"][TASK]["algos"][algo]
+
+
+@pytest.mark.parametrize(("success", "met"), [
+    ([1.0, 1.0, 1.0, 1.0, 0.79], False),  # IQM 100 %, but one seed below the 80 % floor
+    ([0.9, 0.9, 0.9, 0.9, 0.9], False),  # every seed above the floor, IQM 90 % < 95 %
+    ([0.96, 1.0, 0.8, 1.0, 0.97], True),  # floor met by all (80 % counts), IQM 97.7 %
+])
+def test_success_target_is_judged_on_every_seed_and_on_the_iqm(success, met):
+    runs = [_run("sac", s, 195.0, x) for s, x in enumerate(success)]
+    a = _algo(results_page.summarize([_record(runs)]), "sac")
+    assert a["success_met"] is met
+    assert [s["success_ok"] for s in a["seeds"]] == [x >= 0.8 for x in success]
+    middle = sorted(success)[1:4]  # five seeds: one cut at each end
+    assert a["success_iqm"][0] == pytest.approx(np.mean(middle))
+
+
+def test_return_target_needs_every_seed_at_the_threshold():
+    runs = [_run("sac", s, r, 1.0) for s, r in enumerate([195.0, 196.0, 197.0, 198.0, 150.0])]
+    a = _algo(results_page.summarize([_record(runs)]), "sac")
+    assert [s["return_ok"] for s in a["seeds"]] == [True] * 4 + [False]
+    assert a["return_met"] is False
+    assert a["return_iqm"][0] == pytest.approx(196.0)  # (195 + 196 + 197) / 3
+
+
+def test_sustained_crossing_and_the_last_evaluations_per_seed():
+    curves = [(0.0, 195.0, 195.0, 195.0), (195.0, 100.0, 195.0, 195.0),
+              (195.0, 195.0, 195.0, 100.0)]  # from 2k; from 3k (a dip); never (falls at the end)
+    runs = [_run("sac", s, 195.0, 1.0, means=m, last=(1.0, 0.3, 0.0))
+            for s, m in enumerate(curves)]
+    a = _algo(results_page.summarize([_record(runs)]), "sac")
+    assert [s["steps"] for s in a["seeds"]] == [2000.0, 3000.0, None]
+    assert a["sustained"] == 2 and a["curves"] == 3
+    assert a["steps_median"][0] == pytest.approx(3000.0)  # median of 2k, 3k, never
+    assert all(s["last_successes"] == pytest.approx([1.0, 0.3, 0.0]) for s in a["seeds"])
+
+
+def test_pairwise_probability_of_improvement_counts_the_pairs():
+    sac, td3 = [195.0, 196.0, 191.0], [194.0, 196.0, 199.0, 190.0]
+    runs = ([_run("sac", s, r, 1.0) for s, r in enumerate(sac)]
+            + [_run("td3", s, r, 1.0) for s, r in enumerate(td3)])
+    summary = results_page.summarize([_record(runs)])
+    (pair,) = summary["tasks"][TASK]["pairs"]
+    # 12 pairs: 195 beats 194 and 190; 196 beats 194 and 190, ties 196; 191 beats 190
+    assert (pair["a"], pair["b"]) == ("sac", "td3")
+    assert pair["poi"][0] == pytest.approx((2 + 2.5 + 1) / 12)
+    assert pair["poi"][1] <= pair["poi"][0] <= pair["poi"][2]
+
+
+def _numbers(text):
+    return re.findall(r"\d+(?:\.\d+)?", text)
+
+
+def _leaves(x):
+    if isinstance(x, dict):
+        for v in x.values():
+            yield from _leaves(v)
+    elif isinstance(x, list):
+        for v in x:
+            yield from _leaves(v)
+    else:
+        yield x
+
+
+def test_every_number_on_the_page_is_in_the_summary(tmp_path):
+    runs = [_run(algo, s, 190.0 + 2 * s + k, x, last=(1.0, 0.9, 0.3))
+            for k, algo in enumerate(("sac", "td3", "ppo")) for s, x in enumerate(
+                [1.0, 0.95, 0.7, 1.0, 0.85])]
+    (tmp_path / "tasks").mkdir()
+    (tmp_path / "tasks" / "RollerHold-v2.json").write_text(json.dumps(_record(runs)))
+    summary = results_page.render(tmp_path, tmp_path / "RESULTS.md")
+    text = (tmp_path / "RESULTS.md").read_text()
+    leaves = list(_leaves(summary))
+    for s in sorted((v for v in leaves if isinstance(v, str)), key=len, reverse=True):
+        text = text.replace(s, " ")  # dates, versions, the machine, task names
+    shown = set()
+    for v in leaves:
+        if isinstance(v, bool) or not isinstance(v, int | float):
+            continue
+        for scaled in (v, 100 * v, v / 1000):  # as it is, in percent, in thousands of steps
+            shown |= {f"{scaled:.{d}f}" for d in range(4)}
+    stray = [n for n in _numbers(text) if n not in shown]
+    assert not stray, f"numbers on the page that are not in the summary: {stray}"
+
+
+def test_rendering_again_from_the_stored_files_gives_the_same_bytes(tmp_path):
+    runs = [_run("sac", s, 195.0 + s, 1.0) for s in range(5)]
+    (tmp_path / "tasks").mkdir()
+    (tmp_path / "tasks" / "RollerHold-v2.json").write_text(json.dumps(_record(runs)))
+    results_page.render(tmp_path, tmp_path / "RESULTS.md")
+    first = (tmp_path / "RESULTS.md").read_bytes(), (tmp_path / "summary.json").read_bytes()
+    results_page.render(tmp_path, tmp_path / "RESULTS.md")
+    assert ((tmp_path / "RESULTS.md").read_bytes(),
+            (tmp_path / "summary.json").read_bytes()) == first
+
+
+def test_the_committed_page_is_the_rendering_of_the_committed_task_files():
+    summary = results_page.summarize(results_page.load(DOCS / "results"))
+    stored = json.loads((DOCS / "results" / "summary.json").read_text())
+    assert json.loads(json.dumps(summary)) == stored
+    assert results_page.page(stored, "results") == (DOCS / "RESULTS.md").read_text()
+
+
+def test_a_task_file_of_another_format_is_refused_with_its_name(tmp_path):
+    (tmp_path / "tasks").mkdir()
+    (tmp_path / "tasks" / "RollerHold-v2.json").write_text(json.dumps({"format": 1}))
+    with pytest.raises(SystemExit, match=r"RollerHold-v2\.json: format 1, not 2"):
+        results_page.load(tmp_path)
+
+
+def test_the_threshold_is_calibrated_on_its_own_seeds_apart_from_the_evaluation():
+    import gymnasium as gym
+    from roller_gym.agents.policies import baseline, rollout
+    from roller_gym.scripts import results
+
+    assert set(results.CALIBRATION_SEEDS).isdisjoint(range(100))  # the evaluation's seeds
+    seeds = range(10_000, 10_002)
+    got = results.calibrate(TASK, seeds)
+    env = gym.make(TASK)
+    returns = [rollout(env, baseline("classical", env, seed=0), s).total_return for s in seeds]
+    assert got["classical_return"] == pytest.approx(np.mean(returns), rel=1e-12)
+    assert got["value"] == pytest.approx(0.95 * np.mean(returns), rel=1e-12)
+    assert got["calibration_seeds"] == [10_000, 10_001]
+    assert got["registered"] == gym.spec(TASK).reward_threshold
+    evaluated = [rollout(env, baseline("classical", env, seed=0), s).total_return for s in (0, 1)]
+    assert not np.allclose(returns, evaluated)  # other episodes than the evaluation's first
