@@ -24,8 +24,8 @@ from roller_gym.physics import Scene, energy, holding_torque, linearize
 from roller_gym.task import Task, wrap_rate
 from scipy.linalg import expm, solve_discrete_are
 
-__all__ = ["CONTROLLERS", "LQR", "Controller", "EnergyPump", "EnergySwingUp", "RandomPolicy",
-           "ZeroTorque", "controller_for"]
+__all__ = ["CONTROLLERS", "LQR", "Controller", "EnergyPump", "EnergySwingUp", "Informed",
+           "RandomPolicy", "ZeroTorque", "controller_for"]
 
 
 class Controller:
@@ -82,10 +82,13 @@ class RandomPolicy(Controller):
         return self.rng.uniform(-1.0, 1.0, (observation.shape[0], 1))
 
 
-def _task_settings(env: gym.Env | Any) -> tuple[Scene, float, float]:
-    """(scene, max_torque [N·m], dt [s]) of a (possibly wrapped) roller environment."""
+def _task_settings(env: gym.Env | Any, scene: Scene | None = None
+                   ) -> tuple[Scene, float, float]:
+    """(scene, max_torque [N·m], dt [s]) of a (possibly wrapped) roller environment; the
+    scene its construction names (the nominal one), unless ``scene`` is given."""
     base = env.unwrapped
-    return base.config.scene, float(base.task.max_torque), float(base.config.dt)
+    return (base.config.scene if scene is None else scene, float(base.task.max_torque),
+            float(base.config.dt))
 
 
 class LQR(Controller):
@@ -135,14 +138,15 @@ class LQR(Controller):
         self._cache: dict[float, tuple[float, np.ndarray, np.ndarray]] = {}
 
     @classmethod
-    def from_env(cls, env: gym.Env | Any, **weights: float) -> LQR:
+    def from_env(cls, env: gym.Env | Any, scene: Scene | None = None, **weights: float) -> LQR:
         """The LQR for a RollerStabilize or RollerHold environment (target 0 or observed).
 
         Args:
             env: the environment (wrappers allowed); its scene, max_torque and dt are used.
+            scene: the scene to design for instead of the environment's nominal one.
             **weights: ``position_scale``, ``speed_scale``, ``torque_scale`` (see the class).
         """
-        scene, max_torque, dt = _task_settings(env)
+        scene, max_torque, dt = _task_settings(env, scene)
         base = env.unwrapped
         target = None if base.task.observes_target else base.task.default_target(scene)
         return cls(base.task, scene, max_torque, dt, target=target, **weights)
@@ -237,14 +241,15 @@ class EnergySwingUp(Controller):
         self.lqr = LQR(task, scene, max_torque, dt, target=self.target, **weights)
 
     @classmethod
-    def from_env(cls, env: gym.Env | Any, **kwargs: float) -> EnergySwingUp:
+    def from_env(cls, env: gym.Env | Any, scene: Scene | None = None,
+                 **kwargs: float) -> EnergySwingUp:
         """The swing-up for a RollerBalance environment (target φ_b from its task).
 
         Args:
             env: the environment (wrappers allowed).
             **kwargs: the other arguments of the class.
         """
-        scene, max_torque, dt = _task_settings(env)
+        scene, max_torque, dt = _task_settings(env, scene)
         task = env.unwrapped.task
         return cls(task, scene, max_torque, dt, task.default_target(scene), **kwargs)
 
@@ -283,9 +288,10 @@ class EnergyPump(Controller):
         self.energy_gain = float(energy_gain)
 
     @classmethod
-    def from_env(cls, env: gym.Env | Any, **kwargs: float) -> EnergyPump:
+    def from_env(cls, env: gym.Env | Any, scene: Scene | None = None,
+                 **kwargs: float) -> EnergyPump:
         """The pump for a RollerSwing environment (wrappers allowed)."""
-        scene, max_torque, _ = _task_settings(env)
+        scene, max_torque, _ = _task_settings(env, scene)
         return cls(env.unwrapped.task, scene, max_torque, **kwargs)
 
     def act(self, observation: np.ndarray) -> np.ndarray:
@@ -305,6 +311,31 @@ CONTROLLERS: dict[str, tuple[type[Controller], str]] = {
     "swing_up": (EnergySwingUp, "energy swing-up + LQR"),
     "energy_pump": (EnergyPump, "energy pump"),
 }
+
+
+class Informed(Controller):
+    """The task's classical controller designed anew for each episode's true scene, read
+    from the environment (which an agent does not see): the reference that shows what a
+    task whose scene is drawn per episode and hidden allows, beside the classical
+    controller designed on the nominal scene (:func:`controller_for`).
+
+    Args:
+        env: a roller-gym environment (wrappers allowed): it is read at every action.
+        **kwargs: the controller's weights and gains, as for :func:`controller_for`.
+    """
+
+    def __init__(self, env: gym.Env | Any, **kwargs: float) -> None:
+        self.env, self.kwargs = env, kwargs
+        self._scene: Scene | None = None
+        self._inner: Controller | None = None
+
+    def act(self, observation: np.ndarray) -> np.ndarray:
+        scene = self.env.unwrapped.scene
+        if scene is not self._scene or self._inner is None:
+            controller, _ = CONTROLLERS[self.env.unwrapped.task.classical]
+            self._scene = scene
+            self._inner = controller.from_env(self.env, scene=scene, **self.kwargs)
+        return self._inner.act(observation)
 
 
 def controller_for(env: gym.Env | Any, **kwargs: float) -> Controller:

@@ -33,7 +33,13 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from roller_gym.agents.classical import Controller, RandomPolicy, ZeroTorque, controller_for
+from roller_gym.agents.classical import (
+    Controller,
+    Informed,
+    RandomPolicy,
+    ZeroTorque,
+    controller_for,
+)
 from roller_gym.agents.hyperparams import CLASSICAL
 from roller_gym.extras import install_line, missing
 
@@ -44,6 +50,7 @@ __all__ = [
     "TrainedPolicy",
     "algorithm_class",
     "baseline",
+    "baselines_for",
     "evaluation_env",
     "find_run",
     "load_policy",
@@ -51,8 +58,19 @@ __all__ = [
     "rollout",
 ]
 
-#: The baselines of the results table, by name.
-BASELINES = ("classical", "zero", "random")
+#: The baselines of the results table, by name ("informed" only where the task's scene
+#: varies unobserved: :func:`baselines_for`).
+BASELINES = ("classical", "zero", "random", "informed")
+
+
+def baselines_for(env_id: str) -> tuple[str, ...]:
+    """The baselines a task is compared with: the classical controller, zero torque and
+    random actions, and where the task draws its scene per episode unobserved
+    (``Task.scene_ranges``) the classical controller informed of each episode's scene."""
+    from roller_gym.task import get_task
+
+    varies = get_task(env_id).scene_ranges is not None
+    return tuple(b for b in BASELINES if b != "informed" or varies)
 
 Policy = Any  # anything with predict(observation, deterministic=True) -> (action, state)
 
@@ -169,17 +187,23 @@ def read_config(run_dir: str | Path) -> dict[str, Any]:
 
 
 class TrainedPolicy:
-    """A saved stable-baselines3 model with the observation normalization it was trained with.
+    """A saved stable-baselines3 model with the observation normalization and the frame
+    stacking it was trained with (rl-zoo3's ``normalize`` and ``frame_stack``: normalized,
+    then stacked as ``VecFrameStack`` stacks, the newest frame last and zeros before an
+    episode's first).
 
     Args:
         model: the loaded model (``SAC.load(...)`` etc.).
         normalizer: the saved ``VecNormalize`` (its statistics only), or None.
-        config: the run's configuration (:func:`read_config`), for reference.
+        config: the run's configuration (:func:`read_config`); its hyperparameters'
+            ``frame_stack`` sets the frames stacked.
     """
 
     def __init__(self, model: Any, normalizer: Any = None,
                  config: dict[str, Any] | None = None) -> None:
         self.model, self.normalizer, self.config = model, normalizer, dict(config or {})
+        self.frames = int(self.config.get("hyperparams", {}).get("frame_stack") or 1)
+        self._stack: np.ndarray | None = None
 
     def predict(
         self,
@@ -188,10 +212,30 @@ class TrainedPolicy:
         episode_start: np.ndarray | None = None,
         deterministic: bool = True,
     ) -> tuple[np.ndarray, Any]:
-        """As ``model.predict``, on observations normalized as in training."""
+        """As ``model.predict``, on observations normalized and stacked as in training: pass
+        ``episode_start`` (True at an episode's first observation) where frames are stacked."""
+        observation = np.asarray(observation)
         if self.normalizer is not None:
-            observation = self.normalizer.normalize_obs(np.asarray(observation))
+            observation = self.normalizer.normalize_obs(observation)
+        if self.frames > 1:
+            observation = self._stacked(observation, episode_start)
         return self.model.predict(observation, state, episode_start, deterministic)
+
+    def _stacked(self, observation: np.ndarray, episode_start: np.ndarray | None) -> np.ndarray:
+        size = observation.shape[-1]
+        batch = observation.reshape(-1, size)
+        if self._stack is None:
+            starts = np.ones(len(batch), bool)
+        elif episode_start is None:
+            starts = np.zeros(len(batch), bool)
+        else:
+            starts = np.asarray(episode_start, bool).reshape(-1)
+        if self._stack is None or self._stack.shape[0] != len(batch):
+            self._stack = np.zeros((len(batch), size * self.frames), batch.dtype)
+        self._stack = np.roll(self._stack, -size, axis=1)
+        self._stack[starts] = 0.0
+        self._stack[:, -size:] = batch
+        return self._stack.reshape(*observation.shape[:-1], size * self.frames).copy()
 
 
 def load_policy(run_dir: str | Path, best: bool = False, device: str = "cpu") -> TrainedPolicy:
@@ -223,14 +267,18 @@ def baseline(name: str, env: gym.Env, seed: int = 0) -> Controller:
 
     Args:
         name: ``"classical"`` (LQR on Stabilize and Hold, the energy swing-up on Balance,
-            with the settings of :data:`roller_gym.agents.hyperparams.CLASSICAL`), ``"zero"`` (no
-            torque) or ``"random"`` (uniform actions).
+            with the settings of :data:`roller_gym.agents.hyperparams.CLASSICAL`, designed on
+            the environment's nominal scene), ``"informed"`` (the same, designed anew on each
+            episode's true scene: :class:`roller_gym.agents.classical.Informed`), ``"zero"``
+            (no torque) or ``"random"`` (uniform actions).
         env: the environment the policy will act in (its scene, torque limit and dt).
         seed: the seed of the random policy.
     """
-    if name == "classical":
+    if name in ("classical", "informed"):
         spec_id = env.spec.id if env.spec is not None else None
-        return controller_for(env, **CLASSICAL.get(spec_id, {}))
+        weights = CLASSICAL.get(spec_id, {})
+        return controller_for(env, **weights) if name == "classical" else Informed(env,
+                                                                                   **weights)
     if name == "zero":
         return ZeroTorque()
     if name == "random":
@@ -307,8 +355,10 @@ def rollout(env: gym.Env, policy: Policy, seed: int, render: bool = False) -> Ep
     rows: list[tuple[float, ...]] = []
     dt = float(env.unwrapped.config.dt)
     done = terminated = False
+    state, start = None, np.array([True])  # a recurrent policy's state; the episode's start
     while not done:
-        action, _ = policy.predict(obs, deterministic=True)
+        action, state = policy.predict(obs, state, episode_start=start, deterministic=True)
+        start = np.array([False])
         obs, reward, terminated, truncated, info = env.step(action)
         done = terminated or truncated
         rows.append((info["phi"], info["phi_dot"], info["position_error"], info["torque"],

@@ -38,7 +38,7 @@ from roller_gym.registration import TaskEntry
 from roller_gym.task import NAMESPACE, TASKS
 
 #: The modules of the tasks, in the order they are listed; importing one registers its task.
-TASK_MODULES = ("stabilize", "hold", "balance", "track", "swing")
+TASK_MODULES = ("stabilize", "hold", "balance", "track", "swing", "hold_randomized")
 for _module in TASK_MODULES:
     importlib.import_module(f"roller_gym.{_module}")
 

@@ -45,6 +45,7 @@ from roller_gym.agents.hyperparams import ALGOS
 from roller_gym.agents.policies import (
     BASELINES,
     baseline,
+    baselines_for,
     evaluation_env,
     find_run,
     load_policy,
@@ -55,7 +56,8 @@ from roller_gym.scripts.arguments import at_least, output_folder, program_parser
 from roller_gym.task import get_task
 
 #: How the baselines are named in the tables.
-BASELINE_LABELS = {"zero": "zero torque", "random": "random"}
+BASELINE_LABELS = {"informed": "classical, informed of each episode's scene",
+                   "zero": "zero torque", "random": "random"}
 #: Target: SAC's mean return within 5 % of the classical controller's below it (a task's
 #: reward threshold is the classical controller's mean return less this share).
 RETURN_TOLERANCE = 0.05
@@ -78,8 +80,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "log folder of roller-gym train (<LOG_FOLDER>/<algo>/<env name>_<N>)")
     p.add_argument("--algos", nargs="+", default=list(ALGOS), choices=ALGOS,
                    help="with --runs: the algorithms to take (default: sac td3 ppo)")
-    p.add_argument("--baselines", nargs="*", default=list(BASELINES), choices=BASELINES,
-                   help="baselines to compare (default: classical zero random)")
+    p.add_argument("--baselines", nargs="*", default=None, choices=BASELINES,
+                   help="baselines to compare (default: classical zero random, and informed "
+                        "where the task's scene varies unobserved)")
     p.add_argument("--episodes", type=at_least(1), default=100,
                    help="episodes per policy (default 100)")
     p.add_argument("--best", action="store_true",
@@ -256,7 +259,7 @@ def main(argv: list[str] | None = None) -> None:
             meta = {"name": c["algo"], "label": c["algo"].upper(), "run_dir": str(d),
                     "steps": c["trained_steps"], "wall_time_s": c["wall_time_s"]}
             policies.append((meta, load_policy(d, best=args.best)))
-        for name in args.baselines:
+        for name in (baselines_for(env_id) if args.baselines is None else args.baselines):
             label = classical_label(env_id) if name == "classical" else BASELINE_LABELS[name]
             policies.append(({"name": name, "label": label}, baseline(name, env, seed=0)))
         if not policies:

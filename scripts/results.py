@@ -44,7 +44,13 @@ import numpy as np
 import roller_gym
 from roller_gym import file_name
 from roller_gym.agents.hyperparams import ALGOS
-from roller_gym.agents.policies import BASELINES, baseline, evaluation_env, load_policy, read_config
+from roller_gym.agents.policies import (
+    baseline,
+    baselines_for,
+    evaluation_env,
+    load_policy,
+    read_config,
+)
 from roller_gym.bench.records import package_versions
 from roller_gym.scripts import results_page
 from roller_gym.scripts.arguments import at_least, output_folder, program_parser, stage
@@ -166,12 +172,12 @@ def measure(args: argparse.Namespace, env_id: str) -> dict[str, Any]:
         raise SystemExit(f"--runs {args.runs!r}: no trained runs of {env_id} found (train with "
                          "roller-gym train --log-folder ...)")
     jobs = [(env_id, "calibration", None, 0),
-            *((env_id, name, None, args.episodes) for name in BASELINES), *runs]
+            *((env_id, name, None, args.episodes) for name in baselines_for(env_id)), *runs]
     stage("results", f"{env_id}: calibrating the reward threshold on seeds "
                      f"{CALIBRATION_SEEDS.start}–{CALIBRATION_SEEDS.stop - 1}, evaluating "
-                     f"{len(runs)} runs and {len(BASELINES)} baselines on {args.episodes} "
-                     f"episodes each, {args.workers} processes at a time (a line per agent as "
-                     "it finishes)")
+                     f"{len(runs)} runs and {len(baselines_for(env_id))} baselines on "
+                     f"{args.episodes} episodes each, {args.workers} processes at a time (a "
+                     "line per agent as it finishes)")
     start = time.perf_counter()
     with multiprocessing.get_context("spawn").Pool(args.workers) as pool:
         threshold, *evaluations = pool.map(_evaluate_job, jobs, chunksize=1)

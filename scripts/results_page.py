@@ -46,9 +46,10 @@ def load(folder: Path) -> list[dict[str, Any]]:
     import roller_gym
 
     records = []
-    order = {file_name(env_id): i for i, env_id in enumerate(roller_gym.ENV_IDS)}
+    # by task name, whatever its version (a page may hold results of an earlier version)
+    order = {file_name(env_id).split("-v")[0]: i for i, env_id in enumerate(roller_gym.ENV_IDS)}
     for path in sorted(task_files(folder).glob("*.json"),
-                       key=lambda p: (order.get(p.stem, len(order)), p.stem)):
+                       key=lambda p: (order.get(p.stem.split("-v")[0], len(order)), p.stem)):
         record = json.loads(path.read_text())
         if record.get("format") != FORMAT:
             raise SystemExit(f"{path}: format {record.get('format')!r}, not {FORMAT}; measure "

@@ -211,10 +211,10 @@ def test_the_start_state_is_the_first_accepted_candidate_in_draw_order(name):
     n = 60
     try:  # less friction where the task allows it: fewer first candidates roll
         scene = default.replace(mu=0.3 * default.mu)
-        vec = gym.make_vec(task.env_id(), num_envs=n, scene=scene)
+        vec = gym.make_vec(task.env_id(), num_envs=n, scene=scene, randomize={})
     except ValueError:
         scene = default
-        vec = gym.make_vec(task.env_id(), num_envs=n, scene=scene)
+        vec = gym.make_vec(task.env_id(), num_envs=n, scene=scene, randomize={})
     vec.reset(seed=3)  # sub-environment i: seed 3 + i, its episode 0
     phi, phi_dot = vec.unwrapped.phi, vec.unwrapped.phi_dot
     later = 0
