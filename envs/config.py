@@ -13,6 +13,7 @@ same errors, draw scenes the same way and turn actions into torques the same way
 from __future__ import annotations
 
 import inspect
+import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import MISSING, dataclass, field, fields
 from typing import Any, TypeVar
@@ -25,7 +26,7 @@ from roller_gym.physics.integrators import DEFAULT_INTEGRATOR, MAX_SUBSTEPS
 from roller_gym.task import Task
 
 __all__ = ["DEFAULT_DT", "DEFAULT_TOLERANCE", "EnvConfig", "Settings", "resolve_scene",
-           "takes_settings"]
+           "settings_table", "takes_settings"]
 
 #: The control step [s] (as Gymnasium's Pendulum).
 DEFAULT_DT = 0.05
@@ -60,7 +61,7 @@ class Settings:
     them). Each field's documentation is :func:`setting_docs`."""
 
     scene: Scene | str | Sequence[Scene | str] | None = field(default=None, metadata=_doc(
-        "an :class:`roller_gym.Scene` or a preset's name (``roller_gym.PRESETS``); default: "
+        "a :class:`roller_gym.Scene` or a preset's name (``roller_gym.PRESETS``); default: "
         "the task's preset. The vector environment also takes a sequence of them (one per "
         "sub-environment) or a batch Scene of ``num_envs`` rollers."))
     dt: float = field(default=DEFAULT_DT, metadata=_doc(
@@ -75,7 +76,8 @@ class Settings:
         "its own error estimate; the default and the fastest), ``\"rk8\"`` and ``\"rk4\"`` "
         "(error-controlled Runge–Kutta), ``\"euler\"`` (semi-implicit, Pendulum's scheme), "
         "``\"midpoint\"`` (implicit, energy-stable) or ``\"dop853\"`` (scipy's adaptive, "
-        "slow: a reference; the single environment only)."))
+        "slow: a reference; the single environment only: under SB3 and ``roller-gym train`` a "
+        "batch of them is a ``DummyVecEnv``)."))
     substeps: int | None = field(default=None, metadata=_doc(
         "a fixed number of substeps per control step instead of the automatic rule."))
     randomize: Mapping[str, tuple[float, float]] | None = field(default=None, metadata=_doc(
@@ -115,6 +117,17 @@ def setting_docs(indent: str = "        ") -> str:
         lines += textwrap.wrap(f"{f.name}: {f.metadata['doc']}", 91 - len(indent),
                                initial_indent="", subsequent_indent="    ")
     return "\n".join(indent + line for line in lines)
+
+
+def settings_table() -> str:
+    """:class:`Settings` as the README's Markdown table (argument, meaning, default): the
+    README holds this text, and a test compares the two."""
+    rows = ["| argument | meaning | default |", "|---|---|---|"]
+    for f in fields(Settings):
+        meaning = re.sub(r":\w+:(`[^`]+`)", r"\1", f.metadata["doc"])  # Sphinx roles dropped
+        meaning = meaning.replace("``", "`").replace("|", "\\|")
+        rows.append(f"| `{f.name}` | {meaning} | `{f.default!r}` |")
+    return "\n".join(rows)
 
 
 _Env = TypeVar("_Env", bound=type)

@@ -294,3 +294,11 @@ def test_readme_client_table_is_roller_gym_clients():
                       _readme_section("Other clients"), re.M)
     assert [(name, mode) for name, mode, _ in rows] == [
         (c.name, c.autoreset_mode.name.lower()) for c in CLIENTS.values()]
+
+
+def test_the_readmes_table_of_keyword_arguments_is_the_settings_record():
+    """The README's table of the environments' keywords is the text of
+    roller_gym.config.Settings (names, meanings and defaults declared once)."""
+    from roller_gym.config import settings_table
+
+    assert settings_table() in (ROOT / "README.md").read_text()
