@@ -458,7 +458,7 @@ def test_results_render_prints_its_stage(tmp_path):
     pytest.importorskip("rliable")
     source = Path(__file__).resolve().parents[1] / "docs" / "results" / "tasks"
     (tmp_path / "r" / "tasks").mkdir(parents=True)
-    name = "RollerHold-v2.json"  # one task: the page's bootstraps take time
+    name = "RollerHold-v1.json"  # one task: the page's bootstraps take time
     (tmp_path / "r" / "tasks" / name).write_text((source / name).read_text())
     report = tmp_path / "RESULTS.md"
     result = roller_gym("results", "--render-only", "--out", str(tmp_path / "r"),

@@ -11,7 +11,7 @@ import re
 import gymnasium as gym
 import numpy as np
 import pytest
-import roller_gym  # noqa: F401  (registers the environments)
+import roller_gym
 from roller_gym import Scene, feasibility, validation
 from roller_gym.intervals import Interval
 from roller_gym.physics import equations
@@ -19,7 +19,8 @@ from roller_gym.stabilize import StabilizeTask
 from roller_gym.task import unstable_rest_positions
 from scipy.optimize import brentq
 
-STABILIZE, HOLD, BALANCE = (f"roller_gym/Roller{t}-v1" for t in ("Stabilize", "Hold", "Balance"))
+STABILIZE, HOLD, BALANCE = (roller_gym.TASKS[f"Roller{t}"].env_id()
+                            for t in ("Stabilize", "Hold", "Balance"))
 
 
 # -- the interval primitives enclose the true values -------------------------------------------

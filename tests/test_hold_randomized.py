@@ -82,3 +82,27 @@ def test_a_frame_stacked_run_is_evaluated_as_vec_frame_stack_stacks():
         np.testing.assert_array_equal(ours, stacked[0])
         episodes += int(done[0])
     assert episodes >= 2
+
+
+def test_it_runs_holds_compiled_kernels_and_with_holds_scene_is_hold():
+    """A variant that changes no objective shares its parent's compiled kernels (none
+    compiled for it); with the scene fixed (randomize={}) its episodes are RollerHold's, bit
+    for bit. A task with an objective of its own has kernels of its own."""
+    from roller_gym.episode.kernel import task_kernels
+
+    tasks = roller_gym.TASKS
+    assert task_kernels(tasks["RollerHoldRandomized"]) is task_kernels(tasks["RollerHold"])
+    assert task_kernels(tasks["RollerSwing"]) is not task_kernels(tasks["RollerHold"])
+    ours, hold = gym.make(ID, randomize={}), gym.make(HOLD)
+    rng = np.random.default_rng(4)
+    for seed in (0, 1):
+        a, b = ours.reset(seed=seed), hold.reset(seed=seed)
+        np.testing.assert_array_equal(a[0], b[0])
+        for _ in range(60):
+            action = rng.uniform(-1, 1, 1).astype(np.float32)
+            a, b = ours.step(action), hold.step(action)
+            np.testing.assert_array_equal(a[0], b[0])
+            assert a[1:4] == b[1:4]
+            assert a[4]["is_success"] == b[4]["is_success"]
+            if a[2] or a[3]:
+                break

@@ -17,7 +17,8 @@ from roller_gym import Scene, preset
 from roller_gym.physics import analysis
 from scipy.optimize import brentq, minimize_scalar
 
-STABILIZE, HOLD, BALANCE = (f"roller_gym/Roller{t}-v1" for t in ("Stabilize", "Hold", "Balance"))
+STABILIZE, HOLD, BALANCE = (roller_gym.TASKS[f"Roller{t}"].env_id()
+                            for t in ("Stabilize", "Hold", "Balance"))
 
 
 # -- 1. randomize ranges --------------------------------------------------------------------

@@ -252,7 +252,8 @@ out = {}
 # would take minutes interpreted
 for method, sub, tol in (("rk8", None, 1e-8), ("rk4", None, 1e-8), ("rk8", 3, 1e-8),
                          ("euler", None, 1e-3), ("midpoint", None, 1e-5)):
-    stepper = integ.BatchStepper(n, method=method, dt=0.05, tol=tol, substeps=sub)
+    stepper = integ.BatchStepper(n, integrator=method, dt=0.05, tolerance=tol,
+                                 substeps=sub)
     for j, sc in enumerate(scenes):
         stepper.set_scenes(sc, j)
     phi, w = rng.uniform(-1.5, 1.5, n), rng.uniform(-4, 4, n)

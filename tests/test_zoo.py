@@ -24,7 +24,7 @@ yaml = pytest.importorskip("yaml", reason="PyYAML is not installed (it comes wit
 PAIRS = [(algo, env_id) for algo in ALGOS for env_id in TASKS]
 #: Entries rl-zoo3 consumes itself, or that are checked on their own below.
 ZOO_KEYS = {"n_timesteps", "policy", "n_envs", "normalize", "policy_kwargs", "noise_type",
-            "noise_std", "learning_rate", "clip_range"}
+            "noise_std", "learning_rate", "clip_range", "frame_stack"}
 
 
 def _raw(algo: str) -> dict:
@@ -98,6 +98,12 @@ def test_rl_zoo3_builds_the_model_with_exactly_the_files_settings(algo, env_id, 
         assert manager.n_timesteps == raw["n_timesteps"] and not manager.normalize
         assert model.n_envs == raw["n_envs"]
         assert model.get_env().get_attr("spec")[0].id == env_id
+        if "frame_stack" in raw:  # rl-zoo3 stacks the observations: the policy sees them all
+            from stable_baselines3.common.vec_env import VecFrameStack
+
+            assert isinstance(model.get_env(), VecFrameStack)
+            single = gym.spec(env_id).make().observation_space.shape[0]
+            assert model.observation_space.shape == (raw["frame_stack"] * single,)
         assert model.policy_class is model.policy_aliases[raw["policy"]]
         assert model.policy.net_arch == eval(raw["policy_kwargs"])["net_arch"]
         for key in set(raw) - ZOO_KEYS:  # the rest goes to the algorithm as it stands

@@ -190,7 +190,7 @@ def run_kernel(stepper: Stepper, torques: Sequence[float], phi0: float = 0.0,
 
 def run_dop853(scene: Scene, torques: Sequence[float], dt: float, tol: float,
                phi0: float = 0.0, phi_dot0: float = 0.0) -> Trajectory:
-    """An episode through scipy's DOP853 (``integrators.step(method="dop853")``) at
+    """An episode through scipy's DOP853 (``integrators.step(integrator="dop853")``) at
     rtol = atol = ``tol``, restarted at each control step of ``dt`` [s]."""
     n = len(torques)
     states, subs = np.empty((n + 1, 2)), np.zeros(n, dtype=np.int64)

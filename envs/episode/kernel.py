@@ -145,10 +145,26 @@ class TaskKernels:
     one: dict[Callable, Callable]
 
 
+def kernel_owner(task: type) -> type:
+    """The registered class whose kernels ``task`` runs: its furthest registered base with the
+    same ``reward``, ``success`` and ``parameters`` (a variant that changes no objective, such
+    as one whose scene is drawn per episode, shares its parent's compiled kernels), else
+    ``task`` itself."""
+    owner = task
+    for base in task.__mro__[1:]:
+        if ("Constants" in vars(base) and base.reward is task.reward
+                and base.success is task.success and base.parameters == task.parameters):
+            owner = base
+    return owner
+
+
 @functools.cache
 def task_kernels(task: type) -> TaskKernels:
     """The kernels of a task class, specialised to its ``reward``, ``success`` and
-    ``Constants`` (see :class:`TaskKernels`)."""
+    ``Constants`` (see :class:`TaskKernels`); those of :func:`kernel_owner` where it has
+    them."""
+    if kernel_owner(task) is not task:
+        return task_kernels(kernel_owner(task))
     reward, success, K = task.reward, task.success, task.Constants
     n = len(K._fields)
     jit = functools.partial(numba.njit, cache=True, nogil=True, error_model="numpy")
