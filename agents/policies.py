@@ -42,6 +42,7 @@ from roller_gym.agents.classical import (
 )
 from roller_gym.agents.hyperparams import CLASSICAL
 from roller_gym.extras import install_line, missing
+from roller_gym.task import get_task
 
 __all__ = [
     "BASELINES",
@@ -67,8 +68,6 @@ def baselines_for(env_id: str) -> tuple[str, ...]:
     """The baselines a task is compared with: the classical controller, zero torque and
     random actions, and where the task draws its scene per episode unobserved
     (``Task.scene_ranges``) the classical controller informed of each episode's scene."""
-    from roller_gym.task import get_task
-
     varies = get_task(env_id).scene_ranges is not None
     return tuple(b for b in BASELINES if b != "informed" or varies)
 

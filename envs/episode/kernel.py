@@ -163,8 +163,9 @@ def task_kernels(task: type) -> TaskKernels:
     """The kernels of a task class, specialised to its ``reward``, ``success`` and
     ``Constants`` (see :class:`TaskKernels`); those of :func:`kernel_owner` where it has
     them."""
-    if kernel_owner(task) is not task:
-        return task_kernels(kernel_owner(task))
+    owner = kernel_owner(task)
+    if owner is not task:
+        return task_kernels(owner)
     reward, success, K = task.reward, task.success, task.Constants
     n = len(K._fields)
     jit = functools.partial(numba.njit, cache=True, nogil=True, error_model="numpy")
