@@ -6,24 +6,16 @@ work. ``gymnasium.register_envs(roller_gym)`` is the same import, written so tha
 keep it; ``gymnasium.make("roller_gym:roller_gym/RollerStabilize-v2")`` imports the
 package itself.
 
-================================  ==========================================  ==============
-ID                                task                                        steps (dt)
-================================  ==========================================  ==============
-``roller_gym/RollerStabilize-v2``  bring the roller to rest at the bottom      200 (0.05 s)
-``roller_gym/RollerHold-v2``       hold it at rest at a target on the wall     200 (0.05 s)
-``roller_gym/RollerBalance-v2``    swing the mass center up and balance it     400 (0.05 s)
-``roller_gym/RollerTrack-v1``      follow a target moving along the wall       400 (0.05 s)
-``roller_gym/RollerSwing-v0``      keep it swinging at a given amplitude       400 (0.05 s)
-================================  ==========================================  ==============
+The IDs are those of the tasks in :data:`roller_gym.task.TASKS`
+(``[task.env_id() for task in TASKS.values()]``, ``roller_gym/<name>-v<version>``); the
+README's table describes each task, and each task's module documents it in full.
 
 A change to a task's dynamics, reward, observation or spaces registers it under the next
 version (``-v1``), as Gymnasium does.
 
 The physics, which knows nothing of Gymnasium, is :mod:`roller_gym.physics`; the tasks
-are in the registry :data:`roller_gym.task.TASKS` (one module each:
-:mod:`roller_gym.stabilize`, :mod:`roller_gym.hold`, :mod:`roller_gym.balance`,
-:mod:`roller_gym.track`), and every
-task runs in the same two environments, :class:`roller_gym.roller_env.RollerEnv` and
+are in the registry :data:`roller_gym.task.TASKS` (one module each, :data:`TASK_MODULES`),
+and every task runs in the same two environments, :class:`roller_gym.roller_env.RollerEnv` and
 :class:`roller_gym.vector_env.RollerVectorEnv`; the sample agents are
 :mod:`roller_gym.agents`.
 """
@@ -38,7 +30,8 @@ from roller_gym.registration import TaskEntry
 from roller_gym.task import NAMESPACE, TASKS
 
 #: The modules of the tasks, in the order they are listed; importing one registers its task.
-TASK_MODULES = ("stabilize", "hold", "balance", "track", "swing", "hold_randomized")
+TASK_MODULES = ("stabilize", "hold", "balance", "track", "swing", "hold_randomized",
+                "balance_weak")
 for _module in TASK_MODULES:
     importlib.import_module(f"roller_gym.{_module}")
 

@@ -95,6 +95,8 @@ CLASSICAL: dict[str, dict[str, float]] = {
         "torque_scale": 0.5,
     },
 }
+# The weak-torque Balance: the same swing-up (its return is flat in torque_scale 0.05-0.5).
+CLASSICAL["roller_gym/RollerBalanceWeak-v0"] = CLASSICAL["roller_gym/RollerBalance-v2"]
 
 
 def hyperparams(algo: str, env_id: str) -> dict[str, Any]:
