@@ -70,7 +70,7 @@ $(RLLIB_STAMP): EXTRAS := train,render,dev,rllib
 # The tests of the environments' Gymnasium API on RLlib's Gymnasium release (the physics and
 # the tasks know no Gymnasium: their tests run once, in `make test`), and the RLlib training
 # test.
-RLLIB_TESTS := test_envs test_rllib
+RLLIB_TESTS := test_envs test_env_episodes test_rllib
 test-rllib: $(RLLIB_STAMP)  ## the environment tests on RLlib's Gymnasium release, and the RLlib test
 	$(RLLIB_VENV)/bin/python $(PYTEST) $(RLLIB_TESTS:%=tests/%.py)
 

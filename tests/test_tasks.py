@@ -47,7 +47,7 @@ def test_docstring_table_is_the_declared_observation(task):
 @pytest.mark.parametrize("task", TASK_CLASSES, ids=lambda t: t.name)
 def test_docstring_reward_and_success_are_the_declared_numbers(task):
     """The reward formula and success band each task module states carry the task's own
-    band, margins and weights (the formula itself is checked in test_envs); a task with an
+    band, margins and weights (the formula itself is checked in test_env_episodes); a task with an
     objective of its own states each of its numbers."""
     doc = importlib.import_module(task.__module__).__doc__
     if task.reward is not Task.reward:
