@@ -31,8 +31,16 @@ DOCUMENTED = {
                                   "energy_band": 0.1, "energy_margin": 0.4},
     "roller_gym/RollerHoldRandomized-v0": {"steps": 200, "max_torque": 1.0, "obs": 9,
                                            "scene": "paper", "band": 0.05, "margin": 2.0},
+    "roller_gym/RollerBalanceWeak-v0": {"steps": 400, "max_torque": 0.1, "obs": 5,
+                                        "scene": "balance", "band": 0.1, "margin": 3.0},
 }
 IDS = list(roller_gym.ENV_IDS)
+
+
+def balances(env_id: str) -> bool:
+    """Whether the task balances at an unstable rest position (its documented scene is the
+    preset "balance", whose unstable rest positions roll): its scenes must have one."""
+    return DOCUMENTED[env_id]["scene"] == "balance"
 
 
 # -- the physics, from PHYSICS.md ------------------------------------------------------

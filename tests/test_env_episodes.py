@@ -11,7 +11,7 @@ import math
 import gymnasium as gym
 import numpy as np
 import pytest
-from env_cases import DOCUMENTED, IDS, act, check_info_physics, model, psi_rate
+from env_cases import DOCUMENTED, IDS, act, balances, check_info_physics, model, psi_rate
 from roller_gym import Scene, preset
 
 INFO_KEYS = ("phi", "phi_dot", "psi", "torque", "normal_force", "friction_force", "energy",
@@ -46,7 +46,7 @@ def documented_reward(env_id: str, scene: Scene, info: dict) -> float:
         return wrap(q * (info["phi"] - t)) / q
 
     eps = error(target)
-    if env_id == "roller_gym/RollerBalance-v2":
+    if balances(env_id):
         eps = min((error(target), error(-target)), key=abs)
     band = doc["band"]
 
@@ -89,7 +89,7 @@ def test_reset_options_state_and_scene(env_id):
     assert (info["phi"], info["phi_dot"]) == (0.2, -0.3)
     assert (env.unwrapped.phi, env.unwrapped.phi_dot) == (0.2, -0.3)
     assert obs[2] == pytest.approx(math.cos(0.2), abs=1e-7)
-    scene = preset("drum") if env_id == "roller_gym/RollerBalance-v2" else Scene(m=2.0, e=0.02)
+    scene = preset("drum") if balances(env_id) else Scene(m=2.0, e=0.02)
     obs, info = env.reset(seed=0, options={"scene": scene, "state": (0.1, 0.0)})
     assert env.unwrapped.scene == scene
     assert info["psi"] == pytest.approx(psi_rate(scene) * 0.1, rel=1e-12)
@@ -168,7 +168,7 @@ def test_balance_target_is_the_unstable_rest_position():
 @pytest.mark.parametrize(
     ("env_id", "scene_name"),
     [(i, "default") for i in IDS]
-    + [(i, s) for i in IDS if i != "roller_gym/RollerBalance-v2"
+    + [(i, s) for i in IDS if not balances(i)
        for s in ("floor", "drum", "rim_mass")],
 )
 def test_info_forces_and_energy_follow_physics(env_id, scene_name):

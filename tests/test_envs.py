@@ -19,7 +19,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import roller_gym
-from env_cases import DOCUMENTED, IDS, act, check_info_physics, model, psi_rate
+from env_cases import DOCUMENTED, IDS, act, balances, check_info_physics, model, psi_rate
 from gymnasium import spaces
 from gymnasium.utils.env_checker import check_env as gym_check_env
 from roller_gym import Scene, preset
@@ -182,7 +182,7 @@ def test_bad_render_mode_raises():
 
 @pytest.mark.parametrize("env_id", IDS)
 def test_scene_argument_object_and_preset(env_id):
-    custom = Scene(m=1.5, e=0.02, k=0.08) if env_id != "roller_gym/RollerBalance-v2" else preset(
+    custom = Scene(m=1.5, e=0.02, k=0.08) if not balances(env_id) else preset(
         "balance").replace(m=1.5)
     env = gym.make(env_id, scene=custom)
     assert env.unwrapped.scene == custom
@@ -190,7 +190,7 @@ def test_scene_argument_object_and_preset(env_id):
     check_info_physics(env, info, 0.0)
     _, _, _, _, info = env.step(act(0.5))
     check_info_physics(env, info, info["torque"])
-    name = "drum" if env_id == "roller_gym/RollerBalance-v2" else "floor"
+    name = "drum" if balances(env_id) else "floor"
     env = gym.make(env_id, scene=name)
     assert env.unwrapped.scene == preset(name)
 
@@ -293,7 +293,7 @@ def test_substeps_argument_is_the_number_of_fixed_substeps(integrator, n):
 
 @pytest.mark.parametrize("env_id", IDS)
 def test_randomize_draws_scenes_within_the_ranges(env_id):
-    ranges = {"m": (0.8, 1.2), "e": (0.06, 0.09)} if env_id == "roller_gym/RollerBalance-v2" else {
+    ranges = {"m": (0.8, 1.2), "e": (0.06, 0.09)} if balances(env_id) else {
         "m": (0.8, 1.2), "e": (0.03, 0.05)}
     env = gym.make(env_id, randomize=ranges)
     base = preset(DOCUMENTED[env_id]["scene"])
@@ -328,7 +328,7 @@ CHECKED_KWARGS = [
 def test_checkers_pass_without_warnings(env_id, kwargs, monkeypatch, tmp_path):
     """Gymnasium's and SB3's checkers on every task, on the floor and a drum, with every
     integrator, with domain randomization and with rendering."""
-    if env_id.startswith("roller_gym/RollerBalance") and "scene" in kwargs:
+    if balances(env_id) and "scene" in kwargs:
         pytest.skip("Balance needs an unstable rest position that rolls (not on floor, drum)")
     pytest.importorskip("pygame", reason="Gymnasium's checker renders: the render extra")
     monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")  # Gymnasium's checker also renders "human"

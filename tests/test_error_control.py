@@ -443,7 +443,8 @@ def test_dop853_reports_tol_met_only_where_scipy_kept_the_tolerance():
 def test_a_carried_substep_size_never_fails_a_step_that_a_fresh_one_passes():
     """rk8 carries its proposed substep size to the next step; on a state it did not step
     to, a first trial that overflows is rejected and shrunk (it ended the step non-finite,
-    with 0 substeps), and the step ends as the same step from a fresh stepper does."""
+    with 0 substeps), and the step ends as the same step from a fresh stepper does. rk4
+    carries one too; taylor carries none (its size comes from the expansion at the state)."""
     scene = PRESETS["rim_mass"]
     first = (2.939902186110369, 4.969354228348603, -0.04551300450597362)
     second = (0.03250393038817867, 2.83564580148128, 0.22713056202077542)
@@ -451,7 +452,7 @@ def test_a_carried_substep_size_never_fails_a_step_that_a_fresh_one_passes():
     expected = fresh.advance(*second)
     ref = reference(scene, *second[:2], second[2])
     assert expected[4] and max(abs(expected[0] - ref[0]), abs(expected[1] - ref[1])) <= 1e-6
-    for method in ("rk8", "rk4"):
+    for method in ("rk8", "rk4", "taylor"):
         rng = np.random.default_rng(5)
         stepper = integrators.Stepper(scene, integrator=method, dt=0.05, tolerance=1e-6)
         states = [first, second] + [(rng.uniform(-6, 6), rng.uniform(-8, 8),

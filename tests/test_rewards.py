@@ -55,8 +55,9 @@ AT_EDGE, AT_TWICE = 0.9, 0.75
 
 
 def falls_strictly(reward, error, band):
-    """Whether the reward falls strictly as |error| grows from 0 to 2·band, on each side."""
-    inside = np.abs(error) <= 2.0 * band
+    """Whether the reward falls strictly as |error| grows from 0 to 2·band, on each side,
+    where the roller can rest (its holding torque within the limit: ``reward`` finite)."""
+    inside = (np.abs(error) <= 2.0 * band) & np.isfinite(reward)
     for side in (error >= 0, error <= 0):
         keep = inside & side
         order = np.argsort(np.abs(error[keep]))
