@@ -95,9 +95,10 @@ class DigestLocator(caching._CacheLocator):
     """numba's locator for a roller_gym kernel, with a source stamp that digests every source
     the kernel reaches (see the module docs); the cache folder is the one numba would use."""
 
-    def __init__(self, inner: caching._CacheLocator, py_func: Any) -> None:
+    def __init__(self, inner: caching._CacheLocator, py_func: Any, py_file: str) -> None:
         self._inner = inner
         self._py_func = py_func
+        self._py_file = py_file  # numba names it in its warning on a kernel it cannot cache
 
     def ensure_cache_path(self) -> None:
         self._inner.ensure_cache_path()
@@ -120,7 +121,7 @@ class DigestLocator(caching._CacheLocator):
                 continue
             inner = locator_class.from_function(py_func, py_file)
             if inner is not None:
-                return cls(inner, py_func)
+                return cls(inner, py_func, py_file)
         return None
 
 

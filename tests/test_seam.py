@@ -241,3 +241,29 @@ def test_the_id_decides_the_task():
             make(stabilize, task="RollerHold")
         env = make(stabilize, task=stabilize)
         assert type(env.unwrapped.task).name == "RollerStabilize"
+
+
+def test_a_kernel_numba_cannot_cache_is_warned_about_not_a_crash():
+    """numba warns, naming the kernel's file, where a compiled kernel cannot be cached (code
+    it lifted out of nopython mode, dynamic globals); with the package's digest locator that
+    warning raised AttributeError (seen under ``NUMBA_OPT=0``)."""
+    import warnings
+    from types import SimpleNamespace
+
+    from numba.core import caching
+    from numba.core.errors import NumbaWarning
+    from roller_gym import kernel_cache
+    from roller_gym.episode.outcome import observe
+
+    func = observe.py_func
+    locator = kernel_cache.DigestLocator.from_function(func, func.__code__.co_filename)
+    assert isinstance(locator, kernel_cache.DigestLocator)
+    impl = caching.CompileResultCacheImpl.__new__(caching.CompileResultCacheImpl)
+    impl._locator, impl._lineno = locator, func.__code__.co_firstlineno
+    uncachable = SimpleNamespace(lifted=[SimpleNamespace(can_cache=False)],
+                                 fndesc=SimpleNamespace(qualname="observe"))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert impl.check_cachable(uncachable) is False
+    assert [w.filename for w in caught if issubclass(w.category, NumbaWarning)] == [
+        func.__code__.co_filename]
