@@ -135,11 +135,14 @@ class TaskKernels:
     """A task's compiled kernels (each compiled at its first call, then cached on disk).
 
     ``loop`` and ``parallel``: the outcome of every roller on one core or on all, as
-    ``(result, context, constants, observed, out, flags, obs, scratch)``; ``fused``: the
+    ``(result, context, constants, observed, out, flags, obs, scratch)``; ``single``: the
+    same for a batch of one roller (its arithmetic alone, at a fraction of ``loop``'s first
+    compile: what a single environment's reset runs); ``fused``: the
     physics and the outcome in one call, by the stepper's kernel they run in place of;
     ``one``: the single environment's step, by the stepper's serial kernel."""
 
     loop: Callable
+    single: Callable
     parallel: Callable
     fused: dict[Callable, Callable]
     one: dict[Callable, Callable]
@@ -174,6 +177,11 @@ def task_kernels(task: type) -> TaskKernels:
     def loop(result, context, constants, observed, out, flags, obs, scratch):
         _outcome_all(reward, success, K(*_numbers(constants, n)), result, context,
                      observed, out, flags, obs, scratch)
+
+    @jit
+    def single(result, context, constants, observed, out, flags, obs, scratch):
+        outcome_one(reward, success, K(*_numbers(constants, n)), result, context, observed,
+                    out, flags, obs)
 
     # The loops over chunks on all cores: each chunk's physics (a scheme's ``chunk``) then its
     # outcome, while the chunk's results are in cache: one parallel pass per step. The task's
@@ -239,7 +247,8 @@ def task_kernels(task: type) -> TaskKernels:
     # ``parallel`` does
     fused = {_TAYLOR.kernels()[1]: taylor_and_outcome, _RK.kernels()[1]: rk_and_outcome,
              _TAYLOR_SERIAL: taylor_then_outcome, _RK_SERIAL: rk_then_outcome}
-    return TaskKernels(loop, parallel, fused, {_TAYLOR_SERIAL: taylor_one, _RK_SERIAL: rk_one})
+    return TaskKernels(loop, single, parallel, fused,
+                       {_TAYLOR_SERIAL: taylor_one, _RK_SERIAL: rk_one})
 
 
 @dataclass
@@ -279,7 +288,8 @@ class OutcomeKernel:
         self.observation = np.empty((num, self.observed.size), dtype=np.float32)
         self.fresh = fresh
         parallel = num >= PARALLEL_THRESHOLD
-        self._kernel = self.kernels.parallel if parallel else self.kernels.loop
+        self._kernel = (self.kernels.parallel if parallel else
+                        self.kernels.single if num == 1 else self.kernels.loop)
         self._scratch = np.empty(0 if parallel else SCRATCH_SIZE)
 
     def run(self, result: np.ndarray) -> np.ndarray:
