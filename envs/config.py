@@ -98,13 +98,15 @@ class Settings:
         "step faster. Reward and termination are the same whatever the keys."))
 
     @classmethod
-    def of(cls, owner: str, keywords: Mapping[str, Any]) -> Settings:
-        """The settings from ``owner``'s keywords, naming an unknown one and what is allowed."""
+    def of(cls, owner: type, keywords: Mapping[str, Any]) -> Settings:
+        """The settings from the keywords the class ``owner`` was given beyond its own
+        arguments, naming an unknown one and every argument ``owner`` takes."""
         names = [f.name for f in fields(cls)]
         unknown = [key for key in keywords if key not in names]
         if unknown:
-            raise TypeError(f"{owner} got an unexpected keyword argument {unknown[0]!r}; "
-                            f"allowed: {', '.join(names)}")
+            allowed = ", ".join(inspect.signature(owner).parameters)
+            raise TypeError(f"{owner.__name__} got an unexpected keyword argument "
+                            f"{unknown[0]!r}; allowed: {allowed}")
         return cls(**keywords)
 
 

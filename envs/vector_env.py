@@ -206,7 +206,7 @@ class RollerVectorEnv(VectorEnv):
         **settings: Any,
     ) -> None:
         num_envs = validation.count("num_envs", num_envs)
-        given = Settings.of("RollerVectorEnv", settings)
+        given = Settings.of(type(self), settings)
         _check_memory(num_envs)
         try:
             self._build(num_envs, task, given, max_episode_steps, autoreset_mode)

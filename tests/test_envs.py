@@ -406,5 +406,5 @@ def test_one_construction_signature_from_gym_make_down_to_the_physics():
     env = gym.make("roller_gym/RollerStabilize-v2", integrator="rk4", tolerance=1e-6)
     stepper = env.unwrapped._stepper
     assert (stepper.integrator, stepper.tolerance) == ("rk4", 1e-6)
-    with pytest.raises(TypeError, match=r"'tol'.*allowed: scene, dt"):
+    with pytest.raises(TypeError, match=r"'tol'.*allowed: num_envs, task, scene, dt, "):
         RollerVectorEnv(2, tol=1e-6)
