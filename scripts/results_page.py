@@ -42,7 +42,8 @@ def task_files(folder: Path) -> Path:
 
 
 def load(folder: Path) -> list[dict[str, Any]]:
-    """Every per-task results file under ``folder``, in the order of the registry."""
+    """Every per-task results file under ``folder``, in the order of the registry (a task's
+    earlier versions too: :func:`latest` picks what the page aggregates)."""
     import roller_gym
 
     records = []
@@ -56,6 +57,24 @@ def load(folder: Path) -> list[dict[str, Any]]:
                              "the task again with roller-gym results --env ...")
         records.append(record)
     return records
+
+
+def _version(task: str) -> tuple[str, int]:
+    """(name, version) of a task ID (``roller_gym/RollerHold-v2`` -> ("RollerHold", 2))."""
+    name, version = file_name(task).rsplit("-v", 1)
+    return name, int(version)
+
+
+def latest(records: list[dict[str, Any]]) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+    """The records of each task's latest version measured, and those of the earlier versions
+    they supersede (a new version changes the reward or the dynamics: the page compares
+    algorithms on the latest only)."""
+    newest: dict[str, int] = {}
+    for r in records:
+        name, version = _version(r["task"])
+        newest[name] = max(version, newest.get(name, version))
+    current = [r for r in records if _version(r["task"])[1] == newest[_version(r["task"])[0]]]
+    return current, [r for r in records if r not in current]
 
 
 def _iv(values: tuple[float, float, float]) -> list[float | None]:
@@ -178,14 +197,17 @@ def _overall(tasks: dict[str, dict[str, Any]]) -> dict[str, Any] | None:
 
 
 def summarize(records: list[dict[str, Any]]) -> dict[str, Any]:
-    """Every number the page shows, from the per-task records."""
+    """Every number the page shows, from the per-task records (of each task's latest
+    version; the earlier versions' IDs and dates are listed as superseded)."""
     from roller_gym.agents import stats
 
     targets = {"success_iqm": SUCCESS_TARGET, "seed_success_floor": SEED_SUCCESS_FLOOR,
                "return_tolerance": RETURN_TOLERANCE}
-    tasks = {r["task"]: _task_summary(r, targets) for r in records}
+    current, earlier = latest(records)
+    tasks = {r["task"]: _task_summary(r, targets) for r in current}
     return {"confidence": stats.CONFIDENCE, "reps": stats.REPS, "targets": targets,
-            "last_evaluations": LAST_EVALUATIONS, "tasks": tasks, "overall": _overall(tasks)}
+            "last_evaluations": LAST_EVALUATIONS, "tasks": tasks, "overall": _overall(tasks),
+            "superseded": [{"task": r["task"], "date": r["date"][:10]} for r in earlier]}
 
 
 # -- the page ----------------------------------------------------------------------------
@@ -324,6 +346,11 @@ def page(summary: dict[str, Any], figures: str) -> str:
         "and algorithm on it, evaluates them, writes `docs/results/tasks/<task>.json` and "
         "renders this page from every task file there); render the page again from the "
         "stored files with `roller-gym results --render-only`.", ""]
+    if summary.get("superseded"):
+        lines += ["Results of earlier versions, superseded by the versions above and kept in "
+                  "`docs/results/tasks/`: " + ", ".join(
+                      f"`{s['task']}` (measured {s['date']})" for s in summary["superseded"])
+                  + ".", ""]
     if overall:
         lines += [f"## Over {', '.join(file_name(t) for t in overall['tasks'])}", "",
                   f"{overall['seeds']} seeds per algorithm and task; returns divided by the "

@@ -148,6 +148,24 @@ def test_the_committed_page_is_the_rendering_of_the_committed_task_files():
     assert results_page.page(stored, "results") == (DOCS / "RESULTS.md").read_text()
 
 
+def test_a_newer_version_supersedes_the_earlier_ones_results(tmp_path):
+    """A task measured in two versions: the page aggregates the newer only, and names the
+    earlier one (its ID and date) as superseded; the earlier's numbers are not on it."""
+    (tmp_path / "tasks").mkdir()
+    old = _record([_run("sac", s, 150.0 + s, 0.5) for s in range(5)])
+    old["task"], old["date"] = "roller_gym/RollerHold-v1", "2025-12-31T00:00:00+00:00"
+    new = _record([_run("sac", s, 195.0 + s, 1.0) for s in range(5)])
+    for record in (old, new):
+        name = record["task"].split("/")[1]
+        (tmp_path / "tasks" / f"{name}.json").write_text(json.dumps(record))
+    summary = results_page.render(tmp_path, tmp_path / "RESULTS.md")
+    assert list(summary["tasks"]) == [TASK] and summary["overall"]["tasks"] == [TASK]
+    assert summary["superseded"] == [{"task": "roller_gym/RollerHold-v1", "date": "2025-12-31"}]
+    text = (tmp_path / "RESULTS.md").read_text()
+    assert "`roller_gym/RollerHold-v1` (measured 2025-12-31)" in text
+    assert "## roller_gym/RollerHold-v1" not in text and "152.0" not in text
+
+
 def test_a_task_file_of_another_format_is_refused_with_its_name(tmp_path):
     (tmp_path / "tasks").mkdir()
     (tmp_path / "tasks" / "RollerHold-v2.json").write_text(json.dumps({"format": 1}))
