@@ -75,17 +75,6 @@ def _numbers_overload(constants, n):
     return None
 
 
-@inlined
-def _outcome_all(reward, success, k, result, context, observed, out, flags, obs, scratch):
-    """Every roller's outcome on one core, in ``scratch``; a batch of one by
-    :func:`~roller_gym.episode.outcome.outcome_one`."""
-    if result.shape[1] == 1:
-        outcome_one(reward, success, k, result, context, observed, out, flags, obs)
-    else:
-        outcome_range(reward, success, k, 0, result.shape[1], result, context, observed, out,
-                      flags, obs, scratch)
-
-
 _STEP_ROWS = ROWS.index(STEP_FIELDS[0])  # a stepper's io: its result is the last rows
 #: What a single environment's step unpacks, in order (the stepper's io, tableau and cfg,
 #: then OutcomeKernel._buffers()): the dtype and dimensions of each, checked when bound.
@@ -135,14 +124,17 @@ class TaskKernels:
     """A task's compiled kernels (each compiled at its first call, then cached on disk).
 
     ``loop`` and ``parallel``: the outcome of every roller on one core or on all, as
-    ``(result, context, constants, observed, out, flags, obs, scratch)``; ``single``: the
-    same for a batch of one roller (its arithmetic alone, at a fraction of ``loop``'s first
-    compile: what a single environment's reset runs); ``fused``: the
-    physics and the outcome in one call, by the stepper's kernel they run in place of;
-    ``one``: the single environment's step, by the stepper's serial kernel."""
+    ``(result, context, constants, observed, out, flags, obs, scratch)``, ``result`` laid out
+    as a stepper's (:func:`~roller_gym.physics.integrators.row_table`); ``single``: the same
+    for a batch of one roller (what a single environment's reset runs); ``chunk``: the
+    outcome of rollers lo..hi−1, ``(lo, hi, result, ...)``. The serial kernels call
+    ``chunk`` and ``single``, the parallel ones inline the same code. ``fused``: the physics and the
+    outcome in one call, by the stepper's kernel they run in place of; ``one``: the single
+    environment's step, by the stepper's serial kernel."""
 
     loop: Callable
     single: Callable
+    chunk: Callable
     parallel: Callable
     fused: dict[Callable, Callable]
     one: dict[Callable, Callable]
@@ -173,20 +165,32 @@ def task_kernels(task: type) -> TaskKernels:
     n = len(K._fields)
     jit = functools.partial(numba.njit, cache=True, nogil=True, error_model="numpy")
 
+    # The outcome's code is compiled once per task for the serial kernels, in ``chunk``
+    # (rollers lo..hi−1) and ``single``, which they call: a first use compiles it once, not
+    # once per kernel. The parallel kernels inline it: numba does not cache a parallel kernel
+    # that calls a closure's dispatcher (each process would compile them anew). The task's
+    # numbers cross into a parallel loop as the array (numba rebuilds a tuple that crosses
+    # into one by its class's name, which Constants is not in scope under).
     @jit
-    def loop(result, context, constants, observed, out, flags, obs, scratch):
-        _outcome_all(reward, success, K(*_numbers(constants, n)), result, context,
-                     observed, out, flags, obs, scratch)
+    def chunk(lo, hi, result, context, constants, observed, out, flags, obs, scratch):
+        outcome_range(reward, success, K(*_numbers(constants, n)), lo, hi, result, context,
+                      observed, out, flags, obs, scratch)
 
     @jit
     def single(result, context, constants, observed, out, flags, obs, scratch):
         outcome_one(reward, success, K(*_numbers(constants, n)), result, context, observed,
                     out, flags, obs)
 
+    @jit
+    def loop(result, context, constants, observed, out, flags, obs, scratch):
+        if result.shape[1] == 1:
+            single(result, context, constants, observed, out, flags, obs, scratch)
+        else:
+            chunk(np.int64(0), result.shape[1], result, context, constants, observed, out,
+                  flags, obs, scratch)  # (0 would compile a specialisation for the literal)
+
     # The loops over chunks on all cores: each chunk's physics (a scheme's ``chunk``) then its
-    # outcome, while the chunk's results are in cache: one parallel pass per step. The task's
-    # numbers cross into the loop as the array (numba rebuilds a tuple that crosses into a
-    # parallel loop by its class's name, which a task's Constants is not in scope under).
+    # outcome, while the chunk's results are in cache: one parallel pass per step.
     @jit(parallel=True)
     def parallel(result, context, constants, observed, out, flags, obs, scratch):
         rollers = result.shape[1]
@@ -219,15 +223,13 @@ def task_kernels(task: type) -> TaskKernels:
     def taylor_then_outcome(io, tab, cfg, result, context, constants, observed, out, flags,
                             obs, scratch):
         _TAYLOR_SERIAL(io, tab, cfg)
-        _outcome_all(reward, success, K(*_numbers(constants, n)), result, context,
-                     observed, out, flags, obs, scratch)
+        loop(result, context, constants, observed, out, flags, obs, scratch)
 
     @jit
     def rk_then_outcome(io, tab, cfg, result, context, constants, observed, out, flags, obs,
                         scratch):
         _RK_SERIAL(io, tab, cfg)
-        _outcome_all(reward, success, K(*_numbers(constants, n)), result, context,
-                     observed, out, flags, obs, scratch)
+        loop(result, context, constants, observed, out, flags, obs, scratch)
 
     @jit
     def taylor_one(phi, phi_dot, tau, packed):
@@ -247,7 +249,7 @@ def task_kernels(task: type) -> TaskKernels:
     # ``parallel`` does
     fused = {_TAYLOR.kernels()[1]: taylor_and_outcome, _RK.kernels()[1]: rk_and_outcome,
              _TAYLOR_SERIAL: taylor_then_outcome, _RK_SERIAL: rk_then_outcome}
-    return TaskKernels(loop, single, parallel, fused,
+    return TaskKernels(loop, single, chunk, parallel, fused,
                        {_TAYLOR_SERIAL: taylor_one, _RK_SERIAL: rk_one})
 
 
@@ -295,6 +297,10 @@ class OutcomeKernel:
     def run(self, result: np.ndarray) -> np.ndarray:
         """The outcome of the rollers' ``result`` (STEP_FIELDS rows × rollers, float64) under
         the context in :attr:`context`; returns :attr:`table`."""
+        if result.flags.c_contiguous:  # laid out as the steppers' (row_table): the kernels
+            laid = row_table(*result.shape, zeroed=False)  # are then compiled for one layout
+            laid[:] = result
+            result = laid
         self._renew()
         self._kernel(result, *self._buffers())
         return self.table

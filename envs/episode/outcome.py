@@ -142,7 +142,7 @@ def _put_rows(b, start, values):
 @overload(_put_rows, jit_options=INLINED_OPTIONS)
 def _put_rows_overload(b, start, values):
     lines = "".join(f"    b[start + {j * _B}] = values[{j}]\n" for j in range(len(values)))
-    namespace: dict = {}
+    namespace: dict = {"__name__": __name__}  # the generated function's module: this one
     exec(f"def put_rows(b, start, values):\n{lines}    return None\n", namespace)
     return namespace["put_rows"]
 
