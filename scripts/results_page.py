@@ -48,9 +48,9 @@ def load(folder: Path) -> list[dict[str, Any]]:
 
     records = []
     # by task name, whatever its version (a page may hold results of an earlier version)
-    order = {file_name(env_id).split("-v")[0]: i for i, env_id in enumerate(roller_gym.ENV_IDS)}
+    order = {_version(env_id)[0]: i for i, env_id in enumerate(roller_gym.ENV_IDS)}
     for path in sorted(task_files(folder).glob("*.json"),
-                       key=lambda p: (order.get(p.stem.split("-v")[0], len(order)), p.stem)):
+                       key=lambda p: (order.get(_version(p.stem)[0], len(order)), p.stem)):
         record = json.loads(path.read_text())
         if record.get("format") != FORMAT:
             raise SystemExit(f"{path}: format {record.get('format')!r}, not {FORMAT}; measure "
@@ -73,8 +73,9 @@ def latest(records: list[dict[str, Any]]) -> tuple[list[dict[str, Any]], list[di
     for r in records:
         name, version = _version(r["task"])
         newest[name] = max(version, newest.get(name, version))
-    current = [r for r in records if _version(r["task"])[1] == newest[_version(r["task"])[0]]]
-    return current, [r for r in records if r not in current]
+    latest_ids = set(newest.items())
+    current = [r for r in records if _version(r["task"]) in latest_ids]
+    return current, [r for r in records if _version(r["task"]) not in latest_ids]
 
 
 def _iv(values: tuple[float, float, float]) -> list[float | None]:

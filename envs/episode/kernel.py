@@ -295,12 +295,9 @@ class OutcomeKernel:
         self._scratch = np.empty(0 if parallel else SCRATCH_SIZE)
 
     def run(self, result: np.ndarray) -> np.ndarray:
-        """The outcome of the rollers' ``result`` (STEP_FIELDS rows × rollers, float64) under
-        the context in :attr:`context`; returns :attr:`table`."""
-        if result.flags.c_contiguous:  # laid out as the steppers' (row_table): the kernels
-            laid = row_table(*result.shape, zeroed=False)  # are then compiled for one layout
-            laid[:] = result
-            result = laid
+        """The outcome of the rollers' ``result`` (STEP_FIELDS rows × rollers, float64, laid
+        out as a stepper's: :func:`result_table`; another layout compiles the kernels again)
+        under the context in :attr:`context`; returns :attr:`table`."""
         self._renew()
         self._kernel(result, *self._buffers())
         return self.table
@@ -382,11 +379,10 @@ def outcome(task: Any, result: Any, context: Mapping[str, Any]) -> Outcome:
     shape = np.broadcast(*values, *context).shape
     n = math.prod(shape)
     kernel = OutcomeKernel(task, n)
-    table = result_table(result, shape)
     context_rows = kernel.context.reshape(len(context), *shape)
     for row, value in enumerate(context):  # broadcast as they are written
         context_rows[row] = value
-    kernel.run(table.reshape(len(STEP_FIELDS), n))
+    kernel.run(result_table(result, shape))
     rows = info_rows(kernel.table, kernel.flags, tuple(INFO_KEYS), views=True)  # this call's
     scalar = shape == ()
     info = {k: v[0] if scalar else v if v.shape == shape else v.reshape(shape)
@@ -401,10 +397,15 @@ def outcome(task: Any, result: Any, context: Mapping[str, Any]) -> Outcome:
 
 def result_table(result: Any, shape: tuple[int, ...] = ()) -> np.ndarray:
     """``result`` (a StepResult or a :class:`RestState`, of floats or arrays broadcast to
-    ``shape``) as a stepper's result table: STEP_FIELDS rows of ``shape``, float64."""
-    table = np.empty((len(STEP_FIELDS), *shape))
+    ``shape``) as a stepper's result table: STEP_FIELDS rows × the rollers of ``shape``
+    (flattened), float64, laid out as a stepper's
+    (:func:`~roller_gym.physics.integrators.row_table`), so that the kernels that read a
+    stepper's result are compiled for one layout."""
+    table = row_table(len(STEP_FIELDS), math.prod(shape), zeroed=False)
+    rows = table.reshape(len(STEP_FIELDS), *shape)  # a view: splits each row
+    assert np.shares_memory(rows, table)
     for row, field in enumerate(STEP_FIELDS):
-        table[row] = getattr(result, field)  # broadcast as it is written
+        rows[row] = getattr(result, field)  # broadcast as it is written
     return table
 
 
