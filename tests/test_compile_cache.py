@@ -1,8 +1,8 @@
 """The compiled kernels' disk cache where the package's folder is read-only (a Docker image,
 a shared site-packages): numba then caches in the user-wide folder (``$XDG_CACHE_HOME/numba``),
 so that a second process (a Ray worker, a SubprocVecEnv child) loads the kernels instead of
-compiling them again; the parallel ones (a vector env of PARALLEL_THRESHOLD
-sub-environments) included.
+compiling them again: those of a single env, of a small vector env and of one on all cores
+(PARALLEL_THRESHOLD sub-environments).
 
 Each process runs a read-only copy of the package with an empty user-wide cache of the
 test's own; as root, whom file permissions do not stop, the copy is mounted read-only in a
@@ -25,7 +25,7 @@ from roller_gym.physics.integrators import PARALLEL_THRESHOLD
 
 TASK = "roller_gym/RollerStabilize-v2"
 
-# The child: a single env and a vector env on all cores, one step each; reports the
+# The child: a single env, a vector env on one core and one on all cores, one step each; reports the
 # package's folder, whether it could write there, the package's compiles (numba's events)
 # and its dispatchers loaded from the cache (whether each runs on all cores).
 _CHILD = f"""
@@ -49,15 +49,17 @@ try:
     writable = True
 except OSError:
     writable = False
-envs = (gym.make({TASK!r}), gym.make_vec({TASK!r}, num_envs={PARALLEL_THRESHOLD},
-                                          vectorization_mode="vector_entry_point"))
+envs = (gym.make({TASK!r}), gym.make_vec({TASK!r}, num_envs=4,
+                                          vectorization_mode="vector_entry_point"),
+        gym.make_vec({TASK!r}, num_envs={PARALLEL_THRESHOLD},
+                     vectorization_mode="vector_entry_point"))
 for env in envs:
     env.reset(seed=0)
     env.step(env.action_space.sample())
 hits = {{}}
 for env in envs:  # the task's kernels (made per task, not module attributes)
     k = env.unwrapped._outcome.kernels
-    for value in (k.loop, k.single, k.chunk, k.parallel, *k.fused.values(), *k.one.values()):
+    for value in (k.loop, k.single, k.parallel, *k.fused.values(), *k.one.values()):
         if sum(value.stats.cache_hits.values()):
             hits["task." + value.py_func.__qualname__] = bool(value.targetoptions.get("parallel"))
 for name, module in list(sys.modules.items()):

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import functools
 import math
+import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -40,7 +41,7 @@ from roller_gym.episode.record import (
     F,
     O,
 )
-from roller_gym.physics.compiling import inlined
+from roller_gym.physics.compiling import inlined, named
 from roller_gym.physics.integrators import (
     CHUNK,
     PARALLEL_THRESHOLD,
@@ -126,15 +127,13 @@ class TaskKernels:
     ``loop`` and ``parallel``: the outcome of every roller on one core or on all, as
     ``(result, context, constants, observed, out, flags, obs, scratch)``, ``result`` laid out
     as a stepper's (:func:`~roller_gym.physics.integrators.row_table`); ``single``: the same
-    for a batch of one roller (what a single environment's reset runs); ``chunk``: the
-    outcome of rollers lo..hi−1, ``(lo, hi, result, ...)``. The serial kernels call
-    ``chunk`` and ``single``, the parallel ones inline the same code. ``fused``: the physics and the
+    for a batch of one roller (what a single environment's reset runs). The serial fused
+    kernels call ``loop``, the parallel ones inline its code. ``fused``: the physics and the
     outcome in one call, by the stepper's kernel they run in place of; ``one``: the single
     environment's step, by the stepper's serial kernel."""
 
     loop: Callable
     single: Callable
-    chunk: Callable
     parallel: Callable
     fused: dict[Callable, Callable]
     one: dict[Callable, Callable]
@@ -165,17 +164,11 @@ def task_kernels(task: type) -> TaskKernels:
     n = len(K._fields)
     jit = functools.partial(numba.njit, cache=True, nogil=True, error_model="numpy")
 
-    # The outcome's code is compiled once per task for the serial kernels, in ``chunk``
-    # (rollers lo..hi−1) and ``single``, which they call: a first use compiles it once, not
-    # once per kernel. The parallel kernels inline it: numba does not cache a parallel kernel
-    # that calls a closure's dispatcher (each process would compile them anew). The task's
+    # The outcome's code is compiled once per task for the serial kernels, in ``loop``, which
+    # they call through ``call_loop`` (a function this module names: see
+    # :func:`~roller_gym.physics.compiling.named`). The parallel kernels inline it. The task's
     # numbers cross into a parallel loop as the array (numba rebuilds a tuple that crosses
     # into one by its class's name, which Constants is not in scope under).
-    @jit
-    def chunk(lo, hi, result, context, constants, observed, out, flags, obs, scratch):
-        outcome_range(reward, success, K(*_numbers(constants, n)), lo, hi, result, context,
-                      observed, out, flags, obs, scratch)
-
     @jit
     def single(result, context, constants, observed, out, flags, obs, scratch):
         outcome_one(reward, success, K(*_numbers(constants, n)), result, context, observed,
@@ -183,11 +176,14 @@ def task_kernels(task: type) -> TaskKernels:
 
     @jit
     def loop(result, context, constants, observed, out, flags, obs, scratch):
-        if result.shape[1] == 1:
-            single(result, context, constants, observed, out, flags, obs, scratch)
-        else:
-            chunk(np.int64(0), result.shape[1], result, context, constants, observed, out,
-                  flags, obs, scratch)  # (0 would compile a specialisation for the literal)
+        outcome_range(reward, success, K(*_numbers(constants, n)), np.int64(0),
+                      result.shape[1], result, context, observed, out, flags, obs, scratch)
+
+    def call_loop(result, context, constants, observed, out, flags, obs, scratch):
+        loop(result, context, constants, observed, out, flags, obs, scratch)
+
+    tag = re.sub(r"\W", "_", f"{task.__module__}.{task.__qualname__}")
+    call_loop = named(__name__, f"_loop_{tag}", call_loop)
 
     # The loops over chunks on all cores: each chunk's physics (a scheme's ``chunk``) then its
     # outcome, while the chunk's results are in cache: one parallel pass per step.
@@ -223,13 +219,13 @@ def task_kernels(task: type) -> TaskKernels:
     def taylor_then_outcome(io, tab, cfg, result, context, constants, observed, out, flags,
                             obs, scratch):
         _TAYLOR_SERIAL(io, tab, cfg)
-        loop(result, context, constants, observed, out, flags, obs, scratch)
+        call_loop(result, context, constants, observed, out, flags, obs, scratch)
 
     @jit
     def rk_then_outcome(io, tab, cfg, result, context, constants, observed, out, flags, obs,
                         scratch):
         _RK_SERIAL(io, tab, cfg)
-        loop(result, context, constants, observed, out, flags, obs, scratch)
+        call_loop(result, context, constants, observed, out, flags, obs, scratch)
 
     @jit
     def taylor_one(phi, phi_dot, tau, packed):
@@ -249,7 +245,7 @@ def task_kernels(task: type) -> TaskKernels:
     # ``parallel`` does
     fused = {_TAYLOR.kernels()[1]: taylor_and_outcome, _RK.kernels()[1]: rk_and_outcome,
              _TAYLOR_SERIAL: taylor_then_outcome, _RK_SERIAL: rk_then_outcome}
-    return TaskKernels(loop, single, chunk, parallel, fused,
+    return TaskKernels(loop, single, parallel, fused,
                        {_TAYLOR_SERIAL: taylor_one, _RK_SERIAL: rk_one})
 
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import sys
 import threading
+from collections.abc import Callable
 
 from numba.core import event
 from numba.extending import register_jitable
@@ -96,3 +97,16 @@ def install() -> None:
 INLINED_OPTIONS = {"nogil": True, "forceinline": True}
 #: ``register_jitable`` with :data:`INLINED_OPTIONS`: the decorator of those functions.
 inlined = register_jitable(**INLINED_OPTIONS)
+
+
+def named(module: str, name: str, function: Callable) -> Callable:
+    """``function`` (a plain function calling compiled ones) as module ``module``'s attribute
+    ``name``, compiled as :data:`inlined` into each kernel that calls it: what a kernel made
+    by a factory calls in place of another such kernel. numba keys a cached kernel made by a
+    factory on its closure's contents, pickled: a compiled function there pickles differently
+    in every process (the kernel is never loaded from the cache), a function its module names
+    pickles by that name."""
+    function.__name__ = function.__qualname__ = name
+    function.__module__ = module
+    setattr(sys.modules[module], name, function)
+    return inlined(function)
