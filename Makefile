@@ -30,7 +30,8 @@ run: $(STAMP)  ## train the default agent (SAC, rl-zoo3) on the default task, ev
 	$(RG) evaluate --env roller_gym/RollerStabilize-v2 --runs runs --algos sac --out results
 
 TASKS := roller_gym/RollerStabilize-v2 roller_gym/RollerHold-v2 roller_gym/RollerBalance-v2 \
-	roller_gym/RollerTrack-v1 roller_gym/RollerSwing-v0
+	roller_gym/RollerTrack-v1 roller_gym/RollerSwing-v0 roller_gym/RollerHoldRandomized-v0 \
+	roller_gym/RollerBalanceWeak-v0
 SEEDS := 0 1 2 3 4
 # Options of roller-gym train for every run: `make results SEEDS="0 1" TASKS="roller_gym/RollerHold-v2"
 # TRAIN_ARGS="--steps 2000" RESULTS_OUT=/tmp/smoke RESULTS_PAGE=/tmp/smoke/RESULTS.md` is a

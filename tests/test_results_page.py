@@ -189,3 +189,12 @@ def test_the_threshold_is_calibrated_on_its_own_seeds_apart_from_the_evaluation(
     assert got["registered"] == gym.spec(TASK).reward_threshold
     evaluated = [rollout(env, baseline("classical", env, seed=0), s).total_return for s in (0, 1)]
     assert not np.allclose(returns, evaluated)  # other episodes than the evaluation's first
+
+
+def test_the_round_of_make_results_covers_every_registered_task():
+    """`make results` (its TASKS) trains on every registered task, each at its one version."""
+    import roller_gym
+
+    makefile = (DOCS.parent / "Makefile").read_text()
+    listed = re.search(r"^TASKS := ((?:.*\\\n)*.*)$", makefile, re.M).group(1)
+    assert sorted(listed.replace("\\", " ").split()) == sorted(roller_gym.ENV_IDS)
