@@ -522,4 +522,7 @@ class RollerVectorEnv(VectorEnv):
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         state["_renderers"] = None  # pygame surfaces do not pickle: draw again afterwards
+        # The starts drawn ahead are drawn again when needed (the same numbers: a pure function
+        # of the seeds), in the layout the kernels were compiled for, which pickling loses.
+        state["_ahead"] = None
         return state

@@ -22,6 +22,7 @@ import roller_gym
 from env_cases import DOCUMENTED, IDS, act, balances, check_info_physics, model, psi_rate
 from gymnasium import spaces
 from gymnasium.utils.env_checker import check_env as gym_check_env
+from numba.core import event
 from roller_gym import Scene, preset
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
@@ -352,6 +353,46 @@ def test_pickled_env_continues_the_same_episode(env_id):
         np.testing.assert_array_equal(a[0], b[0])
         assert a[1:] == b[1:]
     np.testing.assert_array_equal(env.reset()[0], copy.reset()[0])  # the generator too
+
+
+class _Compiles(event.Listener):
+    """The names of the functions numba compiles while installed (loads from the disk cache
+    are not compiles)."""
+
+    def __init__(self) -> None:
+        self.names: list[str] = []
+
+    def on_start(self, ev) -> None:
+        self.names.append(ev.data["dispatcher"].py_func.__qualname__)
+
+    def on_end(self, ev) -> None:
+        pass
+
+
+def test_a_pickled_environment_runs_the_kernels_it_was_compiled_for():
+    """Pickling copies the padded tables into compact ones, a layout of their own to numba:
+    unpickled environments (a single one on the default scheme and on a fixed-substep one, a
+    vector one through its autoresets) step and reset without compiling anything, and each
+    task kernel has one signature."""
+    envs = [gym.make(IDS[1]), gym.make(IDS[1], integrator="midpoint"),
+            gym.make_vec(IDS[1], num_envs=3, max_episode_steps=5)]
+
+    def run(env, seed):
+        env.reset(seed=seed)
+        for _ in range(12):  # past two autoresets of the vector env
+            env.step(env.action_space.sample())
+        env.reset(seed=seed + 1)  # a reset after observations were handed out
+
+    for env in envs:
+        run(env, 0)
+    compiles = _Compiles()
+    with event.install_listener("numba:compile", compiles):
+        for env in envs:
+            run(pickle.loads(pickle.dumps(env)), 1)
+    assert compiles.names == []
+    kernels = envs[0].unwrapped._outcome.kernels
+    for kernel in (kernels.single, kernels.loop, *kernels.fused.values(), *kernels.one.values()):
+        assert len(kernel.signatures) <= 1, (kernel.py_func.__qualname__, kernel.signatures)
 
 
 @pytest.mark.parametrize("env_id", IDS)

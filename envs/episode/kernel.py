@@ -350,6 +350,18 @@ class OutcomeKernel:
         return (self.context, self.constants, self.observed, self.table, self.flags,
                 self.observation, self._scratch)
 
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        # Pickling copies a padded table into a compact one: pad it again, so that the kernels
+        # run the layout they were compiled (and cached) for, not a second one.
+        for name in ("context", "table"):
+            table = state[name]
+            state[name] = row_table(*table.shape, zeroed=False)
+            state[name][...] = table
+        flags = state["flags"]
+        state["flags"] = flag_table(flags.shape[1])
+        state["flags"][...] = flags
+        self.__dict__.update(state)
+
     def _renew(self) -> None:
         if self.fresh:
             self.table = row_table(*self.table.shape, zeroed=False)

@@ -72,8 +72,9 @@ class _Base:
 
     @staticmethod
     def _new_io(num: int) -> np.ndarray:
-        """The zeroed ``io`` table of ``num`` rollers."""
-        return np.zeros((len(ROWS), num))
+        """The zeroed ``io`` table of ``num`` rollers, its rows padded (:func:`row_table`):
+        one layout for every stepper, so that a kernel is compiled for one."""
+        return row_table(len(ROWS), num)
 
     def __getstate__(self) -> dict:
         state = dict(self.__dict__)
@@ -89,6 +90,11 @@ class _Base:
 
     def _link(self) -> None:
         """Views and kernel choices that refer to the buffers (again after unpickling)."""
+        num = self._io.shape[1]
+        if self._io.strides[0] != (num + _PAD) * self._io.itemsize:  # unpickled: padded again
+            io = self._new_io(num)
+            io[...] = self._io
+            self._io = io
         self._results = self._io[_OUT:]  # the STEP_FIELDS rows
         self._kernel = self._serial
 
@@ -267,16 +273,7 @@ class BatchStepper(_Base):
                        "tol_met": self._tol_met}
         self._link()
 
-    @staticmethod
-    def _new_io(num: int) -> np.ndarray:
-        """The zeroed ``io`` table, its rows padded (:func:`row_table`)."""
-        return row_table(len(ROWS), num)
-
     def _link(self) -> None:
-        if self._io.strides[0] != (self.num + _PAD) * self._io.itemsize:  # unpickled: padded again
-            io = self._new_io(self.num)
-            io[...] = self._io
-            self._io = io
         super()._link()
         self._kernel = self._parallel if self.num >= PARALLEL_THRESHOLD else self._serial
 
