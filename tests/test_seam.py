@@ -18,7 +18,7 @@ import pytest
 import roller_gym
 from roller_gym import episode
 from roller_gym.episode import record
-from roller_gym.physics.integrators import PARALLEL_THRESHOLD, STEP_FIELDS
+from roller_gym.physics.integrators import PARALLEL_THRESHOLD, STEP_FIELDS, row_table
 
 IDS = list(roller_gym.ENV_IDS)
 DATA = Path(__file__).parent / "data"
@@ -44,7 +44,8 @@ def _outcome(task, n, fill, rng_seed=3):
     """The outcome of n random rollers into buffers (table, flags, observation, scratch) first
     filled with ``fill``: an output the kernel does not write keeps it."""
     rng = np.random.default_rng(rng_seed)
-    result = rng.normal(size=(len(STEP_FIELDS), n))
+    result = row_table(len(STEP_FIELDS), n)  # a stepper's layout, as the kernels are compiled for
+    result[:] = rng.normal(size=result.shape)
     result[STEP_FIELDS.index("finite")] = rng.uniform(size=n) < 0.9
     result[STEP_FIELDS.index("tol_met")] = rng.uniform(size=n) < 0.5
     kernel = episode.OutcomeKernel(task, n)
