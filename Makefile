@@ -13,15 +13,24 @@ STAMP := $(VENV)/.installed
 # install a time-out.
 TORCH_INDEX ?=
 
-# Every environment is made by one recipe: a venv in the stamp's folder, the project installed
-# editable there with the extras that environment's stamp names (EXTRAS below).
-%/.installed: pyproject.toml
+# Every environment is made by one recipe in two steps: a venv in the stamp's folder with the
+# third-party requirements of the extras the folder's stamps name (EXTRAS below), read from
+# pyproject.toml without building the tree (so that it may run beside a build: .ci/run), then
+# the project itself, editable.
+%/.deps: pyproject.toml .ci/requirements.py
 	$(PYTHON) -m venv $(@D)
 	$(@D)/bin/python -m pip install --quiet --upgrade pip
-	$(@D)/bin/python -m pip install --quiet $(if $(TORCH_INDEX),--extra-index-url $(TORCH_INDEX)) -e ".[$(EXTRAS)]"
+	$(PYTHON) .ci/requirements.py $(EXTRAS) > $(@D)/requirements.txt
+	$(@D)/bin/python -m pip install --quiet $(if $(TORCH_INDEX),--extra-index-url $(TORCH_INDEX)) -r $(@D)/requirements.txt
 	touch $@
 
-$(STAMP): EXTRAS := all
+%/.installed: %/.deps
+	$(@D)/bin/python -m pip install --quiet --no-deps -e .
+	touch $@
+
+$(VENV)/.deps $(STAMP): EXTRAS := all
+# make keeps each step's stamp (a stamp made by a chain of pattern rules is otherwise deleted).
+.PRECIOUS: %/.deps %/.installed
 
 RG := $(VENV)/bin/roller-gym
 
@@ -66,7 +75,7 @@ test: $(STAMP)  ## the whole test suite and the linter
 RLLIB_VENV := .venv-rllib
 RLLIB_STAMP := $(RLLIB_VENV)/.installed
 
-$(RLLIB_STAMP): EXTRAS := train,render,dev,rllib
+$(RLLIB_VENV)/.deps $(RLLIB_STAMP): EXTRAS := train,render,dev,rllib
 
 # The tests of the environments' Gymnasium API on RLlib's Gymnasium release (the physics and
 # the tasks know no Gymnasium: their tests run once, in `make test`), and the RLlib training
@@ -83,7 +92,7 @@ train-rllib: $(RLLIB_STAMP)  ## PPO on a local Ray
 PEERS_VENV := .venv-peers
 PEERS_STAMP := $(PEERS_VENV)/.installed
 
-$(PEERS_STAMP): EXTRAS := peers
+$(PEERS_VENV)/.deps $(PEERS_STAMP): EXTRAS := peers
 
 throughput: $(PEERS_STAMP)  ## measure docs/THROUGHPUT.md against CartPole, Pendulum, EnvPool and JAX
 	$(PEERS_VENV)/bin/python -m roller_gym.bench.throughput measure --out docs
