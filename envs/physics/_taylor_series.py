@@ -5,6 +5,7 @@ The recurrences are explained in :mod:`roller_gym.physics.taylor`.
 
 import numba
 from roller_gym.physics import equations as eq
+from roller_gym.physics import taylor_ir
 
 ORDER = 18
 
@@ -13,14 +14,13 @@ ORDER = 18
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", forceinline=True)
 
 
-@_jit
-def coefficients(phi, phi_dot, tau, m, r, kappa, e, k, g, c):
-    """(X, V, angles): the Taylor coefficients of φ [rad] and φ' [rad/s] at this
-    state, in powers of the time [s], and its (sin θ, cos θ, sin ψ, cos ψ)."""
-    L0, D0, ST0, CT0, SQ0, CQ0, SF0 = eq.accel_terms(phi, phi_dot, tau, m, r, kappa, e,
-                                                     k, g, c)
+def recurrences(phi, phi_dot, m, r, kappa, e, g, c, L0, D0, ST0, CT0, SQ0, CQ0, SF0):
+    """The Taylor coefficients (X, V) of φ and φ' and the angles (sin θ, cos θ, sin ψ,
+    cos ψ), from the state, the scene's numbers and the order-0 terms (compiled code
+    runs the same operations, emitted by taylor_ir)."""
     CF0 = CT0 * CQ0 + ST0 * SQ0
-    X0, V0 = phi, phi_dot
+    X0 = phi
+    V0 = phi_dot
     A0 = L0 / D0
     s = 1.0 - r * kappa
     inv_d0 = 1.0 / D0
@@ -235,6 +235,18 @@ def coefficients(phi, phi_dot, tau, m, r, kappa, e, k, g, c):
     X18 = V17 * 0.05555555555555555
     V18 = A17 * 0.05555555555555555
     return (X0, X1, X2, X3, X4, X5, X6, X7, X8, X9, X10, X11, X12, X13, X14, X15, X16, X17, X18), (V0, V1, V2, V3, V4, V5, V6, V7, V8, V9, V10, V11, V12, V13, V14, V15, V16, V17, V18), (ST0, CT0, SQ0, CQ0)
+
+
+taylor_ir.compile_as_emitted(recurrences, ORDER)
+
+
+@_jit
+def coefficients(phi, phi_dot, tau, m, r, kappa, e, k, g, c):
+    """(X, V, angles): the Taylor coefficients of φ [rad] and φ' [rad/s] at this
+    state, in powers of the time [s], and its (sin θ, cos θ, sin ψ, cos ψ)."""
+    L0, D0, ST0, CT0, SQ0, CQ0, SF0 = eq.accel_terms(phi, phi_dot, tau, m, r, kappa, e,
+                                                     k, g, c)
+    return recurrences(phi, phi_dot, m, r, kappa, e, g, c, L0, D0, ST0, CT0, SQ0, CQ0, SF0)
 
 
 @_jit
