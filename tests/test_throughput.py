@@ -24,6 +24,25 @@ RESULTS = {
 }
 
 
+def test_the_page_shows_the_first_step_of_each_case_cold_and_warm():
+    """The first-use benchmark's figures, where given, are a section of the page: one row per
+    case, named by what the case runs, with its cold and warm seconds and the machine's load;
+    without them, no such section."""
+    from roller_gym.bench.firstuse import CASES
+
+    run = {"import_s": 1.5, "first_s": 0.0, "process_s": 0.0, "stderr": []}
+    first = {"date": "2026-01-02T03:04:05+00:00",
+             "machine_before": {"usable_cores": 2, "cpu_count": 2, "load_average": [0.5, 0, 0]},
+             "cases": {name: {"cold": {**run, "first_s": 10.0 + i}, "warm": {**run, "first_s": 2.0},
+                              "load_after": [0.5, 0, 0]}
+                       for i, name in enumerate(CASES)}}
+    page = throughput_report.render(RESULTS, first)
+    assert "## The first step" in page and "at a load average of 0.5" in page
+    for i, name in enumerate(CASES):
+        assert f"| `{CASES[name]}` | {10 + i:.1f} | 2.0 | 1.5 |" in page
+    assert "## The first step" not in throughput_report.render(RESULTS)
+
+
 def test_verdicts_compare_each_ratio_with_its_target():
     judged = {v.target: (v.value, v.met) for v in verdicts.throughput_verdicts(RESULTS)}
     vec = {what: v for what, v in judged.items() if "CartPoleVectorEnv" in what}

@@ -10,7 +10,8 @@ with a fresh, empty ``NUMBA_CACHE_DIR`` (cold), then once more in another proces
 cache the first one filled (warm). A process reports the seconds from its start to the end of
 its first step (``first_s``: the import, ``gym.make`` or ``gym.make_vec``, ``reset`` and one
 ``step``) and the import's share (``import_s``). Writes ``<out>/benchmarks/firstuse.json``
-with the machine's cores and load, and prints a table. The machine's load changes compile
+with the machine's cores and load, draws the throughput page (which shows them) again, and
+prints a table. The machine's load changes compile
 times several-fold: compare figures of one run, and read its load.
 """
 
@@ -151,6 +152,12 @@ def main(argv: list[str] | None = None) -> None:
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(json.dumps(results, indent=1) + "\n")
         print(f"wrote {path}", file=sys.stderr)
+        from roller_gym.bench import records, throughput, throughput_report
+
+        measured = args.out / throughput.RESULTS_FILE
+        if measured.exists():  # the throughput page shows these figures: draw it again
+            for page in throughput_report.write(records.load_results(measured), args.out):
+                print(f"wrote {page}", file=sys.stderr)
     print(table(results))
 
 

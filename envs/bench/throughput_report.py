@@ -6,6 +6,7 @@ targets and their verdicts are the maintainers' page's (:mod:`roller_gym.bench.m
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from typing import Any
 
@@ -18,6 +19,8 @@ from roller_gym.episode import INFO_KEYS
 Results = dict[str, Any]
 
 PAGE = "THROUGHPUT.md"
+#: The first-use benchmark's results (:mod:`roller_gym.bench.firstuse`), in the docs folder.
+FIRST_USE_FILE = Path("benchmarks") / "firstuse.json"
 
 
 def _share_repeats(results: Results) -> str:
@@ -26,8 +29,31 @@ def _share_repeats(results: Results) -> str:
     return " or ".join(str(c) for c in counts)
 
 
-def render(results: Results) -> str:
-    """The Markdown page of a results file (no measuring)."""
+def _first_use(first: Results) -> list[str]:
+    """The page's section on the first step from an empty compile cache."""
+    from roller_gym.bench.firstuse import CASES
+
+    load = first["machine_before"]["load_average"][0]
+    lines = ["## The first step", "",
+             "Seconds from a fresh process's start to the end of its first step (the import, "
+             "the make, `reset` and one `step`): with an empty numba cache (cold: the kernels "
+             "are compiled, and cached on disk) and then on the cache that run filled (warm), "
+             f"measured {first['date'][:10]} on {first['machine_before']['usable_cores']} "
+             f"cores at a load average of {load:.1f} before the run, by "
+             "`python -m roller_gym.bench.firstuse` (which writes "
+             f"`{FIRST_USE_FILE.as_posix()}`; compile times grow several-fold on a busy "
+             "machine).", "",
+             "| first step of | cold cache, s | warm cache, s | of which the import (cold), s |",
+             "|---|---:|---:|---:|"]
+    for name, rec in first["cases"].items():
+        lines.append(f"| `{CASES[name]}` | {rec['cold']['first_s']:.1f} | "
+                     f"{rec['warm']['first_s']:.1f} | {rec['cold']['import_s']:.1f} |")
+    return [*lines, ""]
+
+
+def render(results: Results, first_use: Results | None = None) -> str:
+    """The Markdown page of a results file, with the first-use benchmark's ``first_use``
+    where given (no measuring)."""
     peers = [p for p in PEERS if any(p in v for v in results["vector"].values())]
     lines = [
         "# Throughput", "",
@@ -122,6 +148,8 @@ def render(results: Results) -> str:
               f"of single environments: {ppo['RollerVecEnv'] / ppo['DummyVecEnv']:.2f} ×.",
               "- The environments' state error, and what each integrator costs for its "
               "error: [`BENCHMARKS.md`](BENCHMARKS.md).", ""]
+    if first_use is not None:
+        lines += _first_use(first_use)
     if results["peers_missing"]:
         lines += ["## Peers not measured", ""]
         lines += [f"- {name}: {why}." for name, why in results["peers_missing"].items()]
@@ -131,10 +159,12 @@ def render(results: Results) -> str:
 
 def write(results: Results, out: Path) -> list[Path]:
     """Render ``results`` into the docs folder ``out``: ``out/THROUGHPUT.md``, its plot, and
-    the maintainers' page (its verdicts); the pages' paths."""
+    the maintainers' page (its verdicts); the pages' paths. The first-use benchmark's
+    results are on the page where ``out`` holds them."""
     out = Path(out)
     (out / "benchmarks").mkdir(parents=True, exist_ok=True)
     plots.plot_throughput(results, out / "benchmarks" / THROUGHPUT_PLOT)
     page = out / PAGE
-    page.write_text(render(results))
+    first = out / FIRST_USE_FILE
+    page.write_text(render(results, json.loads(first.read_text()) if first.exists() else None))
     return [page, maintainers.write(out)]
