@@ -220,7 +220,12 @@ def test_the_outcome_of_a_roller_is_the_same_alone_and_in_a_batch(task_id, size)
     core and in one large enough to run on all cores (``PARALLEL_THRESHOLD`` rollers), for
     steps that failed, lifted, slipped or have no error estimate too."""
     from roller_gym import episode
-    from roller_gym.physics.integrators import PARALLEL_THRESHOLD, STEP_FIELDS, row_table
+    from roller_gym.physics.integrators import (
+        PARALLEL_THRESHOLD,
+        STEP_FIELDS,
+        as_row_table,
+        row_table,
+    )
 
     task = gym.spec(task_id).make().unwrapped.task
     n = 300 if size == "serial" else PARALLEL_THRESHOLD + 5
@@ -236,9 +241,7 @@ def test_the_outcome_of_a_roller_is_the_same_alone_and_in_a_batch(task_id, size)
     for i in rng.choice(n, 40, replace=False):
         one = episode.OutcomeKernel(task, 1)
         one.context[:] = big.context[:, i:i + 1]
-        column = row_table(len(STEP_FIELDS), 1)
-        column[:] = result[:, i:i + 1]
-        one.run(column)
+        one.run(as_row_table(result[:, i:i + 1]))
         np.testing.assert_array_equal(one.table[:, 0], big.table[:, i])
         np.testing.assert_array_equal(one.flags[:, 0], big.flags[:, i])
         np.testing.assert_array_equal(one.observation[0], big.observation[i])

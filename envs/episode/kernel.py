@@ -49,6 +49,7 @@ from roller_gym.physics.integrators import (
     SCHEMES,
     BatchStepper,
     Stepper,
+    as_row_table,
     missed,
     put_inputs,
     row_table,
@@ -354,9 +355,7 @@ class OutcomeKernel:
         # Pickling copies a padded table into a compact one: pad it again, so that the kernels
         # run the layout they were compiled (and cached) for, not a second one.
         for name in ("context", "table"):
-            table = state[name]
-            state[name] = row_table(*table.shape, zeroed=False)
-            state[name][...] = table
+            state[name] = as_row_table(state[name])
         flags = state["flags"]
         state["flags"] = flag_table(flags.shape[1])
         state["flags"][...] = flags

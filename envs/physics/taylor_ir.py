@@ -1,7 +1,7 @@
 """The Taylor recurrences compiled by emitting their machine code directly.
 
-numba types and lowers each of the recurrences' ~3,000 additions and products on its own:
-at degree 18 that took half of a single environment's compile time on a cold cache.
+numba types and lowers each of the recurrences' ~3,000 additions and products on its own,
+a large part of a cold first step (measured: ``docs/MAINTAINERS.md``).
 :func:`compile_as_emitted` gives the generated ``recurrences`` a compiled form that writes
 the same operations (:func:`roller_gym.physics.taylor.program`), in the same order, as LLVM
 instructions in one step: the same bits (IEEE operations, no reassociation or contraction),

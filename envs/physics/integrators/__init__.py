@@ -40,6 +40,7 @@ from roller_gym.physics.integrators.layout import (
     SCENE_FIELDS,
     STEP_FIELDS,
     StepResult,
+    as_row_table,
     row_table,
     scene_arrays,
 )
@@ -111,6 +112,7 @@ __all__ = [
     "Scheme",
     "StepResult",
     "Stepper",
+    "as_row_table",
     "contact_state",
     "missed",
     "predicted_substeps",

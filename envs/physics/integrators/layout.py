@@ -134,3 +134,14 @@ def row_table(rows: int, n: int, zeroed: bool = True) -> np.ndarray:
     ``_PAD``). Zeroed, unless ``zeroed`` is False (for a table that is written whole)."""
     return (np.zeros if zeroed else np.empty)((rows, n + _PAD))[:, :n]
 
+
+def as_row_table(table: np.ndarray) -> np.ndarray:
+    """``table`` (float64, rows × rollers) in :func:`row_table`'s layout: itself where it has
+    it, else a copy that has. Pickling copies a padded table into a compact one, which numba
+    would compile every kernel for again."""
+    if table.strides[0] == (table.shape[1] + _PAD) * table.itemsize:
+        return table
+    out = row_table(*table.shape, zeroed=False)
+    out[...] = table
+    return out
+

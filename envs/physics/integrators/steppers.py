@@ -23,7 +23,6 @@ from roller_gym.physics.integrators.layout import (
     _MU,
     _NSUB,
     _OUT,
-    _PAD,
     _PHI_IN,
     _TAU,
     _TOL_MET,
@@ -33,6 +32,7 @@ from roller_gym.physics.integrators.layout import (
     SCENE_FIELDS,
     STEP_FIELDS,
     StepResult,
+    as_row_table,
     row_table,
     scene_arrays,
 )
@@ -90,11 +90,7 @@ class _Base:
 
     def _link(self) -> None:
         """Views and kernel choices that refer to the buffers (again after unpickling)."""
-        num = self._io.shape[1]
-        if self._io.strides[0] != (num + _PAD) * self._io.itemsize:  # unpickled: padded again
-            io = self._new_io(num)
-            io[...] = self._io
-            self._io = io
+        self._io = as_row_table(self._io)  # padded again after unpickling
         self._results = self._io[_OUT:]  # the STEP_FIELDS rows
         self._kernel = self._serial
 
