@@ -50,6 +50,11 @@ MAX_BOXES = 4000
 SMALLEST_SHARE = 1e-5
 #: The most such boxes (neither proven nor refuted) before the proof gives up.
 MAX_STALLED = 4
+#: The proof also gives up when more than MAX_FINE boxes narrower than FINE_SHARE of their
+#: fields' ranges are unproven at one depth: a region the enclosures cannot close at any
+#: resolution (there the unproven boxes double with every depth), not the edge of one.
+FINE_SHARE = 1e-3
+MAX_FINE = 16
 #: Points of the scan along a field that names the feasible part of its range.
 SCAN_POINTS = 33
 
@@ -357,6 +362,10 @@ def _middle(box: Box) -> dict[str, float]:
     return {n: 0.5 * lo + 0.5 * hi for n, (lo, hi) in box.items()}
 
 
+def _middle_key(box: Box) -> tuple[float, ...]:
+    return tuple(_middle(box).values())
+
+
 def check_ranges(task: Task, scene: Scene, dt: float,
                  ranges: Mapping[str, tuple[float, float]]) -> None:
     """Raise ValueError unless ``task`` is proven to be posable in every scene of the box
@@ -402,6 +411,7 @@ def _check_ranges_cached(task_class: type[Task], max_torque: float,
         posable = _posable(task, scene, dt, [_middle(b) for b, good in zip(batch, ok,
                                                                            strict=True)
                                              if not good])
+        fine: list[Box] = []
         for box, good in zip(batch, ok, strict=True):
             if good:
                 proven.append(box)
@@ -412,6 +422,11 @@ def _check_ranges_cached(task_class: type[Task], max_torque: float,
                 return _counterexample(ranges, middle, reason, fails)
             shares = {n: (box[n][1] - box[n][0]) / width[n] for n in names if width[n] > 0}
             widest = max(shares, key=shares.get, default=None)
+            if widest is not None and shares[widest] < FINE_SHARE:
+                fine.append(box)
+                if len(fine) > MAX_FINE:
+                    return _not_proven(ranges, proven, sorted(fine, key=_middle_key),
+                                       "however finely the box is split")
             if widest is None or shares[widest] < SMALLEST_SHARE:
                 stalled.append(box)  # the rest of the box of ranges is examined all the same
                 if len(stalled) >= MAX_STALLED:  # (its coarser boxes were, at lower depths)
@@ -476,15 +491,20 @@ def _not_proven(ranges: Mapping[str, tuple[float, float]], proven: list[Box],
     def show(b: Mapping[str, tuple[float, float]]) -> str:
         return ", ".join(f"{n} in {_inward(lo, hi)}" for n, (lo, hi) in b.items())
 
-    if len(ranges) == 1 and proven:  # the runs of proven intervals
+    def runs(boxes: list[Box]) -> list[Box]:  # one field: touching boxes merged
         (name,) = ranges
-        runs: list[list[float]] = []
-        for lo, hi in sorted(b[name] for b in proven):
-            if runs and lo <= runs[-1][1]:
-                runs[-1][1] = max(runs[-1][1], hi)
+        merged: list[list[float]] = []
+        for lo, hi in sorted(b[name] for b in boxes):
+            if merged and lo <= merged[-1][1]:
+                merged[-1][1] = max(merged[-1][1], hi)
             else:
-                runs.append([lo, hi])
-        done = " and ".join(f"{name} in {_inward(lo, hi)}" for lo, hi in runs)
+                merged.append([lo, hi])
+        return [{name: (lo, hi)} for lo, hi in merged]
+
+    if len(ranges) == 1:
+        stalled = runs(stalled)
+    if len(ranges) == 1 and proven:  # the runs of proven intervals
+        done = " and ".join(show(b) for b in runs(proven))
     elif proven:
         def share(b: Box) -> float:
             return math.prod((hi - lo) / (ranges[n][1] - ranges[n][0]) for n, (lo, hi)
