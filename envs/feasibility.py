@@ -366,6 +366,30 @@ def _middle_key(box: Box) -> tuple[float, ...]:
     return tuple(_middle(box).values())
 
 
+#: A range whose ends (of one sign) are more than this ratio apart is split geometrically.
+GEOMETRIC_RATIO = 100.0
+
+
+def _geometric(low: float, high: float) -> bool:
+    return (low > 0 and high > GEOMETRIC_RATIO * low) or (high < 0 and low < GEOMETRIC_RATIO * high)
+
+
+def _share(part: tuple[float, float], whole: tuple[float, float]) -> float:
+    """How much of a field's range ``whole`` a box's ``part`` covers: on a log scale where the
+    range spans orders of magnitude (:data:`GEOMETRIC_RATIO`), else linearly."""
+    if _geometric(*whole):
+        return math.log(part[1] / part[0]) / math.log(whole[1] / whole[0])
+    return (part[1] - part[0]) / (whole[1] - whole[0])
+
+
+def _split(low: float, high: float, whole: tuple[float, float]) -> float:
+    """Where a box's side [low, high] is split: its geometric middle where the field's range
+    spans orders of magnitude, so that each decade is examined alike; else its middle."""
+    if _geometric(*whole):
+        return math.copysign(math.sqrt(low * high), low)
+    return 0.5 * low + 0.5 * high
+
+
 def check_ranges(task: Task, scene: Scene, dt: float,
                  ranges: Mapping[str, tuple[float, float]]) -> None:
     """Raise ValueError unless ``task`` is proven to be posable in every scene of the box
@@ -420,7 +444,7 @@ def _check_ranges_cached(task_class: type[Task], max_torque: float,
             reason = None if next(posable) else fails(middle)
             if reason is not None:
                 return _counterexample(ranges, middle, reason, fails)
-            shares = {n: (box[n][1] - box[n][0]) / width[n] for n in names if width[n] > 0}
+            shares = {n: _share(box[n], ranges[n]) for n in names if width[n] > 0}
             widest = max(shares, key=shares.get, default=None)
             if widest is not None and shares[widest] < FINE_SHARE:
                 fine.append(box)
@@ -434,7 +458,7 @@ def _check_ranges_cached(task_class: type[Task], max_torque: float,
                                        "however finely the box is split")
                 continue
             lo, hi = box[widest]
-            split = middle[widest]
+            split = _split(lo, hi, ranges[widest])
             deeper += [{**box, widest: (lo, split)}, {**box, widest: (split, hi)}]
         if left:
             return _not_proven(ranges, proven, [*stalled, left[0]], f"within {MAX_BOXES} boxes")
@@ -525,8 +549,12 @@ def _not_proven(ranges: Mapping[str, tuple[float, float]], proven: list[Box],
 def _feasible_part(ok: Callable[[float], bool], low: float, high: float,
                    bad: float | None = None) -> tuple[float, float] | None:
     """The longest feasible run of a scan of [low, high] (``bad``, a known infeasible value,
-    among the points), its ends refined by bisection to 1e-6 of the range's width."""
-    grid = np.union1d(np.linspace(low, high, SCAN_POINTS), [] if bad is None else [bad])
+    among the points), its ends refined by bisection to 1e-6 of the range's width (both on
+    a log scale where the range spans orders of magnitude: :func:`_split`)."""
+    geometric = _geometric(low, high)
+    points = (np.copysign(np.geomspace(abs(low), abs(high), SCAN_POINTS), low) if geometric
+              else np.linspace(low, high, SCAN_POINTS))
+    grid = np.union1d(points, [] if bad is None else [bad])
     flags = [v != bad and ok(float(v)) for v in grid]
     best, start = None, None
     for i, flag in enumerate([*flags, False]):
@@ -547,9 +575,9 @@ def _feasible_part(ok: Callable[[float], bool], low: float, high: float,
             continue
         b = float(grid[outside])
         for _ in range(60):
-            if abs(b - a) <= 1e-6 * (high - low):
+            if _share((min(a, b), max(a, b)), (low, high)) <= 1e-6:
                 break
-            mid = 0.5 * (a + b)
+            mid = _split(min(a, b), max(a, b), (low, high))
             a, b = (mid, b) if ok(mid) else (a, mid)
         ends.append(a)
     return min(ends), max(ends)

@@ -364,3 +364,18 @@ def test_balance_targets_of_randomized_scenes_are_a_batch_computation(monkeypatc
                                                 abs=1e-12)
         monkeypatch.setattr(roller_gym.rest, "equilibria",
                             lambda *a, **k: calls.append(a) or search(*a, **k))
+
+
+def test_a_range_over_orders_of_magnitude_is_examined_decade_by_decade():
+    """A range whose ends are orders of magnitude apart is split and scanned geometrically:
+    Balance with R in (1, 1e6) m is proven (split at arithmetic middles, the proof stalled on
+    R in [1, 8.6], a box of 1e-5 of the range, though every part of it is provable), and the
+    feasible part named for m in (1, 1e200) kg ends where m g r reaches float64's bound of
+    1e100 (a linear scan named [1, 1]: every other point of it was past the bound)."""
+    gym.make(BALANCE, randomize={"R": (1.0, 1e6)})
+    scene = Scene()
+    with pytest.raises(ValueError, match="feasible part of the range") as info:
+        gym.make(STABILIZE, randomize={"m": (1.0, 1e200)})
+    part = re.search(r"feasible part of the range: \[([^,]+), ([^\]]+)\]", str(info.value))
+    bound = 1e100 / (scene.g * scene.r)
+    assert float(part[1]) == 1.0 and 0.99 * bound <= float(part[2]) <= 1.03 * bound
