@@ -252,7 +252,7 @@ def test_info_tol_met_is_the_integrators_flag(tol):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", RuntimeWarning)
         info = env.step(act(0.6))[4]
-    warned = any("is out of reach for some step" in str(w.message) for w in caught)
+    warned = any("is not verified for some step" in str(w.message) for w in caught)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         vinfo = vec.step(np.full((3, 1), 0.6, np.float32))[4]

@@ -41,12 +41,12 @@ def _independent_rhs(m, r, R, e, k, g, c, tau):
     return f
 
 
-@pytest.fixture(scope="module")
-def adversarial():
-    """500 control steps and their references, DOP853 at rtol = atol = 1e-13 and 1e-12 on the
-    independent right-hand side, in groups of similar stiffness (sorted by predicted count)."""
+def _with_references(seed: int):
+    """500 control steps of the adversarial sample drawn from ``seed`` and their references,
+    DOP853 at rtol = atol = 1e-13 and 1e-12 on the independent right-hand side, in groups of
+    similar stiffness (sorted by predicted count)."""
     n = 500
-    params, phi, w, tau = _adversarial_sample(n, 2024)
+    params, phi, w, tau = _adversarial_sample(n, seed)
     scene = Scene(m=params[0], r=params[1], R=params[2], e=params[3], k=params[4],
                   damping=params[6])
     order = np.argsort(predicted_substeps(scene, w, DT, 1e-8, "rk8"))
@@ -65,12 +65,22 @@ def adversarial():
     return scene, phi, w, tau, refs[1e-13], uncertainty
 
 
+@pytest.fixture(scope="module")
+def adversarial():
+    """The sample the error control was developed on (seed 2024), with references."""
+    return _with_references(2024)
+
+
+#: A sample no setting was tuned against: drawn from this seed once the settings were fixed.
+FRESH_SEED = 20261127
+
+
 @pytest.mark.parametrize("method", ["rk8", "rk4", "taylor"])
 def test_adversarial_steps_stay_within_tol(method, adversarial):
     """On 500 random hard steps (references whose 1e-12 and 1e-13 runs differ by more than
     tol/10 skipped, and no other), at tol 1e-6 and 1e-8: every step is finite, its error is
     <= tol in >= 99.9 % of them and <= 2 tol in all, whether it reports tol_met or not; at
-    most 1 % report tol_met False (measured: one rk4 step at 1e-8, at 8e-4 tol)."""
+    most 2 % report tol_met False (where the carried estimate does not verify the step)."""
     scene, phi, w, tau, ref, uncertainty = adversarial
     for tol in (1e-6, 1e-8):
         out = step(scene, phi, w, tau, DT, integrator=method, tolerance=tol)
@@ -81,7 +91,25 @@ def test_adversarial_steps_stay_within_tol(method, adversarial):
         ratio = err[checked] / tol
         assert np.mean(ratio <= 1) >= 0.999, np.sort(ratio)[-5:]
         assert ratio.max() <= 2, ratio.max()
-        assert np.mean(~out.tol_met[checked]) <= 0.01, np.flatnonzero(checked & ~out.tol_met)
+        assert np.mean(~out.tol_met[checked]) <= 0.02, np.flatnonzero(checked & ~out.tol_met)
+
+
+@pytest.mark.parametrize("method", ["rk8", "rk4", "taylor"])
+def test_tol_met_never_claims_a_step_twice_over_on_a_fresh_sample(method):
+    """On a fresh adversarial sample (FRESH_SEED, references as above), at tol 1e-6 and 1e-8:
+    no step that reports tol_met is more than 2 tol off, and at most 2 % report False. (On
+    earlier samples, before the carried estimate and the E3 limit, rk8 reported tol_met on
+    steps 3.0, 5.8 and 7.0 tol off: a single substep whose blended estimate missed 60-fold,
+    and two steps of thousands of substeps whose local errors grew 150-fold.)"""
+    scene, phi, w, tau, ref, uncertainty = _with_references(FRESH_SEED)
+    for tol in (1e-6, 1e-8):
+        out = step(scene, phi, w, tau, DT, integrator=method, tolerance=tol)
+        err = np.maximum(np.abs(out.phi - ref[0]), np.abs(out.phi_dot - ref[1]))
+        checked = uncertainty <= tol / 10
+        assert checked.sum() >= 450, checked.sum()
+        claimed = checked & out.tol_met
+        assert (err[claimed] <= 2 * tol).all(), (tol, np.flatnonzero(claimed & (err > 2 * tol)))
+        assert np.mean(~out.tol_met[checked]) <= 0.02, (tol, np.flatnonzero(checked & ~out.tol_met))
 
 
 #: Steps through a spike of φ'' (J_I near zero, passed at speed: φ' reached about 5,000 rad/s
@@ -105,12 +133,14 @@ def test_spikes_of_phi_ddot_stay_within_tol_and_budget(name, method):
     """Through a spike the controller aims at float64's rounding where that is above a
     substep's share, instead of shrinking its substeps on to the smallest size (which spent
     rk8's whole budget of substeps: the first step ended non-finite, the second 16 tol off):
-    the step is finite, reports tol_met, is within tol of DOP853 and leaves most of the
-    budget (measured: rk8 7444 and 5606 substeps, rk4 52757 and 41080)."""
+    the step is finite, is within tol of DOP853 and leaves most of the budget (measured: rk8
+    17727 and 12054 substeps, rk4 52757 and 41080). tol_met is what the estimates verify:
+    through the first spike the carried estimate grows to 9–240 tol, where the error is
+    0.002–0.013 tol, so it reports False (not verified); through the second, True."""
     scene, state, tol = SPIKES[name]
     ref = reference(scene, *state)
     out = step(scene, *state, DT, integrator=method, tolerance=tol)
-    assert out.finite and out.tol_met
+    assert out.finite
     assert error(out, ref) <= tol
     assert out.substeps <= integrators.MAX_SUBSTEPS // 2, out.substeps
 

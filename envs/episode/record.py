@@ -54,8 +54,9 @@ INFO_KEYS: dict[str, tuple[type, str]] = {
     "slipping": (bool, "the friction needed exceeded μN during the step"),
     "nonfinite": (bool, "the step could not stay finite (or |φ| passed 2⁵⁰ rad, where "
                        "sines are NaN): the state is the one before it"),
-    "tol_met": (bool, "the step met the integrator's tolerance (False: out of reach of "
-                     "float64, or of the substeps a step may take)"),
+    "tol_met": (bool, "the step met the integrator's tolerance (False: not verified: out "
+                     "of reach of float64 or of the substeps a step may take, or its error "
+                     "estimate grew past it along the step)"),
     "is_success": (bool, "the task's success rule holds (see the task's docs)"),
 }
 

@@ -118,17 +118,12 @@ def linearize(
 ) -> tuple[np.ndarray, np.ndarray]:
     """(A, B) of d/dt (δφ, δφ') = A (δφ, δφ') + B δτ about the state (exact derivatives).
 
-    With φ'' = (τ − cφ' − ½ J_I' φ'² − V')/J_I (primes: d/dφ):
-    ∂φ''/∂φ = (−½ J_I'' φ'² − V'' − φ'' J_I')/J_I, ∂φ''/∂φ' = −(c + J_I' φ')/J_I,
+    The derivatives of φ'' are :func:`~roller_gym.physics.equations.accel_jacobian`'s;
     ∂φ''/∂τ = 1/J_I. Shapes (..., 2, 2) and (..., 2, 1).
     """
     m, r, kappa, e, k, g, c = scene.params
+    _, d_phi, d_w = eq.accel_jacobian(phi, phi_dot, tau, m, r, kappa, e, k, g, c)
     j = eq.inertia(phi, m, r, kappa, e, k)
-    jp = eq.dinertia(phi, m, r, kappa, e)
-    jpp = eq.d2inertia(phi, m, r, kappa, e)
-    a = eq.accel(phi, phi_dot, tau, m, r, kappa, e, k, g, c)
-    d_phi = (-0.5 * jpp * phi_dot**2 - eq.d2potential(phi, m, r, kappa, e, g) - a * jp) / j
-    d_w = -(c + jp * phi_dot) / j
     shape = np.shape(d_phi + d_w)
     A = np.zeros((*shape, 2, 2))
     A[..., 0, 1] = 1.0

@@ -30,6 +30,7 @@ from roller_gym.physics.compiling import inlined
 __all__ = [
     "accel",
     "accel_concentric",
+    "accel_jacobian",
     "accel_terms",
     "angles",
     "contact_forces",
@@ -175,6 +176,28 @@ def accel_terms(phi, phi_dot, tau, m, r, kappa, e, k, g, c):
         - g * (r * sin_psi + e * sin_phi)
     )
     return lhs, inertia_per_mass(h, r, e, k), sin_t, cos_t, sin_psi, cos_psi, sin_phi
+
+
+@inlined
+def accel_jacobian(phi, phi_dot, tau, m, r, kappa, e, k, g, c):
+    """(φ'' [rad/s²], ∂φ''/∂φ [1/s²], ∂φ''/∂φ' [1/s]): :func:`accel` and its derivatives,
+    the linearized motion's matrix [[0, 1], [∂φ''/∂φ, ∂φ''/∂φ']]. With φ'' = L/D
+    (:func:`accel_terms`),
+
+    ∂L/∂φ = −(e r / s²) φ'² cos θ − g (r²κ/s cos ψ + e cos φ),  ∂D/∂φ = 2 e r sin θ / s,
+    ∂φ''/∂φ = (∂L/∂φ − φ'' ∂D/∂φ)/D,  ∂φ''/∂φ' = (−c/m − 2 (e r / s) φ' sin θ)/D.
+
+    φ'' is bit for bit :func:`accel`'s.
+    """
+    s = 1.0 - r * kappa
+    lhs, d, sin_t, cos_t, sin_psi, cos_psi, _ = accel_terms(phi, phi_dot, tau, m, r, kappa, e,
+                                                            k, g, c)
+    a = lhs / d
+    cos_phi = cos_t * cos_psi + sin_t * sin_psi  # φ = θ − ψ
+    dl = -e * r / (s * s) * phi_dot * phi_dot * cos_t - g * (r * r * kappa / s * cos_psi
+                                                             + e * cos_phi)
+    dd = 2.0 * e * r * sin_t / s
+    return a, (dl - a * dd) / d, (-c / m - 2.0 * e * r / s * phi_dot * sin_t) / d
 
 
 @inlined

@@ -42,11 +42,15 @@ class StepResult:
         energy: E [J].
         liftoff_margin: the smallest N/(m g) met during the step (<= 0: lift-off).
         slip_margin: the smallest (μN − |F|)/(m g) met during the step (< 0: slip).
-        error_estimate: the sum of the accepted substeps' estimated errors
-            (max of |Δφ| [rad], |Δφ'| [rad/s]); NaN for fixed schemes and DOP853.
+        error_estimate: the sum of the accepted substeps' estimated errors (max of |Δφ|
+            [rad], |Δφ'| [rad/s]), for rk8 and rk4 the larger of that and the same estimates
+            carried to the step's end by the linearized motion; NaN for fixed schemes and
+            DOP853.
         tol_met: False where the accepted substeps' error estimates add up to more than the
             scheme's share of ``tolerance`` (substeps accepted at float64 rounding or past the
-            budget: the tolerance was out of reach and is not verified); for euler and
+            budget: the tolerance was out of reach and is not verified), or, for rk8 and rk4,
+            where their carried estimate stays above the scheme's ``propagated_limit`` share
+            of ``tolerance`` after ``RETRIES`` retries with smaller shares; for euler and
             midpoint, where the predicted substeps were more than ``MAX_SUBSTEPS``; for
             DOP853, where scipy failed or raised rtol = ``tol`` to its floor, 100 ε.
     """
@@ -93,11 +97,11 @@ _OUT = _PHI  # the outputs are the last rows, in STEP_FIELDS order
 assert ROWS[_OUT:] == STEP_FIELDS
 #: A stepper's settings, as the kernels read them from its float64 array ``cfg``: the control
 #: step [s], ``tolerance``, the fixed substeps (0: automatic), and its scheme's controller halvings,
-#: order, constant, stable step, sweep exponent and tol_share (:class:`Scheme`).
+#: order, constant, stable step, sweep exponent, tol_share and propagated_limit (:class:`Scheme`).
 CFG_FIELDS = ("dt", "tolerance", "substeps", "halvings", "order", "constant", "stable_step",
-              "sweep_exponent", "tol_share")
+              "sweep_exponent", "tol_share", "propagated_limit")
 (_CF_DT, _CF_TOLERANCE, _CF_SUBSTEPS, _CF_HALVINGS, _CF_ORDER, _CF_CONSTANT, _CF_STABLE, _CF_SWEEP,
- _CF_SHARE) = range(len(CFG_FIELDS))
+ _CF_SHARE, _CF_PROPAGATED) = range(len(CFG_FIELDS))
 
 
 def scene_arrays(scene: Scene, n: int | None = None) -> np.ndarray:

@@ -19,6 +19,7 @@ from roller_gym.physics.integrators.layout import (
     _CF_DT,
     _CF_HALVINGS,
     _CF_ORDER,
+    _CF_PROPAGATED,
     _CF_SHARE,
     _CF_STABLE,
     _CF_SUBSTEPS,
@@ -47,7 +48,9 @@ from roller_gym.physics.integrators.rules import (
     FORCE_AFTER,
     FORCE_REST,
     ROUNDOFF_FACTOR,
+    _accel_jac_lanes,
     _accel_lanes,
+    _again,
     _end_lanes,
     _finish,
     _finite,
@@ -55,7 +58,10 @@ from roller_gym.physics.integrators.rules import (
     _margin_lanes,
     _margins,
     _parallel,
+    _propagate,
+    _propagated,
     _serial,
+    _smaller_share,
     _substeps,
     _write,
 )
@@ -111,6 +117,13 @@ _BS5 = _tableau(
 )
 
 
+#: The largest error of the embedded 3rd-order solution (|h E3·K|, rad or rad/s) at which a
+#: DOP853 substep is judged by its blended estimate: that estimate (the 5th-order one times
+#: its ratio to the 3rd-order one) assumes both in their asymptotic range, and past this it
+#: was measured to miss the error 60-fold. A larger one is rejected and at least halved.
+E3_LIMIT = 1e-2
+
+
 @numba.extending.register_jitable
 def _first_size(io, col, phi_dot, dt, tol, nfixed, cfg):
     """The size [s] a roller's first substep wants: the fixed one; else where the last step's
@@ -135,6 +148,14 @@ def _attempt_size(fixed, nfixed, hdes, count, t, dt):
 
 
 @numba.extending.register_jitable
+def _blend(h, e5, e3):
+    """A substep's error estimate of one component (φ or φ'), scipy's DOP853 form:
+    h E5² / sqrt(E5² + 0.01 E3²) from its error sums E5·K and E3·K (E3 = 0: |h E5·K|)."""
+    d = e5 * e5 + 0.01 * e3 * e3
+    return h * e5 * e5 / math.sqrt(trig.select(d > 0.0, d, 1.0))
+
+
+@numba.extending.register_jitable
 def _judge(h, e5p, e5w, e3p, e3w, phi, w, phin, wn, a_new, count, hforce, t, hdes, rejected,
            last, status, dt, share, fixed, halvings):
     """Accept or reject one roller's attempt of size h, from its error sums (scipy's DOP853
@@ -142,11 +163,9 @@ def _judge(h, e5p, e5w, e3p, e3w, phi, w, phin, wn, a_new, count, hforce, t, hde
 
     Returns (accepted, its error estimate, the next size [s], the roller's status, hforce).
     """
-    dp = e5p * e5p + 0.01 * e3p * e3p
-    dw = e5w * e5w + 0.01 * e3w * e3w
-    errp = h * e5p * e5p / math.sqrt(trig.select(dp > 0.0, dp, 1.0))
-    errw = h * e5w * e5w / math.sqrt(trig.select(dw > 0.0, dw, 1.0))
-    err = max(errp, errw)
+    err = max(_blend(h, e5p, e3p), _blend(h, e5w, e3w))
+    # past E3_LIMIT the blend is not trusted (E3 = 0: never)
+    wide = (h * max(abs(e3p), abs(e3w)) > E3_LIMIT) & (not fixed)
     fin = _finite(phin) & _finite(wn) & _finite(a_new) & _finite(err)
     # past FORCE_AFTER accepted substeps, the rest in fewer than as many more
     start = (count == FORCE_AFTER) & (hforce == 0.0)
@@ -159,8 +178,8 @@ def _judge(h, e5p, e5w, e3p, e3w, phi, w, phin, wn, a_new, count, hforce, t, hde
     ratio = trig.select(aim > 0.0, err / trig.select(aim > 0.0, aim, 1.0), 0.0)
     # an estimate at the level of float64 rounding is accepted: no smaller substep does better
     # (a non-finite trial never is: it is rejected and shrunk, failing only at the floor)
-    forced = (h <= floor) | (fin & (err <= ROUNDOFF_FACTOR * _EPS * big))
-    accept = trig.select(fixed, fin, fin & ((ratio <= 1.0) | forced))
+    forced = (h <= floor) | (fin & (err <= ROUNDOFF_FACTOR * _EPS * big) & (not wide))
+    accept = trig.select(fixed, fin, fin & (((ratio <= 1.0) & (not wide)) | forced))
     fail = (not fin) & (fixed | forced)
     ends = accept & (last != 0.0)
     status = trig.select(ends, 1.0, trig.select(fail, 2.0, status))
@@ -170,6 +189,7 @@ def _judge(h, e5p, e5w, e3p, e3w, phi, w, phin, wn, a_new, count, hforce, t, hde
     factor = min(_MAX_FACTOR, max(_MIN_FACTOR, _SAFETY / q))  # ratio 0: the largest
     factor = trig.select(fin, factor, _MIN_FACTOR)
     factor = trig.select(rejected != 0.0, min(factor, 1.0), factor)
+    factor = trig.select(wide, min(factor, 0.5), factor)
     h_new = trig.select(fixed, hdes, max(h * factor, floor))
     return accept, err, h_new, status, hforce
 
@@ -198,10 +218,12 @@ def _rk_chunk(io, lo, hi, tab, cfg):
     dt, tol = cfg[_CF_DT], cfg[_CF_TOLERANCE]
     nfixed, halvings = int(cfg[_CF_SUBSTEPS]), int(cfg[_CF_HALVINGS])
     share = tol * cfg[_CF_SHARE]  # the error the accepted substeps' estimates may add up to
+    limit = tol * cfg[_CF_PROPAGATED]  # the error they may grow into by the step's end
+    order = cfg[_CF_ORDER]
     fixed = nfixed > 0
     # one scratch block: the stages, then one row per per-roller quantity
     nf = len(SCENE_FIELDS)
-    scratch = np.empty((2 * (s + 1) + nf + 31, n + _PAD))
+    scratch = np.empty((2 * (s + 1) + nf + 42, n + _PAD))
     kp = scratch[: s + 1]  # stage velocities φ'
     kw = scratch[s + 1: 2 * (s + 1)]  # stage accelerations φ''
     par = scratch[2 * (s + 1): 2 * (s + 1) + nf]
@@ -214,9 +236,16 @@ def _rk_chunk(io, lo, hi, tab, cfg):
     rejected = rows[21]  # 0 or 1
     slot = rows[22]  # the roller (column lo + slot) whose numbers are in this lane
     hwant, carry = rows[29], rows[30]  # the size wanted this attempt; the size carried on
+    # the propagated estimate S (2 × 2), ∂φ''/∂φ and ∂φ''/∂φ' at the substep's start and end,
+    # the roller's share of tol and its retries
+    s00, s01, s10, s11 = rows[31], rows[32], rows[33], rows[34]
+    jp0, jq0, jp1, jq1 = rows[35], rows[36], rows[37], rows[38]
+    lshare, retries = rows[39], rows[40]  # (lshare: the share this pass aims at)
+    h_new = rows[41]  # the next size
     for i in range(n):
         hforce[i], count[i], status[i], rejected[i], slot[i] = 0.0, 0.0, 0.0, 0.0, i
-        carry[i] = 0.0
+        carry[i], lshare[i], retries[i] = 0.0, share, 0.0
+        s00[i], s01[i], s10[i], s11[i] = 0.0, 0.0, 0.0, 0.0
     # The running rollers are kept in lanes 0..na−1 (a finished one swaps places with the last
     # running one), so every per-lane loop runs over contiguous lanes.
     na = n
@@ -229,7 +258,7 @@ def _rk_chunk(io, lo, hi, tab, cfg):
         kp[0, i] = w[i]
         t[i], lift[i], slip[i], err_sum[i] = 0.0, np.inf, np.inf, 0.0
         hdes[i] = _first_size(io, col, w[i], dt, tol, nfixed, cfg)
-    _accel_lanes(phi, w, tau, par, n, kw[0])
+    _accel_jac_lanes(phi, w, tau, par, n, kw[0], jp0, jq0)
     for _attempt in range(_MAX_ATTEMPTS):
         if na == 0:
             break
@@ -251,7 +280,10 @@ def _rk_chunk(io, lo, hi, tab, cfg):
             for i in range(na):
                 phin[i] = phi[i] + hh[i] * acc_p[i]
                 kp[st, i] = w[i] + hh[i] * acc_w[i]
-            _accel_lanes(phin, kp[st], tau, par, na, kw[st])
+            if st < s:
+                _accel_lanes(phin, kp[st], tau, par, na, kw[st])
+            else:  # the new state: its derivatives too
+                _accel_jac_lanes(phin, kp[st], tau, par, na, kw[st], jp1, jq1)
         # the last stage's weights are b: its state is the new state
         for i in range(na):
             wn[i] = kp[s, i]
@@ -268,13 +300,26 @@ def _rk_chunk(io, lo, hi, tab, cfg):
         # Accept or reject, and the next size, per roller: selects only, in three loops that
         # each touch few rows, so that LLVM can vectorize them (it gives up on a loop whose
         # rows it would have to check pairwise for overlap too many times).
-        accepted, err_now, h_new = acc_p, e3p, e3w  # rows free until the next attempt
+        accepted, err_now = acc_p, acc_w  # rows free until the next attempt
         for i in range(na):
             accept, err_now[i], h_new[i], status[i], hforce[i] = _judge(
                 hh[i], e5p[i], e5w[i], e3p[i], e3w[i], phi[i], w[i], phin[i], wn[i], kw[s, i],
                 count[i], hforce[i], t[i], hdes[i], rejected[i], last[i], status[i], dt,
-                share, fixed, halvings)
+                lshare[i], fixed, halvings)
             accepted[i] = trig.select(accept, 1.0, 0.0)
+        ep, ew = e5p, e5w  # each component's estimate, in place of its error sum
+        for i in range(na):
+            ep[i], ew[i] = _blend(hh[i], e5p[i], e3p[i]), _blend(hh[i], e5w[i], e3w[i])
+        for i in range(na):  # the accepted estimates carried to the new state
+            accept = accepted[i] != 0.0
+            n00, n01, n10, n11 = _propagate(s00[i], s01[i], s10[i], s11[i], hh[i], jp0[i],
+                                            jq0[i], jp1[i], jq1[i], ep[i], ew[i])
+            s00[i] = trig.select(accept, n00, s00[i])
+            s01[i] = trig.select(accept, n01, s01[i])
+            s10[i] = trig.select(accept, n10, s10[i])
+            s11[i] = trig.select(accept, n11, s11[i])
+            jp0[i] = trig.select(accept, jp1[i], jp0[i])
+            jq0[i] = trig.select(accept, jq1[i], jq0[i])
         for i in range(na):  # the state of the accepted
             accept = accepted[i] != 0.0
             phi[i] = trig.select(accept, phin[i], phi[i])
@@ -286,6 +331,20 @@ def _rk_chunk(io, lo, hi, tab, cfg):
                 accepted[i] != 0.0, last[i], t[i], hh[i], count[i], err_sum[i], err_now[i],
                 hwant[i], h_new[i], carry[i], dt)
             hdes[i] = h_new[i]
+        for i in range(na):  # a step whose estimates grew past the limit: again, aiming lower
+            g = _propagated(s00[i], s01[i], s10[i], s11[i])
+            if _again(status[i], fixed, g, limit, retries[i], hforce[i], count[i], order):
+                col = lo + int(slot[i])
+                phi[i], w[i] = io[_PHI_IN, col], io[_W_IN, col]
+                kp[0, i] = w[i]
+                kw[0, i], jp0[i], jq0[i] = eq.accel_jacobian(
+                    phi[i], w[i], tau[i], par[0, i], par[1, i], par[2, i], par[3, i],
+                    par[4, i], par[5, i], par[6, i])
+                t[i], err_sum[i], status[i], rejected[i], carry[i] = 0.0, 0.0, 0.0, 0.0, 0.0
+                s00[i], s01[i], s10[i], s11[i] = 0.0, 0.0, 0.0, 0.0
+                lshare[i] = _smaller_share(lshare[i], g, limit)
+                retries[i] += 1.0
+                hdes[i] = _first_size(io, col, w[i], dt, tol, nfixed, cfg)
         i = 0
         while i < na:
             if status[i] != 0.0:
@@ -293,7 +352,8 @@ def _rk_chunk(io, lo, hi, tab, cfg):
                 for f in range(nf):
                     par[f, i], par[f, na] = par[f, na], par[f, i]
                 for x in (kp[0], kw[0], tau, phi, w, hdes, t, lift, slip, err_sum, hforce, count,
-                          status, rejected, slot, carry):  # what outlives an attempt
+                          status, rejected, slot, carry, s00, s01, s10, s11, jp0, jq0, lshare,
+                          retries):  # what outlives an attempt
                     x[i], x[na] = x[na], x[i]
             else:
                 i += 1
@@ -304,9 +364,10 @@ def _rk_chunk(io, lo, hi, tab, cfg):
     _end_lanes(phi, w, tau, par, n, end)
     for i in range(n):
         io[_H_NEXT, lo + int(slot[i])] = 0.0 if fixed or status[i] != 1.0 else carry[i]
+        g = _propagated(s00[i], s01[i], s10[i], s11[i])
         _write(io, lo + int(slot[i]), status[i] == 1.0, phi[i], w[i], count[i], end[0, i],
-               end[1, i], end[2, i], end[3, i], end[4, i], end[5, i], err_sum[i],
-               err_sum[i] <= share)
+               end[1, i], end[2, i], end[3, i], end[4, i], end[5, i], max(err_sum[i], g),
+               (err_sum[i] <= share) & (g <= limit))
 
 
 @_jit
@@ -318,14 +379,20 @@ def _rk_one(io, tab, cfg):
     dt, tol = cfg[_CF_DT], cfg[_CF_TOLERANCE]
     nfixed, halvings = int(cfg[_CF_SUBSTEPS]), int(cfg[_CF_HALVINGS])
     share = tol * cfg[_CF_SHARE]
+    aim = share  # the share this pass aims at (smaller in a retry)
+    limit = tol * cfg[_CF_PROPAGATED]
+    order = cfg[_CF_ORDER]
     fixed = nfixed > 0
     m, r, kappa, e = io[_M, 0], io[_RR, 0], io[_KAPPA, 0], io[_E, 0]
     k, g, c, mu = io[_K, 0], io[_G, 0], io[_C, 0], io[_MU, 0]
     tau, phi, w = io[_TAU, 0], io[_PHI_IN, 0], io[_W_IN, 0]
     kp, kw = np.empty(s + 1), np.empty(s + 1)  # the stages' φ' and φ''
-    kp[0], kw[0] = w, eq.accel(phi, w, tau, m, r, kappa, e, k, g, c)
+    kp[0] = w
+    kw[0], jp0, jq0 = eq.accel_jacobian(phi, w, tau, m, r, kappa, e, k, g, c)
+    jp1, jq1 = jp0, jq0
     t, lift, slip, err_sum, hforce, count = 0.0, np.inf, np.inf, 0.0, 0.0, 0.0
-    status, rejected, carry = 0.0, 0.0, 0.0
+    status, rejected, carry, retries = 0.0, 0.0, 0.0, 0.0
+    s00, s01, s10, s11 = 0.0, 0.0, 0.0, 0.0
     hdes = _first_size(io, 0, w, dt, tol, nfixed, cfg)
     for _attempt in range(_MAX_ATTEMPTS):
         if status != 0.0:
@@ -343,7 +410,10 @@ def _rk_one(io, tab, cfg):
                     acc_w += a * kw[j]
             phin = phi + h * acc_p
             kp[st] = w + h * acc_w
-            kw[st] = eq.accel(phin, kp[st], tau, m, r, kappa, e, k, g, c)
+            if st < s:
+                kw[st] = eq.accel(phin, kp[st], tau, m, r, kappa, e, k, g, c)
+            else:
+                kw[st], jp1, jq1 = eq.accel_jacobian(phin, kp[st], tau, m, r, kappa, e, k, g, c)
         wn = kp[s]
         e5p, e5w, e3p, e3w = 0.0, 0.0, 0.0, 0.0
         for j in range(s + 1):
@@ -354,14 +424,29 @@ def _rk_one(io, tab, cfg):
             e5w += a5 * kw[j]
         accept, err, h_new, status, hforce = _judge(
             h, e5p, e5w, e3p, e3w, phi, w, phin, wn, kw[s], count, hforce, t, hdes, rejected,
-            last, status, dt, share, fixed, halvings)
+            last, status, dt, aim, fixed, halvings)
         if accept:
             phi, w, kp[0], kw[0] = phin, wn, kp[s], kw[s]
+            s00, s01, s10, s11 = _propagate(s00, s01, s10, s11, h, jp0, jq0, jp1, jq1,
+                                            _blend(h, e5p, e3p), _blend(h, e5w, e3w))
+            jp0, jq0 = jp1, jq1
         t, count, err_sum, rejected, carry = _tick(accept, last, t, h, count, err_sum, err,
                                                    hdes, h_new, carry, dt)
         hdes = h_new
+        grown = _propagated(s00, s01, s10, s11)
+        if _again(status, fixed, grown, limit, retries, hforce, count, order):
+            phi, w = io[_PHI_IN, 0], io[_W_IN, 0]
+            kp[0] = w
+            kw[0], jp0, jq0 = eq.accel_jacobian(phi, w, tau, m, r, kappa, e, k, g, c)
+            t, err_sum, status, rejected, carry = 0.0, 0.0, 0.0, 0.0, 0.0
+            s00, s01, s10, s11 = 0.0, 0.0, 0.0, 0.0
+            aim = _smaller_share(aim, grown, limit)
+            retries += 1.0
+            hdes = _first_size(io, 0, w, dt, tol, nfixed, cfg)
     io[_H_NEXT, 0] = 0.0 if fixed or status != 1.0 else carry
-    _finish(io, 0, status == 1.0, phi, w, tau, count, lift, slip, err_sum, err_sum <= share)
+    grown = _propagated(s00, s01, s10, s11)
+    _finish(io, 0, status == 1.0, phi, w, tau, count, lift, slip, max(err_sum, grown),
+            (err_sum <= share) & (grown <= limit))
 
 
 

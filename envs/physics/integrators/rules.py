@@ -100,6 +100,15 @@ def _accel_lanes(phi, w, tau, par, na, out):
 
 
 @_jit
+def _accel_jac_lanes(phi, w, tau, par, na, out, dp, dw):
+    """:func:`_accel_lanes`, and the derivatives of φ'' into dp[i] (∂/∂φ) and dw[i] (∂/∂φ')."""
+    for i in range(na):
+        out[i], dp[i], dw[i] = eq.accel_jacobian(phi[i], w[i], tau[i], par[0, i], par[1, i],
+                                                 par[2, i], par[3, i], par[4, i], par[5, i],
+                                                 par[6, i])
+
+
+@_jit
 def _margin_lanes(phi, w, a, par, na, lift, slip):
     """Lower lift[i] and slip[i] to lane i's margins at (phi[i], w[i], a[i]) if smaller."""
     for i in range(na):
@@ -195,3 +204,59 @@ def _parallel(io, tab, cfg, chunk):
 
 #: Batches at least this large are advanced on all cores.
 PARALLEL_THRESHOLD = 2048
+
+
+# -- the error carried along a step ---------------------------------------------------------------
+
+#: Times an error-controlled Runge–Kutta step may be taken again with a smaller share of tol
+#: when its propagated estimate passes ``propagated_limit · tolerance``.
+RETRIES = 2
+
+
+@numba.extending.register_jitable
+def _propagate(s00, s01, s10, s11, h, p0, q0, p1, q1, ep, ew):
+    """The accepted substeps' error estimates carried to the end of one more of size h [s]:
+    S ← M S + diag(ep, ew), with M = (I − h A1/2)⁻¹ (I + h A0/2) the trapezoidal rule's map
+    of the linearized motion over it, A = [[0, 1], [p, q]] from
+    :func:`~roller_gym.physics.equations.accel_jacobian` at its start (p0, q0) and end
+    (p1, q1). Where the substep is too long for the rule (the determinant of I − h A1/2
+    below 1/2), S is inf: the estimate is not trusted."""
+    a01, a10, a11 = -0.5 * h, -0.5 * h * p1, 1.0 - 0.5 * h * q1  # I − h A1/2 (a00 = 1)
+    det = a11 - a01 * a10
+    b01, b10, b11 = 0.5 * h, 0.5 * h * p0, 1.0 + 0.5 * h * q0  # I + h A0/2 (b00 = 1)
+    inv = 1.0 / trig.select(det >= 0.5, det, 1.0)
+    m00, m01 = (a11 - a01 * b10) * inv, (a11 * b01 - a01 * b11) * inv
+    m10, m11 = (b10 - a10) * inv, (b11 - a10 * b01) * inv
+    bad = trig.select(det >= 0.5, 0.0, math.inf)
+    return (m00 * s00 + m01 * s10 + ep + bad, m00 * s01 + m01 * s11,
+            m10 * s00 + m11 * s10, m10 * s01 + m11 * s11 + ew + bad)
+
+
+@numba.extending.register_jitable
+def _propagated(s00, s01, s10, s11):
+    """The propagated estimate [rad or rad/s]: the largest row sum of |S| (the error in φ or
+    φ' that the substeps' estimates, each at its own substep, grow into by the end; inf where
+    not finite)."""
+    r0, r1 = abs(s00) + abs(s01), abs(s10) + abs(s11)
+    return trig.select((r0 - r0 == 0.0) & (r1 - r1 == 0.0), max(r0, r1), math.inf)
+
+
+@numba.extending.register_jitable
+def _again(status, fixed, g, limit, retries, hforce, count, order):
+    """True if a step that has just ended is to be taken again: error-controlled, not forced
+    to its end, its propagated estimate g above ``limit`` (or not finite), retries left, and
+    room for the retry before substeps are forced (forced substeps could end it further off
+    than this pass): its ``count`` substeps so far plus twice as many again as the smaller
+    share asks for at the scheme's ``order`` (count · (g / (limit/2))^(1/order)) at most
+    FORCE_AFTER."""
+    growth = (2.0 * g / limit) ** (1.0 / order)
+    room = count + 2.0 * count * growth <= FORCE_AFTER
+    return ((status == 1.0) & (not fixed) & (not g <= limit) & (retries < RETRIES)
+            & (hforce == 0.0) & room)
+
+
+@numba.extending.register_jitable
+def _smaller_share(share, g, limit):
+    """The share of tol a step taken again aims at: enough smaller that its propagated
+    estimate lands near half the limit (at least halved; local errors scale with the share)."""
+    return share * min(0.5, 0.5 * limit / g) if g - g == 0.0 else share * 0.01

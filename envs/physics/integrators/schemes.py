@@ -71,6 +71,10 @@ class Scheme:
         tol_share: the share of ``tolerance`` the accepted substeps' error estimates may add up to
             (below 1: room for what the estimates miss, measured in the tests; each row's
             value and what it was measured against: ``docs/INTEGRATORS.md``).
+        propagated_limit: a Runge–Kutta pair's step reports ``tol_met`` only if its accepted
+            substeps' estimates, carried to the step's end by the linearized motion, stay
+            within this share of ``tolerance`` (above it the step is taken again with a smaller
+            share, at most ``RETRIES`` times; ``docs/INTEGRATORS.md``).
     """
 
     name: str
@@ -88,6 +92,7 @@ class Scheme:
     sweep_exponent: float = 0.5
     halvings: int = 0
     tol_share: float = 1.0
+    propagated_limit: float = math.inf
 
     def kernels(self) -> tuple[Callable, Callable]:
         """(serial, parallel) kernels ``f(io, tableau, cfg)`` of this scheme."""
@@ -112,9 +117,10 @@ class Scheme:
 
 _SCHEME_LIST = (
     Scheme("rk8", 8, 1.0, True, _rk_chunk, _DOP853, chunk=_rk_chunk, one=_rk_one,
-           constant=1e-6, sweep_exponent=0.75, halvings=3, tol_share=0.1),
+           constant=1e-6, sweep_exponent=0.75, halvings=3, tol_share=0.1,
+           propagated_limit=0.5),
     Scheme("rk4", 4, 1.0, True, _rk_chunk, _BS5, fixed_tableau=_RK4, chunk=_rk_chunk,
-           one=_rk_one, constant=0.02, halvings=2, tol_share=0.12),
+           one=_rk_one, constant=0.02, halvings=2, tol_share=0.12, propagated_limit=2.0),
     Scheme("euler", 1, 0.5, False, _euler_substep, kernel=_euler_kernel, constant=2.0),
     Scheme("midpoint", 2, math.inf, False, _midpoint_substep, kernel=_midpoint_kernel,
            constant=0.3),

@@ -2,7 +2,7 @@
 (N rollers, all cores) advance by one control step per call and carry the controller's
 substep size from step to step; :func:`step` (stateless, any broadcast shape),
 :func:`contact_state` (forces, energy and margins at states) and :func:`predicted_substeps`.
-A step whose tolerance was out of reach reports ``tol_met=False`` and the stepper warns once.
+A step whose tolerance was not verified reports ``tol_met=False`` and the stepper warns once.
 """
 
 from __future__ import annotations
@@ -65,7 +65,8 @@ class _Base:
         settings = {"dt": dt, "tolerance": tolerance, "substeps": substeps or 0,
                     "halvings": sch.halvings,
                     "order": sch.order, "constant": sch.constant, "stable_step": sch.stable_step,
-                    "sweep_exponent": sch.sweep_exponent, "tol_share": sch.tol_share}
+                    "sweep_exponent": sch.sweep_exponent, "tol_share": sch.tol_share,
+                    "propagated_limit": sch.propagated_limit}
         self._cfg = np.array([settings[name] for name in CFG_FIELDS], dtype=float)
         self._io = self._new_io(num)
         self._warned = False
@@ -107,11 +108,12 @@ class _Base:
         if not self._warned:
             self._warned = True
             warnings.warn(
-                f"tolerance={self.tolerance!r} is out of reach for some step (integrator "
-                f"{self.integrator!r}, "
-                f"dt={self.dt!r}: of float64's rounding, or of the {MAX_SUBSTEPS} substeps a "
-                "step may take): those steps report tol_met=False; a looser tolerance or a more "
-                "accurate integrator avoids this", RuntimeWarning, stacklevel=stacklevel)
+                f"tolerance={self.tolerance!r} is not verified for some step (integrator "
+                f"{self.integrator!r}, dt={self.dt!r}: out of reach of float64's rounding or "
+                f"of the {MAX_SUBSTEPS} substeps a step may take, or its error estimate grew "
+                "past it along the step): those steps report tol_met=False; a looser "
+                "tolerance or a more accurate integrator avoids this", RuntimeWarning,
+                stacklevel=stacklevel)
 
 
 @numba.extending.register_jitable
