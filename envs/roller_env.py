@@ -41,7 +41,8 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array"], "render_fps": 20}
 
     def __init__(self, task: str | type[Task] = "RollerStabilize", **settings: Any) -> None:
-        self.config = EnvConfig.build(get_task(task), Settings.of(type(self), settings),
+        self.config = EnvConfig.build(get_task(task, current=True),
+                                      Settings.of(type(self), settings),
                                       render_modes=self.metadata["render_modes"])
         self.task = self.config.task
         self._outcome = OutcomeKernel(self.task, 1)

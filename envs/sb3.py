@@ -69,6 +69,14 @@ class RollerVecEnv(VecEnv):
         if not isinstance(monitor, bool | str):
             raise ValueError(f"monitor={monitor!r} must be True, False or a path (str)")
         vector_seeds(seed, int(n_envs))  # the seeds' check, before anything is built
+        if seed is not None and not isinstance(seed, int | np.integer):
+            raise ValueError(f"seed={seed!r} must be None or an integer: SB3 seeds "
+                             "sub-environment i with seed + i (a list of seeds is not SB3's)")
+        fixed = {"num_envs", "vectorization_mode", "autoreset_mode"} & set(env_kwargs)
+        if fixed:
+            raise ValueError(f"{', '.join(sorted(fixed))}: RollerVecEnv sets these itself "
+                             "(n_envs sub-environments of the native batch, autoreset on the "
+                             "same step as SB3 expects); leave them out")
         self.venv = gym.make_vec(env_id, num_envs=n_envs, vectorization_mode="vector_entry_point",
                                  autoreset_mode=AutoresetMode.SAME_STEP, **env_kwargs)
         base = self.venv.unwrapped
@@ -90,6 +98,14 @@ class RollerVecEnv(VecEnv):
                                                           "env_id": env_id})
 
     # -- SB3's VecEnv API ----------------------------------------------------------------
+    def seed(self, seed: int | None = None) -> Sequence[int | None]:
+        """Seed the next reset: sub-environment i with ``seed`` + i (SB3's rule; None: a
+        random seed)."""
+        if seed is not None and not isinstance(seed, int | np.integer):
+            raise ValueError(f"seed={seed!r} must be None or an integer")
+        vector_seeds(seed, self.num_envs)  # (in range, else its message)
+        return super().seed(None if seed is None else int(seed))
+
     def reset(self) -> np.ndarray:
         """Every sub-environment starts a new episode, with the seeds and options set by
         ``seed()`` and ``set_options()`` (each sub-environment its own, as DummyVecEnv)."""

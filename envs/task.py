@@ -152,15 +152,20 @@ def objective(function: Any) -> Any:
     return inlined(function)
 
 
-def get_task(task: str | type[Task]) -> type[Task]:
-    """The task class from its name (``"RollerHold"``), its ID or the class itself."""
-    if isinstance(task, type) and issubclass(task, Task):
+def get_task(task: str | type[Task], current: bool = False) -> type[Task]:
+    """The task class from its name (``"RollerHold"``), its ID or the class itself; with
+    ``current``, an ID must be the task's current one (namespace and version)."""
+    if isinstance(task, type) and issubclass(task, Task) and task is not Task:
         return task
     name = task.split("/")[-1].split("-v")[0] if isinstance(task, str) else None
     if name not in TASKS:
         raise ValueError(f"task={task!r} is not a registered task; allowed: "
                          f"{', '.join(TASKS)}")
-    return TASKS[name]
+    found = TASKS[name]
+    if current and task != name and task != found.env_id():  # an ID: namespace and version
+        raise ValueError(f"task={task!r} is not a registered ID; {name}'s is "
+                         f"{found.env_id()!r} (or give the name {name!r})")
+    return found
 
 
 #: The most turns of φ a start state lies from the bottom (see :meth:`Task.start_candidates`).

@@ -219,7 +219,7 @@ class RollerVectorEnv(VectorEnv):
                max_episode_steps: int | None, autoreset_mode: AutoresetMode | str) -> None:
         scene, integrator = settings.scene, settings.integrator
         per_env = self._per_env_scenes(scene, num_envs)
-        task_class = get_task(task)
+        task_class = get_task(task, current=True)
         resolved = [resolve_scene(s, task_class.default_scene) for s in per_env]
         self.config = EnvConfig.build(
             task_class, replace(settings, scene=None) if per_env else settings,

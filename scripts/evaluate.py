@@ -224,6 +224,9 @@ def main(argv: list[str] | None = None) -> None:
                      "file (or leave --notes out for a report without notes)")
     if args.notes is not None and args.report is None:
         parser.error(f"--notes {args.notes!r} needs --report: the notes are appended to it")
+    if args.runs is not None and not Path(args.runs).is_dir():
+        parser.error(f"--runs {args.runs!r}: no such folder; it must be the log folder of "
+                     "roller-gym train (or leave --runs out to evaluate the baselines only)")
     import matplotlib  # the plots extra: missing, say so before evaluating
 
     matplotlib.use("Agg")  # files only, no window

@@ -115,6 +115,19 @@ def test_evaluate_with_nothing_to_evaluate_says_so(tmp_path):
         main(["--runs", str(tmp_path), "--baselines", "--out", str(tmp_path / "out")])
 
 
+def test_evaluate_refuses_a_runs_folder_that_does_not_exist(tmp_path, capsys):
+    """A mistyped --runs is an error naming it (it exited 0 after evaluating the baselines,
+    as if the runs had not trained)."""
+    from roller_gym.scripts.evaluate import main
+
+    missing = str(tmp_path / "nothing-here")
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--runs", missing, "--out", str(tmp_path / "out")])
+    assert exit_info.value.code == 2
+    assert f"--runs {missing!r}: no such folder" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
 def test_version_is_pyprojects_from_the_command_and_the_package():
     import roller_gym as package
 

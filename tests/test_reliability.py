@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 import roller_gym
 from roller_gym import Scene, preset
-from roller_gym.physics import analysis
+from roller_gym.physics import analysis, predicted_substeps, step
+from roller_gym.roller_env import RollerEnv
 from scipy.optimize import brentq, minimize_scalar
 
 STABILIZE, HOLD, BALANCE = (roller_gym.TASKS[f"Roller{t}"].env_id()
@@ -315,3 +316,65 @@ def test_the_readmes_warning_on_a_first_reset_that_raised_holds_and_its_remedy_w
                 env.step(np.zeros(1, np.float32))
         else:
             assert np.isfinite(env.step(np.zeros(1, np.float32))[1])
+
+
+# -- the physics API refuses what it cannot use, naming the argument -----------------------------
+def _stepper(**kwargs):
+    from roller_gym.physics import Stepper
+
+    return Stepper(Scene(), **{"dt": 0.05, "tolerance": 1e-8, **kwargs})
+
+
+def _batch(num=2, **kwargs):
+    from roller_gym.physics import BatchStepper
+
+    return BatchStepper(num, **{"dt": 0.05, "tolerance": 1e-8, **kwargs})
+
+
+@pytest.mark.parametrize(
+    ("call", "error", "message"),
+    [
+        (lambda: Scene(m=np.array([1.0, 2.0]), r=np.array([0.1, 0.1, 0.1])), ValueError,
+         r"shapes \{'m': \(2,\), 'r': \(3,\)\} are not a batch"),
+        (lambda: Scene(m=np.ones((2, 2))), ValueError, r"shapes \{'m': \(2, 2\)\} are not"),
+        (lambda: Scene(m=np.array([])), ValueError, r"shapes \{'m': \(0,\)\} are not"),
+        (lambda: Scene.stack([]), ValueError, r"scenes=\[\] has no scene"),
+        (lambda: Scene.stack([Scene(), "paper"]), TypeError,
+         r"scenes\[1\]='paper' must be a Scene.*preset\('paper'\)"),
+        (lambda: Scene().item(5), ValueError, r"i=5 is not a roller"),
+        (lambda: Scene(m=np.ones(2)).item("a"), ValueError, r"i='a' is not a roller"),
+        (lambda: _stepper().set_scene("paper"), TypeError, r"scene='paper' must be a Scene"),
+        (lambda: _batch().set_scenes(None), TypeError, r"scene=None must be a Scene, not"),
+        (lambda: _batch().set_scenes(Scene(), index=5), ValueError,
+         r"index=5 does not select rollers of the 2"),
+        (lambda: _stepper(dt=True), ValueError, r"dt=True \[s\] must be a number"),
+        (lambda: _stepper(tolerance=np.True_), ValueError, r"tolerance=np\.True_ must be a number"),
+        (lambda: _stepper(integrator="rk4", substeps=True), ValueError,
+         r"substeps=True must be None"),
+        (lambda: _batch(True), ValueError, r"num=True must be an integer >= 1"),
+        (lambda: _stepper().advance(None, 0.0, 0.0), ValueError, r"phi=None must be a number"),
+        (lambda: _stepper().advance("1", 0.0, 0.0), ValueError, r"phi='1' must be a number"),
+        (lambda: _stepper().advance(0.0, math.nan, 0.0), ValueError, r"phi_dot=nan is not finite"),
+        (lambda: _batch().advance(np.zeros(3), 0.0, 0.0), ValueError,
+         r"phi has 3 values for 2 rollers"),
+        (lambda: _batch().advance(np.zeros(2), 0.0, np.array([0.0, np.inf])), ValueError,
+         r"tau=array\(\[ 0., inf\]\) is not finite"),
+        (lambda: step(Scene(), "0.1", 0.0, 0.0, 0.05), ValueError, r"phi='0.1' must be real"),
+        (lambda: predicted_substeps(Scene(), math.nan, 0.05, 1e-8, "euler"), ValueError,
+         r"phi_dot=nan must be finite"),
+        (lambda: RollerEnv(task="roller_gym/RollerStabilize-v0"), ValueError,
+         r"not a registered ID; RollerStabilize's is 'roller_gym/RollerStabilize-v\d+'"),
+        (lambda: RollerEnv(task="foo/RollerHold"), ValueError,
+         r"task='foo/RollerHold' is not a registered ID"),
+        (lambda: RollerEnv(task=roller_gym.task.Task), ValueError,
+         r"is not a registered task"),
+    ],
+)
+def test_the_physics_api_refuses_bad_arguments_naming_them(call, error, message):
+    """Scenes whose fields are not one batch (they built, and failed later in NumPy), a
+    preset's name or None where a Scene goes (AttributeError), bools where numbers go (a
+    step of True seconds ran), an index past the rollers (IndexError); a task ID of another
+    version or namespace (it built the current task), the base class Task (AttributeError);
+    states that are not finite real numbers (None and NaN stepped to NaN, "1" to 1 rad)."""
+    with pytest.raises(error, match=message):
+        call()

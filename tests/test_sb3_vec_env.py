@@ -192,7 +192,22 @@ def test_attributes_per_sub_environment_as_in_dummy_vec_env():
 @pytest.mark.parametrize(("kwargs", "message"), [
     ({"n_envs": 0}, r"n_envs=0 must be a positive integer"),
     ({"n_envs": 2.0}, r"n_envs=2.0 must be"), ({"seed": -1}, r"seed=-1 must be None"),
-    ({"seed": "x"}, r"seed='x' must be None"), ({"monitor": 3}, r"monitor=3 must be")])
+    ({"seed": "x"}, r"seed='x' must be None"), ({"monitor": 3}, r"monitor=3 must be"),
+    ({"seed": [0, 1]}, r"seed=\[0, 1\] must be None or an integer: SB3 seeds"),
+    ({"autoreset_mode": "next_step"}, r"autoreset_mode: RollerVecEnv sets these itself"),
+    ({"num_envs": 3, "vectorization_mode": "sync"},
+     r"num_envs, vectorization_mode: RollerVecEnv sets these itself")])
 def test_bad_arguments_are_refused_naming_them(kwargs, message):
     with pytest.raises(ValueError, match=message):
         RollerVecEnv(IDS[0], **{"n_envs": 2, **kwargs})
+
+
+def test_a_seed_that_is_not_an_integer_is_refused_before_the_reset():
+    """SB3's seed() took any value and the next reset failed inside SB3 (a list: "can only
+    concatenate list"); it is refused where it is given."""
+    venv = RollerVecEnv(IDS[0], n_envs=2)
+    for bad in ("a", [0, 1], 1.5):
+        with pytest.raises(ValueError, match=r"seed=.* must be None"):
+            venv.seed(bad)
+    venv.seed(3)
+    assert venv._seeds == [3, 4]

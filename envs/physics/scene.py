@@ -52,7 +52,9 @@ class Scene:
         r: radius of the roller [m], > 0.
         R: signed radius of the fixed surface [m]: ``R > r`` inside a cylinder, ``math.inf``
             for a flat floor, ``R < 0`` on top of a drum of radius ``-R``.
-        e: eccentricity, distance from the geometric center to the mass center [m], >= 0.
+        e: eccentricity, distance from the geometric center to the mass center [m], >= 0
+            (e > r, a mass center beyond the rim, as on an arm, is allowed: the equations
+            hold for any rigid body rolling on its circular rim).
         k: central radius of gyration [m], > 0.
         g: gravitational acceleration [m/s²], > 0.
         mu: friction coefficient [-], >= 0 (used to report slip, not to model it).
@@ -82,6 +84,15 @@ class Scene:
             "mu": (lambda v: v >= 0, ">= 0"),
             "damping": (lambda v: v >= 0, ">= 0"),
         }
+        shapes = {f.name: np.shape(getattr(self, f.name)) for f in fields(self)}
+        try:
+            shape = np.broadcast_shapes(*shapes.values())
+        except ValueError:
+            shape = None
+        if shape is None or len(shape) > 1 or shape == (0,):
+            given = {n: s for n, s in shapes.items() if s}
+            raise ValueError(f"Scene fields of shapes {given} are not a batch: each field must "
+                             "be a number or a 1-D array, the arrays of one length >= 1")
         for f in fields(self):
             raw = getattr(self, f.name)
             try:
@@ -150,6 +161,9 @@ class Scene:
     def item(self, i: int) -> Scene:
         """The ``i``-th roller of a batch scene, as a scalar scene."""
         n = self.batch_size or 1
+        if not (isinstance(i, int | np.integer) and -n <= i < n):
+            raise ValueError(f"i={i!r} is not a roller of this scene's {n}: it must be an "
+                             f"integer in [{-n}, {n})")
         return Scene(
             **{
                 f.name: float(np.broadcast_to(getattr(self, f.name), (n,))[i])
@@ -160,6 +174,9 @@ class Scene:
     @staticmethod
     def stack(scenes: list[Scene]) -> Scene:
         """One batch scene whose ``i``-th roller is ``scenes[i]``."""
+        if not scenes:
+            raise ValueError("scenes=[] has no scene to stack")
+        scenes = [require_scene(s, f"scenes[{i}]") for i, s in enumerate(scenes)]
         return Scene(
             **{
                 f.name: np.array([float(getattr(s, f.name)) for s in scenes])
@@ -205,6 +222,17 @@ PRESETS: dict[str, Scene] = {
     # k = r keeps φ'' = τ/J_I moderate, so the torque does not lift the roller off.
     "balance": Scene(R=10 * _R, e=0.8 * _R, k=_R),
 }
+
+
+def require_scene(scene: Any, name: str = "scene") -> Scene:
+    """``scene`` if it is a :class:`Scene`, else a TypeError naming the argument ``name``
+    (a preset's name gets the call that turns it into one)."""
+    if isinstance(scene, Scene):
+        return scene
+    if isinstance(scene, str):
+        raise TypeError(f"{name}={scene!r} must be a Scene; for the preset of that name use "
+                        f"preset({scene!r})")
+    raise TypeError(f"{name}={scene!r} must be a Scene, not {type(scene).__name__}")
 
 
 def preset(name: str) -> Scene:

@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from roller_gym.physics import _taylor_series as series
@@ -160,14 +161,20 @@ def scheme(integrator: str) -> Scheme:
                          f"{', '.join(INTEGRATORS)}") from None
 
 
+def _real(x: Any) -> bool:
+    """A real number: a Python or NumPy int or float, not a bool."""
+    return isinstance(x, int | float | np.integer | np.floating) and not isinstance(
+        x, bool | np.bool_)
+
+
 def _check_step_args(dt: float, tolerance: float, substeps: int | None) -> None:
-    if not (isinstance(dt, int | float | np.floating) and math.isfinite(dt) and dt > 0):
-        raise ValueError(f"dt={dt!r} [s] must be finite and > 0")
-    if not (isinstance(tolerance, int | float | np.floating) and math.isfinite(tolerance)
-            and tolerance > 0):
-        raise ValueError(f"tolerance={tolerance!r} must be finite and > 0")
+    if not (_real(dt) and math.isfinite(dt) and dt > 0):
+        raise ValueError(f"dt={dt!r} [s] must be a number, finite and > 0")
+    if not (_real(tolerance) and math.isfinite(tolerance) and tolerance > 0):
+        raise ValueError(f"tolerance={tolerance!r} must be a number, finite and > 0")
     if substeps is not None and not (
-        isinstance(substeps, int | np.integer) and 1 <= substeps <= MAX_SUBSTEPS
+        _real(substeps) and isinstance(substeps, int | np.integer)
+        and 1 <= substeps <= MAX_SUBSTEPS
     ):
         raise ValueError(
             f"substeps={substeps!r} must be None (automatic) or an integer in [1, {MAX_SUBSTEPS}]"

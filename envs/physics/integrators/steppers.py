@@ -7,6 +7,7 @@ A step whose tolerance was not verified reports ``tol_met=False`` and the steppe
 
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Callable
 from typing import Any
@@ -45,7 +46,7 @@ from roller_gym.physics.integrators.rules import (
 )
 from roller_gym.physics.integrators.schemes import DEFAULT_INTEGRATOR, _check_step_args, scheme
 from roller_gym.physics.packed import pack
-from roller_gym.physics.scene import Scene
+from roller_gym.physics.scene import Scene, require_scene
 
 
 class _Base:
@@ -116,6 +117,21 @@ class _Base:
                 stacklevel=stacklevel)
 
 
+def _check_states(num: int | None = None, **values: Any) -> None:
+    """Raise a ValueError naming the first of ``values`` (φ [rad], φ' [rad/s], τ [N·m]) that
+    is not a finite real number, or (``num`` given) not one or ``num`` of them."""
+    for name, value in values.items():
+        array = np.asarray(value) if not isinstance(value, float) else None
+        if array is not None and (array.dtype.kind not in "iuf" or array.ndim > 1
+                                  or (num is None and array.ndim)):
+            shape = "a number" if num is None else f"a number or a 1-D array of {num}"
+            raise ValueError(f"{name}={value!r} must be {shape}, real")
+        if array is not None and array.ndim and array.shape != (num,):
+            raise ValueError(f"{name} has {array.shape[0]} values for {num} rollers")
+        if not np.isfinite(value if array is None else array).all():
+            raise ValueError(f"{name}={value!r} is not finite")
+
+
 @numba.extending.register_jitable
 def missed(flat: np.ndarray) -> bool:
     """Whether a Stepper's finished step missed the tolerance, from its ``io`` as one row (a
@@ -163,6 +179,7 @@ class Stepper(_Base):
 
     def set_scene(self, scene: Scene) -> None:
         """Use ``scene`` (scalar) from the next step on."""
+        scene = require_scene(scene)
         if scene.batch_size is not None:
             raise ValueError(f"scene has a batch of {scene.batch_size} rollers; Stepper takes "
                              "a scalar Scene (use BatchStepper for a batch)")
@@ -239,7 +256,17 @@ class Stepper(_Base):
 
     def advance(self, phi: float, phi_dot: float, tau: float) -> tuple:
         """One control step from (φ [rad], φ' [rad/s]) at torque τ [N·m]: the fields of
-        :class:`StepResult` in :data:`STEP_FIELDS` order, as Python float, int and bool."""
+        :class:`StepResult` in :data:`STEP_FIELDS` order, as Python float, int and bool.
+
+        Raises:
+            ValueError: a state or torque that is not a finite real number.
+        """
+        try:  # the common case in a fraction of a microsecond; else the reason, named
+            ok = math.isfinite(phi + phi_dot + tau)
+        except TypeError:
+            ok = False
+        if not ok:
+            _check_states(phi=phi, phi_dot=phi_dot, tau=tau)
         (p, w, a, nsub, finite, normal, friction, energy, lift, slip, err,
          met) = self._run(phi, phi_dot, tau, 4)[:, 0].tolist()
         return (p, w, a, int(nsub), finite != 0.0, normal, friction, energy, lift, slip, err,
@@ -258,7 +285,7 @@ class BatchStepper(_Base):
 
     def __init__(self, num: int, *, integrator: str = DEFAULT_INTEGRATOR, dt: float,
                  tolerance: float, substeps: int | None = None) -> None:
-        if not (isinstance(num, int | np.integer) and num >= 1):
+        if not (isinstance(num, int | np.integer) and not isinstance(num, bool) and num >= 1):
             raise ValueError(f"num={num!r} must be an integer >= 1")
         super().__init__(int(num), integrator, dt, tolerance, substeps)
         self.num = int(num)
@@ -278,7 +305,12 @@ class BatchStepper(_Base):
     def set_scenes(self, scene: Scene, index=None) -> None:
         """Put ``scene`` (scalar: broadcast; batch: one roller each) into rows ``index``
         (an index, slice, mask or index array of the rollers; all if None)."""
-        rows = np.arange(self.num)[slice(None) if index is None else index]
+        scene = require_scene(scene)
+        try:
+            rows = np.arange(self.num)[slice(None) if index is None else index]
+        except IndexError as error:
+            raise ValueError(f"index={index!r} does not select rollers of the {self.num}: "
+                             f"{error}") from None
         size = scene.batch_size
         if size is not None and size != np.size(rows):
             raise ValueError(f"scene has {size} rollers for {np.size(rows)} rows of index")
@@ -334,8 +366,13 @@ class BatchStepper(_Base):
         return self._results
 
     def advance(self, phi: np.ndarray, phi_dot: np.ndarray, tau: np.ndarray) -> StepResult:
-        """One control step of every roller; arrays of ``num``. The result's arrays are views
-        of the stepper's own buffers, valid until the next call."""
+        """One control step of every roller; arrays of ``num`` (or numbers, for all). The
+        result's arrays are views of the stepper's own buffers, valid until the next call.
+
+        Raises:
+            ValueError: states or torques that are not finite real numbers, or not of ``num``.
+        """
+        _check_states(self.num, phi=phi, phi_dot=phi_dot, tau=tau)
         io = self._run(phi, phi_dot, tau, 4)
         np.copyto(self._substeps, io[_NSUB - _OUT], casting="unsafe")
         np.not_equal(io[_FINITE - _OUT], 0.0, out=self._finite)
@@ -416,7 +453,10 @@ def step(
         A :class:`StepResult`; arrays of the broadcast shape, or scalars for scalar input.
     """
     _check_step_args(dt, tolerance, substeps)
-    params = (*scene.params, scene.mu)
+    params = (*require_scene(scene).params, scene.mu)
+    for name, value in (("phi", phi), ("phi_dot", phi_dot), ("tau", tau)):
+        if np.asarray(value).dtype.kind not in "iuf":
+            raise ValueError(f"{name}={value!r} must be real numbers (a number or an array)")
     scalar = all(np.ndim(x) == 0 for x in (phi, phi_dot, tau, *params))
     arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (phi, phi_dot, tau,
                                                                          *params)))
@@ -451,7 +491,11 @@ def predicted_substeps(
     if sch.substep is None:
         raise ValueError(f"integrator={integrator!r} chooses its own steps; no prediction is made")
     _check_step_args(dt, tolerance, None)
-    arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (phi_dot, *scene.params)))
+    speed = np.asarray(phi_dot)
+    if speed.dtype.kind not in "iuf" or not np.isfinite(speed).all():
+        raise ValueError(f"phi_dot={phi_dot!r} must be finite real numbers [rad/s]")
+    arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (phi_dot,
+                                                                       *require_scene(scene).params)))
     flat = [a.reshape(-1) for a in arrays]
     out = np.array([
         _substeps(abs(v[0]), *v[1:], dt, tolerance, sch.order, sch.constant, sch.stable_step,
