@@ -126,7 +126,7 @@ class RollerVecEnv(VecEnv):
         return obs
 
     def step_async(self, actions: np.ndarray) -> None:
-        self._actions = np.asarray(actions, dtype=np.float32).reshape(self.num_envs, -1)
+        self._actions = actions  # checked (and clipped) by the batch's step, naming them
 
     def step_wait(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[dict[str, Any]]]:
         obs, reward, terminated, truncated, info = self.venv.step(self._actions)
@@ -223,6 +223,8 @@ def from_env_fns(env_fns: list[Any], **vec_env_kwargs: Any) -> VecEnv:
     evaluation environments are of one type); ``DummyVecEnv`` for other tasks, when the
     environments carry wrappers of their own, or when their integrator is one the batch does
     not take (``"dop853"``)."""
+    if not env_fns:
+        raise ValueError("env_fns=[]: it needs at least one environment function")
     if env_fns:
         probe = env_fns[0]()
         wrappers, env, monitor, probe_file = set(), probe, True, None

@@ -99,8 +99,13 @@ def actions(value: Any, shape: tuple[int, ...], scale: float = 1.0,
     if isinstance(value, np.ma.MaskedArray):  # np.asarray would take the data under the mask
         raise ValueError(f"action={value!r} is a masked array, which is not allowed: every "
                          "action must be given (pass a plain NumPy array)")
-    a = np.asarray(value)
     shapes = (shape, shape[:-1]) if shape and shape[-1] == 1 else (shape,)
+    try:
+        a = np.asarray(value)
+    except ValueError:  # a ragged nest of lists
+        allowed = " or ".join(str(s) for s in shapes)
+        raise ValueError(f"action={value!r} is not allowed: it must be real numbers of shape "
+                         f"{allowed}, not a ragged list") from None
     if a.dtype.kind not in "iuf" or a.shape not in shapes:
         allowed = " or ".join(str(s) for s in shapes)
         raise ValueError(f"action={value!r} is not allowed: it must be real numbers of shape "

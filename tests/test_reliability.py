@@ -257,7 +257,7 @@ def test_an_action_of_any_real_dtype_steps_as_its_float64_value():
         assert step(huge) == step(np.array([1.0]))
 
 
-def test_a_masked_action_is_refused():
+def test_a_masked_or_ragged_action_is_refused():
     masked = np.ma.array([0.5], mask=[True])
     env = gym.make(STABILIZE)
     env.reset(seed=0)
@@ -267,6 +267,8 @@ def test_a_masked_action_is_refused():
     vec.reset(seed=0)
     with pytest.raises(ValueError, match="masked"):
         vec.step(np.ma.array([[0.5], [0.1]], mask=[[False], [True]]))
+    with pytest.raises(ValueError, match=r"action=\[\[0.1\], \[0.2, 0.3\]\] .* not a ragged"):
+        vec.step([[0.1], [0.2, 0.3]])  # (NumPy's "inhomogeneous shape" before)
 
 
 def test_sizes_that_cannot_be_allocated_and_wrong_render_modes_are_refused_by_name():

@@ -211,3 +211,18 @@ def test_a_seed_that_is_not_an_integer_is_refused_before_the_reset():
             venv.seed(bad)
     venv.seed(3)
     assert venv._seeds == [3, 4]
+
+
+def test_bad_actions_and_no_environments_are_refused_naming_them():
+    """Actions go to the batch's own check (they were cast to float32 and reshaped first:
+    a wrong count failed in NumPy's reshape, and 1e39 became inf and was refused where the
+    batch clips it to 1); an empty list of environment functions is refused (IndexError)."""
+    venv = RollerVecEnv(IDS[0], n_envs=2)
+    venv.reset()
+    for bad in (np.zeros(3), None, np.array([["a"], ["b"]])):
+        with pytest.raises(ValueError, match=r"(?s)action=.* is not allowed"):
+            venv.step(bad)
+    *_, infos = venv.step(np.array([[1e39], [0.0]]))  # clipped, as the native batch does
+    assert infos[0]["torque"] == venv.venv.unwrapped.task.max_torque
+    with pytest.raises(ValueError, match=r"env_fns=\[\]: it needs at least one"):
+        from_env_fns([])
