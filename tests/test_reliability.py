@@ -380,3 +380,16 @@ def test_the_physics_api_refuses_bad_arguments_naming_them(call, error, message)
     states that are not finite real numbers (None and NaN stepped to NaN, "1" to 1 rad)."""
     with pytest.raises(error, match=message):
         call()
+
+
+def test_a_start_state_is_refused_for_its_own_reason():
+    """φ past the sines' domain (2⁵⁰ rad) is named as such (it was refused as too fast, at
+    zero speed, with N/(m g) = nan), and a state at rest that slips asks for another φ or
+    more friction, not for less speed."""
+    env = gym.make(STABILIZE)
+    with pytest.raises(ValueError, match=r"phi must be within ±1.126e\+15 rad"):
+        env.reset(options={"state": (1e17, 0.0)})
+    slippery = gym.make(STABILIZE, scene=Scene(mu=0.3))
+    with pytest.raises(ValueError, match=r"choose another phi, where the roller rests"):
+        slippery.reset(options={"state": (2.7, 0.0)})
+    env.reset(options={"state": (1e12, 0.0)})  # within the domain: a state like any other

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 from roller_gym import validation
 from roller_gym.episode.streams import uniform
-from roller_gym.physics import Scene
+from roller_gym.physics import Scene, trig
 from roller_gym.physics import equations as eq
 from roller_gym.physics.integrators import contact_state
 
@@ -301,15 +301,21 @@ def state_option(value: Any, scene: Scene, n: int) -> tuple[np.ndarray, np.ndarr
             f"options['state']={value!r} must be a pair (phi [rad], phi_dot [rad/s]) of "
             "finite real numbers"
         )
+    if not abs(float(pair[0])) < trig.DOMAIN:
+        raise ValueError(f"options['state']={value!r}: phi must be within "
+                         f"±{trig.DOMAIN:.4g} rad, where the sines are defined")
     phi, phi_dot = np.full(n, float(pair[0])), np.full(n, float(pair[1]))
     with np.errstate(all="ignore"):
         start = at_start(scene, phi, phi_dot)
         rolls = (start.liftoff_margin > 0) & (start.slip_margin >= 0)
     if not rolls.all():
+        remedy = ("a state on the surface with less speed" if pair[1] != 0 else
+                  "another phi, where the roller rests without slipping, or a scene with more "
+                  "friction (mu)")
         raise ValueError(
             f"options['state']={value!r}: the roller does not roll there under zero torque "
             f"(N/(m g) = {float(np.min(start.liftoff_margin)):.3g}, "
             f"(μN − |F|)/(m g) = {float(np.min(start.slip_margin)):.3g}; both must be "
-            "> 0 and >= 0): choose a state on the surface with less speed"
+            f"> 0 and >= 0): choose {remedy}"
         )
     return phi, phi_dot
