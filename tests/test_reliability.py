@@ -393,3 +393,14 @@ def test_a_start_state_is_refused_for_its_own_reason():
     with pytest.raises(ValueError, match=r"choose another phi, where the roller rests"):
         slippery.reset(options={"state": (2.7, 0.0)})
     env.reset(options={"state": (1e12, 0.0)})  # within the domain: a state like any other
+
+
+def test_a_reset_option_a_sub_environments_scene_refuses_names_it():
+    """With a scene per sub-environment, the one whose scene refuses a reset option is
+    named with its scene (the message said "this scene")."""
+    vec = gym.make_vec(STABILIZE, num_envs=3, scene=["paper", Scene(mu=0.3), "paper"])
+    with pytest.raises(ValueError, match=r"the roller of sub-environment 1 \(Scene\(.*mu=0.3"):
+        vec.reset(options={"state": (2.7, 0.0)})
+    hold = gym.make_vec(HOLD, num_envs=2, scene=["paper", Scene(m=2.0)])
+    with pytest.raises(ValueError, match=r"sub-environment 1 \(Scene\(m=2.0.*cannot be held"):
+        hold.reset(options={"target": 0.3})  # (paper holds up to 0.43 rad)

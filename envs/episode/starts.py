@@ -211,9 +211,7 @@ def start_episodes(
     if options.get("target") is not None:
         if task.moving_target:
             raise ValueError(f"{task.name}'s target moves; options['target'] is not allowed")
-        params[:, 0] = [task.target_from_option(
-            options["target"], scene if scene.batch_size is None else scene.item(i))
-            for i in range(n)]
+        params[:, 0] = [_target_option(task, options["target"], scene, i) for i in range(n)]
     target, target_rate = task.target_at(params, np.zeros(n))
     if options.get("state") is not None:
         phi, phi_dot = state_option(options["state"], scene, n)
@@ -285,6 +283,16 @@ def at_start(scene: Scene, phi: np.ndarray, phi_dot: np.ndarray) -> RestState:
                      friction, energy, lift, slip)
 
 
+def _target_option(task: Any, value: Any, scene: Scene, i: int) -> float:
+    """``options['target']`` in the scene of roller ``i`` (of a batch: its error names it)."""
+    if scene.batch_size is None:
+        return task.target_from_option(value, scene)
+    try:
+        return task.target_from_option(value, scene.item(i))
+    except ValueError as error:
+        raise ValueError(f"sub-environment {i} ({scene.item(i)!r}): {error}") from None
+
+
 def state_option(value: Any, scene: Scene, n: int) -> tuple[np.ndarray, np.ndarray]:
     """(φ, φ') arrays of n from ``reset(options={"state": (φ [rad], φ' [rad/s])})``.
 
@@ -312,8 +320,12 @@ def state_option(value: Any, scene: Scene, n: int) -> tuple[np.ndarray, np.ndarr
         remedy = ("a state on the surface with less speed" if pair[1] != 0 else
                   "another phi, where the roller rests without slipping, or a scene with more "
                   "friction (mu)")
+        bad = int(np.flatnonzero(~rolls)[0])
+        where = (f" of sub-environment {bad} ({scene.item(bad)!r})" if scene.batch_size
+                 else "")
         raise ValueError(
-            f"options['state']={value!r}: the roller does not roll there under zero torque "
+            f"options['state']={value!r}: the roller{where} does not roll there under zero "
+            "torque "
             f"(N/(m g) = {float(np.min(start.liftoff_margin)):.3g}, "
             f"(μN − |F|)/(m g) = {float(np.min(start.slip_margin)):.3g}; both must be "
             f"> 0 and >= 0): choose {remedy}"
