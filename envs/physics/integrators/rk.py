@@ -156,16 +156,24 @@ def _blend(h, e5, e3):
 
 
 @numba.extending.register_jitable
-def _judge(h, e5p, e5w, e3p, e3w, phi, w, phin, wn, a_new, count, hforce, t, hdes, rejected,
-           last, status, dt, share, fixed, halvings):
-    """Accept or reject one roller's attempt of size h, from its error sums (scipy's DOP853
-    form; E3 = 0 gives |h E5·K|), and the size of its next: selects only, no branch.
+def _estimates(h, e5p, e5w, e3p, e3w):
+    """(φ's estimate, φ''s estimate, the 3rd-order estimate max |h E3·K|) of an attempt of
+    size h from its error sums: what :func:`_judge` decides on."""
+    return _blend(h, e5p, e3p), _blend(h, e5w, e3w), h * max(abs(e3p), abs(e3w))
 
-    Returns (accepted, its error estimate, the next size [s], the roller's status, hforce).
+
+@numba.extending.register_jitable
+def _judge(h, ep, ew, e3, phi, w, phin, wn, a_new, count, hforce, t, hdes, rejected, last,
+           status, dt, share, fixed, halvings):
+    """Accept or reject one roller's attempt of size h, from its estimates
+    (:func:`_estimates`), and the size of its next: selects only, no branch.
+
+    Returns (accepted, the next size [s], the roller's status, hforce); its error estimate is
+    max(ep, ew).
     """
-    err = max(_blend(h, e5p, e3p), _blend(h, e5w, e3w))
+    err = max(ep, ew)
     # past E3_LIMIT the blend is not trusted (E3 = 0: never)
-    wide = (h * max(abs(e3p), abs(e3w)) > E3_LIMIT) & (not fixed)
+    wide = (e3 > E3_LIMIT) & (not fixed)
     fin = _finite(phin) & _finite(wn) & _finite(a_new) & _finite(err)
     # past FORCE_AFTER accepted substeps, the rest in fewer than as many more
     start = (count == FORCE_AFTER) & (hforce == 0.0)
@@ -191,7 +199,7 @@ def _judge(h, e5p, e5w, e3p, e3w, phi, w, phin, wn, a_new, count, hforce, t, hde
     factor = trig.select(rejected != 0.0, min(factor, 1.0), factor)
     factor = trig.select(wide, min(factor, 0.5), factor)
     h_new = trig.select(fixed, hdes, max(h * factor, floor))
-    return accept, err, h_new, status, hforce
+    return accept, h_new, status, hforce
 
 
 @numba.extending.register_jitable
@@ -223,7 +231,7 @@ def _rk_chunk(io, lo, hi, tab, cfg):
     fixed = nfixed > 0
     # one scratch block: the stages, then one row per per-roller quantity
     nf = len(SCENE_FIELDS)
-    scratch = np.empty((2 * (s + 1) + nf + 42, n + _PAD))
+    scratch = np.empty((2 * (s + 1) + nf + 41, n + _PAD))
     kp = scratch[: s + 1]  # stage velocities φ'
     kw = scratch[s + 1: 2 * (s + 1)]  # stage accelerations φ''
     par = scratch[2 * (s + 1): 2 * (s + 1) + nf]
@@ -241,7 +249,6 @@ def _rk_chunk(io, lo, hi, tab, cfg):
     s00, s01, s10, s11 = rows[31], rows[32], rows[33], rows[34]
     jp0, jq0, jp1, jq1 = rows[35], rows[36], rows[37], rows[38]
     lshare, retries = rows[39], rows[40]  # (lshare: the share this pass aims at)
-    h_new = rows[41]  # the next size
     for i in range(n):
         hforce[i], count[i], status[i], rejected[i], slot[i] = 0.0, 0.0, 0.0, 0.0, i
         carry[i], lshare[i], retries[i] = 0.0, share, 0.0
@@ -297,19 +304,20 @@ def _rk_chunk(io, lo, hi, tab, cfg):
                 e3w[i] += a3 * kw[j, i]
                 e5p[i] += a5 * kp[j, i]
                 e5w[i] += a5 * kw[j, i]
-        # Accept or reject, and the next size, per roller: selects only, in three loops that
-        # each touch few rows, so that LLVM can vectorize them (it gives up on a loop whose
-        # rows it would have to check pairwise for overlap too many times).
-        accepted, err_now = acc_p, acc_w  # rows free until the next attempt
+        # Accept or reject, and the next size, per roller: selects only, in loops that each
+        # touch few rows, so that LLVM can vectorize them (it gives up on a loop whose rows it
+        # would have to check pairwise for overlap too many times). The estimates replace the
+        # error sums in their rows, the next size the 3rd-order estimate's.
+        ep, ew, e3, accepted = e5p, e5w, e3p, acc_p  # (acc_p: free until the next attempt)
         for i in range(na):
-            accept, err_now[i], h_new[i], status[i], hforce[i] = _judge(
-                hh[i], e5p[i], e5w[i], e3p[i], e3w[i], phi[i], w[i], phin[i], wn[i], kw[s, i],
-                count[i], hforce[i], t[i], hdes[i], rejected[i], last[i], status[i], dt,
-                lshare[i], fixed, halvings)
+            ep[i], ew[i], e3[i] = _estimates(hh[i], e5p[i], e5w[i], e3p[i], e3w[i])
+        for i in range(na):
+            accept, e3[i], status[i], hforce[i] = _judge(
+                hh[i], ep[i], ew[i], e3[i], phi[i], w[i], phin[i], wn[i], kw[s, i], count[i],
+                hforce[i], t[i], hdes[i], rejected[i], last[i], status[i], dt, lshare[i],
+                fixed, halvings)
             accepted[i] = trig.select(accept, 1.0, 0.0)
-        ep, ew = e5p, e5w  # each component's estimate, in place of its error sum
-        for i in range(na):
-            ep[i], ew[i] = _blend(hh[i], e5p[i], e3p[i]), _blend(hh[i], e5w[i], e3w[i])
+        h_new = e3
         for i in range(na):  # the accepted estimates carried to the new state
             accept = accepted[i] != 0.0
             n00, n01, n10, n11 = _propagate(s00[i], s01[i], s10[i], s11[i], hh[i], jp0[i],
@@ -328,8 +336,8 @@ def _rk_chunk(io, lo, hi, tab, cfg):
             kw[0, i] = trig.select(accept, kw[s, i], kw[0, i])
         for i in range(na):  # the clocks and counts
             t[i], count[i], err_sum[i], rejected[i], carry[i] = _tick(
-                accepted[i] != 0.0, last[i], t[i], hh[i], count[i], err_sum[i], err_now[i],
-                hwant[i], h_new[i], carry[i], dt)
+                accepted[i] != 0.0, last[i], t[i], hh[i], count[i], err_sum[i],
+                max(ep[i], ew[i]), hwant[i], h_new[i], carry[i], dt)
             hdes[i] = h_new[i]
         for i in range(na):  # a step whose estimates grew past the limit: again, aiming lower
             g = _propagated(s00[i], s01[i], s10[i], s11[i])
@@ -422,13 +430,14 @@ def _rk_one(io, tab, cfg):
             e3w += a3 * kw[j]
             e5p += a5 * kp[j]
             e5w += a5 * kw[j]
-        accept, err, h_new, status, hforce = _judge(
-            h, e5p, e5w, e3p, e3w, phi, w, phin, wn, kw[s], count, hforce, t, hdes, rejected,
-            last, status, dt, aim, fixed, halvings)
+        ep, ew, e3 = _estimates(h, e5p, e5w, e3p, e3w)
+        accept, h_new, status, hforce = _judge(
+            h, ep, ew, e3, phi, w, phin, wn, kw[s], count, hforce, t, hdes, rejected, last,
+            status, dt, aim, fixed, halvings)
+        err = max(ep, ew)
         if accept:
             phi, w, kp[0], kw[0] = phin, wn, kp[s], kw[s]
-            s00, s01, s10, s11 = _propagate(s00, s01, s10, s11, h, jp0, jq0, jp1, jq1,
-                                            _blend(h, e5p, e3p), _blend(h, e5w, e3w))
+            s00, s01, s10, s11 = _propagate(s00, s01, s10, s11, h, jp0, jq0, jp1, jq1, ep, ew)
             jp0, jq0 = jp1, jq1
         t, count, err_sum, rejected, carry = _tick(accept, last, t, h, count, err_sum, err,
                                                    hdes, h_new, carry, dt)
