@@ -68,10 +68,7 @@ class RollerVecEnv(VecEnv):
             raise ValueError(f"n_envs={n_envs!r} must be a positive integer")
         if not isinstance(monitor, bool | str):
             raise ValueError(f"monitor={monitor!r} must be True, False or a path (str)")
-        vector_seeds(seed, int(n_envs))  # the seeds' check, before anything is built
-        if seed is not None and not isinstance(seed, int | np.integer):
-            raise ValueError(f"seed={seed!r} must be None or an integer: SB3 seeds "
-                             "sub-environment i with seed + i (a list of seeds is not SB3's)")
+        _check_seed(seed, int(n_envs))  # before anything is built
         fixed = {"num_envs", "vectorization_mode", "autoreset_mode"} & set(env_kwargs)
         if fixed:
             raise ValueError(f"{', '.join(sorted(fixed))}: RollerVecEnv sets these itself "
@@ -101,9 +98,7 @@ class RollerVecEnv(VecEnv):
     def seed(self, seed: int | None = None) -> Sequence[int | None]:
         """Seed the next reset: sub-environment i with ``seed`` + i (SB3's rule; None: a
         random seed)."""
-        if seed is not None and not isinstance(seed, int | np.integer):
-            raise ValueError(f"seed={seed!r} must be None or an integer")
-        vector_seeds(seed, self.num_envs)  # (in range, else its message)
+        _check_seed(seed, self.num_envs)
         return super().seed(None if seed is None else int(seed))
 
     def reset(self) -> np.ndarray:
@@ -215,6 +210,15 @@ class RollerVecEnv(VecEnv):
         return [self.monitor and wrapper_class is Monitor] * len(self._get_indices(indices))
 
 
+def _check_seed(seed: Any, n: int) -> None:
+    """SB3's seed: None or one integer in range (sub-environment i gets seed + i), checked by
+    the vector environments' rule (:func:`vector_seeds`) and refusing its list of seeds."""
+    vector_seeds(seed, n)
+    if seed is not None and not isinstance(seed, int | np.integer):
+        raise ValueError(f"seed={seed!r} must be None or an integer: SB3 seeds "
+                         "sub-environment i with seed + i (a list of seeds is not SB3's)")
+
+
 def from_env_fns(env_fns: list[Any], **vec_env_kwargs: Any) -> VecEnv:
     """A ``vec_env_cls`` for SB3's ``make_vec_env`` (and rl-zoo3's
     ``ExperimentManager.default_vec_env_cls``): for the environments of a roller-gym task,
@@ -225,26 +229,25 @@ def from_env_fns(env_fns: list[Any], **vec_env_kwargs: Any) -> VecEnv:
     not take (``"dop853"``)."""
     if not env_fns:
         raise ValueError("env_fns=[]: it needs at least one environment function")
-    if env_fns:
-        probe = env_fns[0]()
-        wrappers, env, monitor, probe_file = set(), probe, True, None
-        while isinstance(env, gym.Wrapper):
-            wrappers.add(type(env).__name__)
-            writer = getattr(env, "results_writer", None)
-            if writer is not None:  # make_vec_env's monitor_dir: write there too
-                probe_file = Path(writer.file_handler.name)
-                monitor = str(probe_file.parent / "batch")
-            env = env.env
-        spec = probe.spec  # the outermost: it carries make()'s max_episode_steps
-        probe.close()
-        if (wrappers <= _PLAIN_WRAPPERS and spec is not None
-                and spec.id.startswith("roller_gym/")
-                and spec.kwargs.get("integrator", DEFAULT_INTEGRATOR) in BATCH_INTEGRATORS):
-            if probe_file is not None:  # the probe's own Monitor file: never written to
-                probe_file.unlink(missing_ok=True)
-            kwargs = {k: v for k, v in spec.kwargs.items() if k != "render_mode"}
-            return RollerVecEnv(spec.id, n_envs=len(env_fns), monitor=monitor,
-                                max_episode_steps=spec.max_episode_steps, **kwargs)
+    probe = env_fns[0]()
+    wrappers, env, monitor, probe_file = set(), probe, True, None
+    while isinstance(env, gym.Wrapper):
+        wrappers.add(type(env).__name__)
+        writer = getattr(env, "results_writer", None)
+        if writer is not None:  # make_vec_env's monitor_dir: write there too
+            probe_file = Path(writer.file_handler.name)
+            monitor = str(probe_file.parent / "batch")
+        env = env.env
+    spec = probe.spec  # the outermost: it carries make()'s max_episode_steps
+    probe.close()
+    if (wrappers <= _PLAIN_WRAPPERS and spec is not None
+            and spec.id.startswith("roller_gym/")
+            and spec.kwargs.get("integrator", DEFAULT_INTEGRATOR) in BATCH_INTEGRATORS):
+        if probe_file is not None:  # the probe's own Monitor file: never written to
+            probe_file.unlink(missing_ok=True)
+        kwargs = {k: v for k, v in spec.kwargs.items() if k != "render_mode"}
+        return RollerVecEnv(spec.id, n_envs=len(env_fns), monitor=monitor,
+                            max_episode_steps=spec.max_episode_steps, **kwargs)
     return DummyVecEnv(env_fns, **vec_env_kwargs)
 
 
