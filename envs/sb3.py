@@ -74,6 +74,10 @@ class RollerVecEnv(VecEnv):
             raise ValueError(f"{', '.join(sorted(fixed))}: RollerVecEnv sets these itself "
                              "(n_envs sub-environments of the native batch, autoreset on the "
                              "same step as SB3 expects); leave them out")
+        if not (isinstance(env_id, str) and env_id.rpartition(":")[2].startswith("roller_gym/")):
+            raise ValueError(f"env_id={env_id!r} is not a roller-gym task ID "
+                             "('roller_gym/<Task>-v<N>'): RollerVecEnv batches roller-gym's "
+                             "tasks only; for other environments use SB3's make_vec_env")
         self.venv = gym.make_vec(env_id, num_envs=n_envs, vectorization_mode="vector_entry_point",
                                  autoreset_mode=AutoresetMode.SAME_STEP, **env_kwargs)
         base = self.venv.unwrapped
@@ -173,7 +177,7 @@ class RollerVecEnv(VecEnv):
         index = list(self._get_indices(indices))
         current = getattr(self.venv.unwrapped, attr_name, None)  # (None: a new attribute)
         if self._per_env(current):
-            current[index] = value
+            current[index] = self._entries(attr_name, value, current, len(index))
         elif sorted(index) == list(range(self.num_envs)):
             setattr(self.venv.unwrapped, attr_name, value)
         else:
@@ -195,6 +199,20 @@ class RollerVecEnv(VecEnv):
                 f"each on its own")
         result = getattr(self.venv.unwrapped, method_name)(*method_args, **method_kwargs)
         return [result] * len(index)
+
+    @staticmethod
+    def _entries(attr_name: str, value: Any, current: np.ndarray, count: int) -> np.ndarray:
+        """``value`` as ``count`` entries of the per-sub-environment array ``current``: numbers
+        of its kind (real and finite where it holds floats, as the state φ [rad], φ' [rad/s])."""
+        new = np.asarray(value)
+        wrong = (new.dtype.kind not in ("iuf" if current.dtype.kind == "f" else "biuf")
+                 or (new.dtype.kind == "f" and not np.isfinite(new).all()))
+        if wrong or new.ndim > current.ndim or (new.ndim and len(new) != count):
+            kind = "finite real numbers" if current.dtype.kind == "f" else "integers or bools"
+            raise ValueError(f"set_attr({attr_name!r}, value={value!r}): {attr_name!r} holds "
+                             f"{kind}, one per sub-environment; give one, or one for each "
+                             f"of the {count} indices")
+        return new
 
     def _per_env(self, value: Any) -> bool:
         """Whether ``value`` is an array with one entry per sub-environment."""

@@ -22,7 +22,6 @@ Autoreset (``autoreset_mode=``, Gymnasium's three modes):
 
 from __future__ import annotations
 
-import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any, ClassVar
@@ -37,6 +36,7 @@ from roller_gym import clients, episode, validation
 from roller_gym.config import EnvConfig, Settings, resolve_scene, takes_settings
 from roller_gym.physics import Scene
 from roller_gym.physics.integrators import INTEGRATORS, BatchStepper
+from roller_gym.physics.integrators.layout import check_memory
 from roller_gym.task import Task, get_task, psi_rate, wrap_rate
 
 __all__ = ["RollerVectorEnv"]
@@ -131,20 +131,6 @@ def _masks(keys: Sequence[str], n: int, where: np.ndarray | None = None) -> dict
 BYTES_PER_ENV = 4096
 
 
-def _check_memory(num_envs: int) -> None:
-    """Refuse a ``num_envs`` whose arrays would not fit in the machine's physical memory
-    (where the platform tells it), rather than fail in NumPy or be killed later."""
-    try:
-        total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
-    except (AttributeError, OSError, ValueError):  # not told: MemoryError is caught instead
-        return
-    need = num_envs * BYTES_PER_ENV
-    if need > total:
-        raise ValueError(f"num_envs={num_envs} is too many: their arrays need about "
-                         f"{need / 2**30:.3g} GiB of memory (up to {BYTES_PER_ENV} bytes "
-                         f"each), more than the machine's {total / 2**30:.3g} GiB; use fewer")
-
-
 def _some(idx: np.ndarray) -> str:
     """Sub-environment numbers for a message: the first ten, and how many more."""
     more = f" and {idx.size - 10} more" if idx.size > 10 else ""
@@ -207,7 +193,7 @@ class RollerVectorEnv(VectorEnv):
     ) -> None:
         num_envs = validation.count("num_envs", num_envs)
         given = Settings.of(type(self), settings)
-        _check_memory(num_envs)
+        check_memory("num_envs", num_envs, BYTES_PER_ENV)
         try:
             self._build(num_envs, task, given, max_episode_steps, autoreset_mode)
         except MemoryError:

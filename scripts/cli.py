@@ -89,6 +89,9 @@ def main(argv: Sequence[str] | None = None) -> None:
     """Run ``roller-gym COMMAND [options]`` (``argv``: the arguments after ``roller-gym``)."""
     argv = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser()
+    if argv and argv[0].startswith("-") and argv[0] not in ("-h", "--help", "--version"):
+        parser.error(f"unrecognized option {argv[0]!r}: a COMMAND comes first (one of "
+                     f"{', '.join(COMMANDS)}), then its options; or -h, --help, --version")
     if not argv or argv[0].startswith("-"):  # no command: --help, or an error naming them
         parser.parse_args(argv[:1])
     name = parser.parse_args(argv[:1]).command

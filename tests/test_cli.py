@@ -88,6 +88,14 @@ def test_no_command_fails_asking_for_one():
     assert result.returncode == 2 and "required: COMMAND" in result.stderr
 
 
+def test_an_unknown_option_before_the_command_is_named():
+    """(It was reported as a missing COMMAND.)"""
+    result = roller_gym("--nope", "train", check=False)
+    assert result.returncode == 2 and "unrecognized option '--nope'" in result.stderr
+    for name in COMMANDS:
+        assert name in result.stderr
+
+
 @pytest.mark.parametrize(("command", "argv", "message"), [
     ("train", ["--steps", "-5"], "argument --steps: '-5' is not an integer >= 1"),
     ("train", ["--steps", "0"], "argument --steps: '0' is not an integer >= 1"),

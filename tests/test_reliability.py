@@ -354,16 +354,26 @@ def _batch(num=2, **kwargs):
         (lambda: _stepper(integrator="rk4", substeps=True), ValueError,
          r"substeps=True must be None"),
         (lambda: _batch(True), ValueError, r"num=True must be an integer >= 1"),
-        (lambda: _stepper().advance(None, 0.0, 0.0), ValueError, r"phi=None must be a number"),
-        (lambda: _stepper().advance("1", 0.0, 0.0), ValueError, r"phi='1' must be a number"),
+        (lambda: _stepper().advance(None, 0.0, 0.0), ValueError, r"phi=None must be a real number"),
+        (lambda: _stepper().advance("1", 0.0, 0.0), ValueError, r"phi='1' must be a real number"),
         (lambda: _stepper().advance(0.0, math.nan, 0.0), ValueError, r"phi_dot=nan is not finite"),
+        (lambda: _stepper().advance(True, 0.0, 0.0), ValueError,
+         r"phi=True must be a real number, not a bool"),
+        (lambda: _stepper().advance(0.0, np.True_, 0.0), ValueError,
+         r"phi_dot=np\.True_ must be a real number"),
+        (lambda: step(Scene(), 0.0, 0.0, np.array([0.0, math.inf]), 0.05), ValueError,
+         r"tau=array\(\[ 0., inf\]\) is not finite"),
+        (lambda: _batch(2**50), ValueError, r"num=1125899906842624 is too many: .* GiB"),
+        (lambda: roller_gym.physics.integrators.contact_state(Scene(), 0.1, 0.2, 0.0),
+         ValueError, r"phi=0.1 must be a 1-D array of states"),
         (lambda: _batch().advance(np.zeros(3), 0.0, 0.0), ValueError,
          r"phi has 3 values for 2 rollers"),
         (lambda: _batch().advance(np.zeros(2), 0.0, np.array([0.0, np.inf])), ValueError,
          r"tau=array\(\[ 0., inf\]\) is not finite"),
-        (lambda: step(Scene(), "0.1", 0.0, 0.0, 0.05), ValueError, r"phi='0.1' must be real"),
+        (lambda: step(Scene(), "0.1", 0.0, 0.0, 0.05), ValueError,
+         r"phi='0.1' must be real numbers \(a number or an array\)"),
         (lambda: predicted_substeps(Scene(), math.nan, 0.05, 1e-8, "euler"), ValueError,
-         r"phi_dot=nan must be finite"),
+         r"phi_dot=nan is not finite"),
         (lambda: RollerEnv(task="roller_gym/RollerStabilize-v0"), ValueError,
          r"not a registered ID; RollerStabilize's is 'roller_gym/RollerStabilize-v\d+'"),
         (lambda: RollerEnv(task="foo/RollerHold"), ValueError,
@@ -377,7 +387,8 @@ def test_the_physics_api_refuses_bad_arguments_naming_them(call, error, message)
     preset's name or None where a Scene goes (AttributeError), bools where numbers go (a
     step of True seconds ran), an index past the rollers (IndexError); a task ID of another
     version or namespace (it built the current task), the base class Task (AttributeError);
-    states that are not finite real numbers (None and NaN stepped to NaN, "1" to 1 rad)."""
+    states that are not finite real numbers (None and NaN stepped to NaN, "1" and True to 1
+    rad); a batch too large for the memory (NumPy's MemoryError)."""
     with pytest.raises(error, match=message):
         call()
 

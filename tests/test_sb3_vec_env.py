@@ -4,6 +4,8 @@ and algorithms on top of it."""
 
 from __future__ import annotations
 
+import math
+
 import gymnasium
 import gymnasium.envs.registration
 import gymnasium.wrappers.common
@@ -189,6 +191,21 @@ def test_attributes_per_sub_environment_as_in_dummy_vec_env():
         ours.env_method("reset", indices=[0])
 
 
+@pytest.mark.parametrize(("value", "indices"), [("abc", None), (math.nan, [0]), (True, [1]),
+                                                ([0.1, 0.2], [0]), (np.zeros((3, 1)), None)])
+def test_set_attr_of_the_state_refuses_what_is_not_one_finite_angle_each(value, indices):
+    """A state written through set_attr is checked as a reset's is (NaN was written and the
+    next step handed back a NaN observation; text failed in NumPy's float conversion; a
+    wrong count in NumPy's broadcasting); the state is left as it was."""
+    venv = RollerVecEnv(IDS[0], n_envs=3, seed=0)
+    venv.reset()
+    before = venv.get_attr("phi")
+    with pytest.raises(ValueError, match=r"(?s)set_attr\('phi', value=.*'phi' holds finite "
+                                         r"real numbers, one per sub-environment"):
+        venv.set_attr("phi", value, indices)
+    assert venv.get_attr("phi") == before
+
+
 @pytest.mark.parametrize(("kwargs", "message"), [
     ({"n_envs": 0}, r"n_envs=0 must be a positive integer"),
     ({"n_envs": 2.0}, r"n_envs=2.0 must be"), ({"seed": -1}, r"seed=-1 must be None"),
@@ -196,10 +213,14 @@ def test_attributes_per_sub_environment_as_in_dummy_vec_env():
     ({"seed": [0, 1]}, r"seed=\[0, 1\] must be None or an integer: SB3 seeds"),
     ({"autoreset_mode": "next_step"}, r"autoreset_mode: RollerVecEnv sets these itself"),
     ({"num_envs": 3, "vectorization_mode": "sync"},
-     r"num_envs, vectorization_mode: RollerVecEnv sets these itself")])
+     r"num_envs, vectorization_mode: RollerVecEnv sets these itself"),
+    ({"env_id": "CartPole-v1"}, r"env_id='CartPole-v1' is not a roller-gym task ID"),
+    ({"env_id": 3}, r"env_id=3 is not a roller-gym task ID")])
 def test_bad_arguments_are_refused_naming_them(kwargs, message):
+    """(Another task's ID failed in its own vector environment: "unexpected keyword
+    argument 'autoreset_mode'".)"""
     with pytest.raises(ValueError, match=message):
-        RollerVecEnv(IDS[0], **{"n_envs": 2, **kwargs})
+        RollerVecEnv(**{"env_id": IDS[0], "n_envs": 2, **kwargs})
 
 
 def test_a_seed_that_is_not_an_integer_is_refused_before_the_reset():

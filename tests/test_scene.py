@@ -286,3 +286,15 @@ def test_every_equation_broadcasts_per_element_scene_parameters():
             for name, value in got.items():
                 np.testing.assert_allclose(value[..., i, j], ref[name], rtol=1e-14,
                                            atol=1e-14, err_msg=name)
+
+
+def test_as_dict_gives_plain_numbers_for_a_scalar_scene_and_a_batch():
+    """A batch gives one list per field, a field shared by the batch repeated (it raised
+    NumPy's "only 0-dimensional arrays can be converted")."""
+    assert Scene(m=2.0).as_dict() == {f.name: getattr(Scene(m=2.0), f.name)
+                                      for f in dataclasses.fields(Scene)}
+    batch = Scene(m=np.array([1.0, 2.0]), e=np.array([0.01, 0.02]))
+    got = batch.as_dict()
+    for i in range(2):
+        assert {name: values[i] for name, values in got.items()} == batch.item(i).as_dict()
+    assert all(type(v) is list and all(type(x) is float for x in v) for v in got.values())

@@ -2,7 +2,9 @@
 
 Every function takes a :class:`~roller_gym.physics.scene.Scene` and states as floats or arrays
 (broadcast together, per-element scene parameters included), except :func:`equilibria`,
-which searches one scene at one torque.
+which searches one scene at one torque. They are NumPy formulas and take what NumPy
+computes with: complex states give complex results (complex-step derivatives), bools are 0
+and 1; the steppers, unlike them, refuse anything but finite real numbers.
 """
 
 from __future__ import annotations

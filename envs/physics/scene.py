@@ -184,9 +184,12 @@ class Scene:
             }
         )
 
-    def as_dict(self) -> dict[str, float]:
-        """The fields as plain floats (scalar scenes only), e.g. for logging."""
-        return {f.name: float(getattr(self, f.name)) for f in fields(self)}
+    def as_dict(self) -> dict[str, float | list[float]]:
+        """The fields as plain Python numbers, e.g. for logging as JSON: floats for a scalar
+        scene, for a batch each field as a list of one float per roller."""
+        shape = () if self.batch_size is None else (self.batch_size,)
+        return {f.name: np.broadcast_to(np.asarray(getattr(self, f.name), dtype=float),
+                                        shape).tolist() for f in fields(self)}
 
     def __repr__(self) -> str:
         inner = ", ".join(f"{f.name}={getattr(self, f.name)!r}" for f in fields(self))

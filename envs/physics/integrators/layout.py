@@ -10,6 +10,7 @@ bit for bit the same alone and in any batch.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -130,6 +131,21 @@ def scene_arrays(scene: Scene, n: int | None = None) -> np.ndarray:
 #: rows would otherwise fall into one set of the cache, and a loop that reads many rows at
 #: once (the stages read up to 30) would miss it at every element.
 _PAD = 8
+
+
+def check_memory(argument: str, count: int, bytes_each: int) -> None:
+    """Refuse ``count`` (the value of ``argument``) items of up to ``bytes_each`` bytes whose
+    arrays would not fit in the machine's physical memory (where the platform tells it), with
+    a ValueError naming them, rather than fail in NumPy or be killed later."""
+    try:
+        total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, OSError, ValueError):  # not told: NumPy's MemoryError remains
+        return
+    need = count * bytes_each
+    if need > total:
+        raise ValueError(f"{argument}={count} is too many: their arrays need about "
+                         f"{need / 2**30:.3g} GiB of memory (up to {bytes_each} bytes "
+                         f"each), more than the machine's {total / 2**30:.3g} GiB; use fewer")
 
 
 def row_table(rows: int, n: int, zeroed: bool = True) -> np.ndarray:

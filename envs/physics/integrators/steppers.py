@@ -34,6 +34,7 @@ from roller_gym.physics.integrators.layout import (
     STEP_FIELDS,
     StepResult,
     as_row_table,
+    check_memory,
     row_table,
     scene_arrays,
 )
@@ -117,16 +118,22 @@ class _Base:
                 stacklevel=stacklevel)
 
 
+#: ``num`` of :func:`_check_states` for states of any shape (broadcast together later).
+ANY_SHAPE = -1
+
+
 def _check_states(num: int | None = None, **values: Any) -> None:
     """Raise a ValueError naming the first of ``values`` (φ [rad], φ' [rad/s], τ [N·m]) that
-    is not a finite real number, or (``num`` given) not one or ``num`` of them."""
+    is not a finite real number (a bool is not one), or not of the shape ``num`` asks for:
+    None one number, ANY_SHAPE numbers of any shape, else one or a 1-D array of ``num``."""
+    shapes = {None: "a real number", ANY_SHAPE: "real numbers (a number or an array)"}
     for name, value in values.items():
         array = np.asarray(value) if not isinstance(value, float) else None
-        if array is not None and (array.dtype.kind not in "iuf" or array.ndim > 1
-                                  or (num is None and array.ndim)):
-            shape = "a number" if num is None else f"a number or a 1-D array of {num}"
-            raise ValueError(f"{name}={value!r} must be {shape}, real")
-        if array is not None and array.ndim and array.shape != (num,):
+        if array is not None and (array.dtype.kind not in "iuf" or (num != ANY_SHAPE and (
+                array.ndim > 1 or (num is None and array.ndim)))):
+            shape = shapes.get(num, f"a real number or a 1-D array of {num} of them")
+            raise ValueError(f"{name}={value!r} must be {shape}, not a bool or complex")
+        if array is not None and array.ndim and num not in shapes and array.shape != (num,):
             raise ValueError(f"{name} has {array.shape[0]} values for {num} rollers")
         if not np.isfinite(value if array is None else array).all():
             raise ValueError(f"{name}={value!r} is not finite")
@@ -261,16 +268,18 @@ class Stepper(_Base):
         Raises:
             ValueError: a state or torque that is not a finite real number.
         """
-        try:  # the common case in a fraction of a microsecond; else the reason, named
-            ok = math.isfinite(phi + phi_dot + tau)
-        except TypeError:
-            ok = False
-        if not ok:
+        # the common case (floats, finite) in a fraction of a microsecond; else the reason
+        if not (isinstance(phi, float) and isinstance(phi_dot, float)
+                and isinstance(tau, float) and math.isfinite(phi + phi_dot + tau)):
             _check_states(phi=phi, phi_dot=phi_dot, tau=tau)
         (p, w, a, nsub, finite, normal, friction, energy, lift, slip, err,
          met) = self._run(phi, phi_dot, tau, 4)[:, 0].tolist()
         return (p, w, a, int(nsub), finite != 0.0, normal, friction, energy, lift, slip, err,
                 met != 0.0)
+
+
+#: Bytes a BatchStepper holds per roller: its ``io`` rows and the typed result arrays.
+BYTES_PER_ROLLER = 8 * len(ROWS) + 10
 
 
 class BatchStepper(_Base):
@@ -287,6 +296,7 @@ class BatchStepper(_Base):
                  tolerance: float, substeps: int | None = None) -> None:
         if not (isinstance(num, int | np.integer) and not isinstance(num, bool) and num >= 1):
             raise ValueError(f"num={num!r} must be an integer >= 1")
+        check_memory("num", int(num), BYTES_PER_ROLLER)
         super().__init__(int(num), integrator, dt, tolerance, substeps)
         self.num = int(num)
         self._io[: len(SCENE_FIELDS)] = np.nan  # no scene yet
@@ -402,8 +412,11 @@ def contact_state(scene: Scene | np.ndarray, phi: np.ndarray, phi_dot: np.ndarra
     equations' own (NaN where they are undefined), so such a state never passes as rolling.
 
     Raises:
-        ValueError: ``phi_dot``, ``tau`` or the scene's numbers do not have one value per state.
+        ValueError: ``phi`` is not a 1-D array, or ``phi_dot``, ``tau`` or the scene's numbers
+            do not have one value per state.
     """
+    if np.ndim(phi) != 1:
+        raise ValueError(f"phi={phi!r} must be a 1-D array of states (one φ [rad] each)")
     n = len(phi)
     par = (np.ascontiguousarray(scene, dtype=float) if isinstance(scene, np.ndarray)
            else scene_arrays(scene, n))
@@ -454,9 +467,7 @@ def step(
     """
     _check_step_args(dt, tolerance, substeps)
     params = (*require_scene(scene).params, scene.mu)
-    for name, value in (("phi", phi), ("phi_dot", phi_dot), ("tau", tau)):
-        if np.asarray(value).dtype.kind not in "iuf":
-            raise ValueError(f"{name}={value!r} must be real numbers (a number or an array)")
+    _check_states(ANY_SHAPE, phi=phi, phi_dot=phi_dot, tau=tau)
     scalar = all(np.ndim(x) == 0 for x in (phi, phi_dot, tau, *params))
     arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (phi, phi_dot, tau,
                                                                          *params)))
@@ -491,9 +502,7 @@ def predicted_substeps(
     if sch.substep is None:
         raise ValueError(f"integrator={integrator!r} chooses its own steps; no prediction is made")
     _check_step_args(dt, tolerance, None)
-    speed = np.asarray(phi_dot)
-    if speed.dtype.kind not in "iuf" or not np.isfinite(speed).all():
-        raise ValueError(f"phi_dot={phi_dot!r} must be finite real numbers [rad/s]")
+    _check_states(ANY_SHAPE, phi_dot=phi_dot)
     arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (phi_dot,
                                                                        *require_scene(scene).params)))
     flat = [a.reshape(-1) for a in arrays]
