@@ -5,7 +5,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: run test test-rllib train-rllib bench throughput results clean
+.PHONY: run test test-rllib train-rllib bench throughput results results-train results-evaluate clean
 
 # An index with torch's CPU build, where pip's own settings have none: on the open internet,
 # `make test TORCH_INDEX=https://download.pytorch.org/whl/cpu` (torch==2.13.0 resolves to the
@@ -42,6 +42,7 @@ TASKS := roller_gym/RollerStabilize-v2 roller_gym/RollerHold-v2 roller_gym/Rolle
 	roller_gym/RollerTrack-v1 roller_gym/RollerSwing-v0 roller_gym/RollerHoldRandomized-v0 \
 	roller_gym/RollerBalanceWeak-v0
 SEEDS := 0 1 2 3 4
+ALGOS := sac td3 ppo
 # Options of roller-gym train for every run: `make results SEEDS="0 1" TASKS="roller_gym/RollerHold-v2"
 # TRAIN_ARGS="--steps 2000" RESULTS_OUT=/tmp/smoke RESULTS_PAGE=/tmp/smoke/RESULTS.md` is a
 # smoke run of the whole pipeline in minutes.
@@ -50,19 +51,25 @@ TRAIN_ARGS ?=
 # the page rendered from every task file there.
 RESULTS_OUT ?= docs/results
 RESULTS_PAGE ?= docs/RESULTS.md
-# One seed's ($$0) trainings of one task ($$1), every algorithm, into runs/results/<task>/seed<S>.
-TRAIN_SEED = for algo in sac td3 ppo; do \
-	$(RG) train --algo $$algo --env $$1 --seed $$0 --log-folder runs/results/$${1\#*/}/seed$$0 \
+# One seed's ($$0) trainings of one task ($$1), each of ALGOS afresh, into
+# runs/results/<task>/seed<S>/<algo>.
+TRAIN_SEED = for algo in $(ALGOS); do dir=runs/results/$${1\#*/}/seed$$0; rm -rf $$dir/$$algo; \
+	$(RG) train --algo $$algo --env $$1 --seed $$0 --log-folder $$dir \
 	--verbose 0 --checkpoints 0 $(TRAIN_ARGS) || exit 1; done
-# One task at a time, a piece of the round on its own (5 seeds x 3 algorithms, two processes):
-# train, evaluate into its task file, render the page from every task file in RESULTS_OUT.
-results: $(STAMP)  ## train SAC, TD3 and PPO with 5 seeds on each of TASKS in turn, evaluate, write docs/RESULTS.md
-	for env in $(TASKS); do \
-	runs=runs/results/$${env#*/}; rm -rf $$runs; start=$$(date +%s); \
-	printf '%s\n' $(SEEDS) | xargs -P 2 -I SEED sh -c '$(TRAIN_SEED)' SEED $$env && \
+# A round in pieces, each well inside two hours on two cores: `make results-train TASKS=<task>
+# ALGOS=sac SEEDS="0 1 2"`, … (each piece adds its wall time to runs/results/<task>/wall_s),
+# then `make results-evaluate TASKS=<task>` over every run there. `make results` does both, afresh.
+results-train: $(STAMP)  ## train ALGOS x SEEDS on each of TASKS (two processes), keeping other runs
+	for env in $(TASKS); do runs=runs/results/$${env#*/}; mkdir -p $$runs; start=$$(date +%s); \
+	printf '%s\n' $(SEEDS) | xargs -P 2 -I SEED sh -c '$(TRAIN_SEED)' SEED $$env || exit 1; \
+	echo $$(( $$(date +%s) - start )) >> $$runs/wall_s; done
+results-evaluate: $(STAMP)  ## evaluate every run of each of TASKS, write its task file and the page
+	for env in $(TASKS); do runs=runs/results/$${env#*/}; \
 	$(RG) results --runs $$runs --env $$env --out $(RESULTS_OUT) --report $(RESULTS_PAGE) \
-	--train-wall-s $$(( $$(date +%s) - start )) || exit 1; \
-	done
+	--train-wall-s $$(awk '{s += $$1} END {print s + 0}' $$runs/wall_s) || exit 1; done
+results: $(STAMP)  ## train SAC, TD3 and PPO with 5 seeds on each of TASKS afresh, evaluate, write docs/RESULTS.md
+	for env in $(TASKS); do rm -rf runs/results/$${env#*/}; \
+	$(MAKE) --no-print-directory results-train results-evaluate TASKS=$$env || exit 1; done
 
 # The suite runs on every core (pytest-xdist), one test file per worker at a time, so that a
 # file's module-scoped references are computed once.
