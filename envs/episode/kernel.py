@@ -98,18 +98,21 @@ def _unpack_one(packed):
 
 
 @inlined
-def _one_roller(phi, phi_dot, tau, kernel, reward, success, k, io, tab, cfg, context, observed,
-                out, flags, obs):
-    """The single environment's step: its roller's inputs and torque written, the physics
-    (the scheme's ``kernel`` for one roller, ``Scheme.one``) and the outcome, and what the
+def _inputs_one(phi, phi_dot, tau, io, context):
+    """The single environment's step, before its physics: its roller's inputs and torque
+    written (the physics is then the scheme's kernel for one roller, ``Scheme.one``, called
+    by its global name: passed in as an argument it doubled the first compile)."""
+    put_inputs(io[:, 0], phi, phi_dot, tau)
+    context[C.torque, 0] = tau
+
+
+@inlined
+def _outcome_one_roller(reward, success, k, io, context, observed, out, flags, obs):
+    """The single environment's step, after its physics: the outcome, and what the
     environment reads back, as :meth:`~roller_gym.physics.integrators.Stepper.bind` takes
     it: (missed, φ [rad], φ' [rad/s], reward, terminated)."""
-    flat = io[:, 0]
-    put_inputs(flat, phi, phi_dot, tau)
-    context[C.torque, 0] = tau
-    kernel(io, tab, cfg)
     outcome_one(reward, success, k, io[_STEP_ROWS:], context, observed, out, flags, obs)
-    return (missed(flat), out[O.phi, 0], out[O.phi_dot, 0], out[O.reward, 0],
+    return (missed(io[:, 0]), out[O.phi, 0], out[O.phi_dot, 0], out[O.reward, 0],
             flags[F.terminated, 0])
 
 
@@ -231,16 +234,18 @@ def task_kernels(task: type) -> TaskKernels:
     @jit
     def taylor_one(phi, phi_dot, tau, packed):
         io, tab, cfg, context, constants, observed, out, flags, obs = _unpack_one(packed)
-        return _one_roller(phi, phi_dot, tau, _TAYLOR_ONE, reward, success,
-                           K(*_numbers(constants, n)), io, tab, cfg, context, observed, out,
-                           flags, obs)
+        _inputs_one(phi, phi_dot, tau, io, context)
+        _TAYLOR_ONE(io, tab, cfg)
+        return _outcome_one_roller(reward, success, K(*_numbers(constants, n)), io, context,
+                                   observed, out, flags, obs)
 
     @jit
     def rk_one(phi, phi_dot, tau, packed):
         io, tab, cfg, context, constants, observed, out, flags, obs = _unpack_one(packed)
-        return _one_roller(phi, phi_dot, tau, _RK_ONE, reward, success,
-                           K(*_numbers(constants, n)), io, tab, cfg, context, observed, out,
-                           flags, obs)
+        _inputs_one(phi, phi_dot, tau, io, context)
+        _RK_ONE(io, tab, cfg)
+        return _outcome_one_roller(reward, success, K(*_numbers(constants, n)), io, context,
+                                   observed, out, flags, obs)
 
     # the parallel fused kernels leave ``scratch`` unused (a chunk's is its own), as
     # ``parallel`` does
@@ -332,7 +337,7 @@ class OutcomeKernel:
         if one is not None and not numba.config.DISABLE_JIT:  # (interpreted: two calls)
             step = stepper.bind(one, *self._buffers())
             kinds = tuple((a.dtype.type, a.ndim) for a in step.arrays)
-            assert kinds == _ONE_ARRAYS, f"_one_roller would misread {kinds}"
+            assert kinds == _ONE_ARRAYS, f"the one-roller kernels would misread {kinds}"
             return step
         advance, torque = stepper.bind(), self.context[C.torque]
         table, flags = self.table[:, 0], self.flags[:, 0]

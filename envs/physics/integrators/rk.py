@@ -45,6 +45,7 @@ from roller_gym.physics.integrators.rules import (
     _MAX_FACTOR,
     _MIN_FACTOR,
     _SAFETY,
+    CHUNK,
     FORCE_AFTER,
     FORCE_REST,
     ROUNDOFF_FACTOR,
@@ -60,7 +61,6 @@ from roller_gym.physics.integrators.rules import (
     _parallel,
     _propagate,
     _propagated,
-    _serial,
     _smaller_share,
     _substeps,
     _write,
@@ -459,11 +459,17 @@ def _rk_one(io, tab, cfg):
 
 
 
-# Each chunked scheme's kernels: the shared loops around its functions, a function of its own
-# per scheme so that numba caches it (as the fixed-substep kernels, in ``fixed``).
+# Each chunked scheme's kernels: the loops around its functions, a function of its own per
+# scheme so that numba caches it (as the fixed-substep kernels, in ``fixed``). The serial one
+# is the loop of rules.CHUNK's comment, written out.
 @_jit
 def _rk_serial(io, tab, cfg):
-    _serial(io, tab, cfg, _rk_one, _rk_chunk)
+    n = io.shape[1]
+    if n == 1:
+        _rk_one(io, tab, cfg)
+        return
+    for lo in range(0, n, CHUNK):
+        _rk_chunk(io, lo, min(lo + CHUNK, n), tab, cfg)
 
 
 @numba.njit(cache=True, parallel=True, nogil=True, error_model="numpy")

@@ -171,24 +171,17 @@ def _end_lanes(phi, w, tau, par, n, out):
         out[4, i], out[5, i] = min(out[4, i], li), min(out[5, i], si)
 
 
-#: Rollers advanced together (each with its own step size) by one task.
+#: Rollers advanced together (each with its own step size) by one task. A scheme's serial
+#: batch kernel (``taylor_kernel._taylor_serial``, ``rk._rk_serial``) runs its ``one`` for a
+#: batch of one roller (a Stepper: the same arithmetic without lanes), else its ``chunk``
+#: over chunks of CHUNK rollers; each scheme writes that loop out, calling its kernels by
+#: their global names: through a shared function taking them as arguments, the serial
+#: kernel's first compile took twice as long.
 CHUNK = 512
 
 _SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0
 #: Attempts (accepted or rejected substeps) after which a roller still running is failed.
 _MAX_ATTEMPTS = 4 * MAX_SUBSTEPS
-
-
-@inlined
-def _serial(io, tab, cfg, one, chunk):
-    """A batch kernel on one core: ``one`` for a batch of one roller (a Stepper: the same
-    arithmetic without lanes), else ``chunk`` over chunks of CHUNK rollers."""
-    n = io.shape[1]
-    if n == 1:
-        one(io, tab, cfg)
-        return
-    for lo in range(0, n, CHUNK):
-        chunk(io, lo, min(lo + CHUNK, n), tab, cfg)
 
 
 @numba.extending.register_jitable(inline="always")

@@ -38,6 +38,7 @@ from roller_gym.physics.integrators.rules import (
     _EPS,
     _MAX_ATTEMPTS,
     _SAFETY,
+    CHUNK,
     FORCE_AFTER,
     FORCE_REST,
     _end_lanes,
@@ -45,7 +46,6 @@ from roller_gym.physics.integrators.rules import (
     _finite,
     _jit,
     _parallel,
-    _serial,
     _write,
 )
 
@@ -243,8 +243,13 @@ def _taylor_one(io, tab, cfg):
 
 
 @_jit
-def _taylor_serial(io, tab, cfg):
-    _serial(io, tab, cfg, _taylor_one, _taylor_chunk)
+def _taylor_serial(io, tab, cfg):  # the loop of rules.CHUNK's comment, written out
+    n = io.shape[1]
+    if n == 1:
+        _taylor_one(io, tab, cfg)
+        return
+    for lo in range(0, n, CHUNK):
+        _taylor_chunk(io, lo, min(lo + CHUNK, n), tab, cfg)
 
 
 @numba.njit(cache=True, parallel=True, nogil=True, error_model="numpy")
