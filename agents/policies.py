@@ -110,7 +110,10 @@ def _read_yaml(path: Path) -> Any:
     except ImportError:
         raise missing("yaml", "zoo", "reading training runs") from None
     with path.open() as f:
-        return yaml.load(f, Loader=yaml.UnsafeLoader)
+        try:
+            return yaml.load(f, Loader=yaml.UnsafeLoader)
+        except yaml.YAMLError as error:
+            raise ValueError(f"{path} is not a YAML file rl-zoo3 wrote: {error}") from None
 
 
 def find_run(log_folder: str | Path, algo: str, env_id: str) -> Path | None:

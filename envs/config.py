@@ -35,18 +35,21 @@ DEFAULT_TOLERANCE = 1e-8
 _SCENE_FIELDS = tuple(f.name for f in fields(Scene))
 
 
-def resolve_scene(scene: Scene | str | None, default: str) -> Scene:
-    """A Scene from a Scene, a preset's name, or None (the task's default preset)."""
+def resolve_scene(scene: Scene | str | None, default: str, name: str = "scene") -> Scene:
+    """A Scene from a Scene, a preset's name, or None (the task's default preset); errors
+    name the argument ``name``."""
     if scene is None:
         return preset(default)
     if isinstance(scene, str):
         return preset(scene)
     if isinstance(scene, Scene):
         if scene.batch_size is not None:
-            raise ValueError("scene must be a scalar Scene here; a batch goes to the vector env")
+            raise ValueError(f"{name} is a batch Scene of {scene.batch_size} rollers: it must "
+                             "be one scalar Scene (a vector environment's scene= takes a list "
+                             "of them, one per sub-environment)")
         return scene
     raise ValueError(
-        f"scene={scene!r} is not allowed: pass an roller_gym.Scene or a preset name "
+        f"{name}={scene!r} is not allowed: pass an roller_gym.Scene or a preset name "
         "(see roller_gym.PRESETS)"
     )
 
@@ -219,7 +222,7 @@ class EnvConfig:
                    info_keys)
 
     def resolve_option_scene(self, value: Any) -> Scene:
-        return resolve_scene(value, self.task.default_scene)
+        return resolve_scene(value, self.task.default_scene, "options['scene']")
 
 
 def check_randomize(task: Task, scene: Scene, dt: float,

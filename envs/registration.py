@@ -55,7 +55,7 @@ class TaskEntry:
         if "task" in kwargs:
             given = kwargs.pop("task")
             ours = get_task(self.task)
-            if get_task(given) is not ours:
+            if get_task(given, current=True) is not ours:
                 raise ValueError(f"task={given!r} contradicts the ID {ours.env_id()}, whose "
                                  f"task is {self.task!r}: make {get_task(given).env_id()} "
                                  "instead, or leave task= out")

@@ -86,16 +86,17 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         """Start an episode. ``options``: ``"state"``: (φ [rad], φ' [rad/s]); ``"target"``:
         the task's target (see the task); ``"scene"``: a Scene or preset for this episode."""
         seed = episode.check_seed(seed)
-        super().reset(seed=seed)
         if seed is not None or self._stream_seed is None:
-            self._stream_seed = episode.random_seed() if seed is None else seed
-            self._episode = 0
+            stream_seed = episode.random_seed() if seed is None else seed
+            number = 0
         else:
-            self._episode += 1
-        start = episode.start_episodes(
-            self.config, self.config.scene, np.array([self._stream_seed], np.uint64),
-            np.array([self._episode], np.uint64), options,
+            stream_seed, number = self._stream_seed, self._episode + 1
+        start = episode.start_episodes(  # before any change: refused options leave none
+            self.config, self.config.scene, np.array([stream_seed], np.uint64),
+            np.array([number], np.uint64), options,
         )
+        super().reset(seed=seed)
+        self._stream_seed, self._episode = stream_seed, number
         scene = start.scene if start.scene.batch_size is None else start.scene.item(0)
         if scene is not self.scene:  # randomized, or set by the options: its numbers anew
             self._set_scene(scene)

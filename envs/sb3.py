@@ -27,7 +27,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from gymnasium.vector import AutoresetMode
-from roller_gym.episode import INFO_KEYS, vector_seeds
+from roller_gym.episode import INFO_KEYS, state_option, vector_seeds
 from roller_gym.physics.integrators import DEFAULT_INTEGRATOR
 from roller_gym.vector_env import BATCH_INTEGRATORS
 from stable_baselines3.common.vec_env import DummyVecEnv
@@ -41,6 +41,8 @@ __all__ = ["RollerVecEnv", "from_env_fns"]
 #: ``info["TimeLimit.truncated"]`` as :class:`RollerVecEnv` does.
 _PLAIN_WRAPPERS = {"Monitor", "TimeLimit", "PatchedTimeLimit", "OrderEnforcing",
                    "PassiveEnvChecker"}
+#: The attributes set_attr sets per sub-environment: the state (φ [rad], φ' [rad/s]).
+_STATE = ("phi", "phi_dot")
 #: Attributes whose sub-environment's value the native batch holds under another name.
 _SINGLE = {"observation_space": "single_observation_space",
            "action_space": "single_action_space"}
@@ -87,6 +89,7 @@ class RollerVecEnv(VecEnv):
         if seed is not None:
             self.seed(seed)
         self._actions: np.ndarray | None = None
+        self._own: set[str] = set()  # attributes set_attr added
         self.monitor = bool(monitor)
         self._returns = np.zeros(self.num_envs)
         self._lengths = np.zeros(self.num_envs, dtype=np.int64)
@@ -172,19 +175,64 @@ class RollerVecEnv(VecEnv):
         return [value] * len(index)
 
     def set_attr(self, attr_name: str, value: Any, indices: VecEnvIndices = None) -> None:
-        """Set the attribute of the sub-environments in ``indices``: the entries of an array
-        with one entry per sub-environment; a value of the whole batch only for all of them."""
+        """Set an attribute of the sub-environments in ``indices``: the state (``phi`` [rad],
+        ``phi_dot`` [rad/s]) of each, or an attribute of your own (one value, for all of
+        them). The native batch's own attributes (its settings and bookkeeping: the target,
+        the step counts, ``max_episode_steps``, ``autoreset_mode``, …) are fixed: set them
+        where the batch is made or through ``set_options`` and ``reset``."""
         index = list(self._get_indices(indices))
-        current = getattr(self.venv.unwrapped, attr_name, None)  # (None: a new attribute)
-        if self._per_env(current):
-            current[index] = self._entries(attr_name, value, current, len(index))
+        base = self.venv.unwrapped
+        if attr_name in _STATE:
+            current = getattr(base, attr_name)
+            new = current.copy()
+            new[index] = self._entries(attr_name, value, current, len(index))
+            phi, phi_dot = (new, base.phi_dot) if attr_name == "phi" else (base.phi, new)
+            scenes = base.scenes
+            for i in index:  # a state a reset could start from: it rolls (as reset checks)
+                try:
+                    state_option((float(phi[i]), float(phi_dot[i])), scenes[i], 1)
+                except ValueError as error:
+                    raise ValueError(f"set_attr({attr_name!r}, value={value!r}): the state of "
+                                     f"sub-environment {i} would be refused by a reset: "
+                                     f"{error}") from None
+            current[index] = new[index]
+        elif hasattr(base, attr_name) and attr_name not in self._own:
+            raise ValueError(
+                f"set_attr({attr_name!r}, indices={indices!r}): {attr_name!r} is the native "
+                f"batch's own, one value for the whole batch of {self.num_envs} "
+                "sub-environments or its bookkeeping, and is not set this way: give settings "
+                "where the batch is made (RollerVecEnv(..., name=value)), a target or a "
+                "scene through set_options and reset; set_attr sets the state "
+                f"({', '.join(_STATE)}) and attributes of your own")
         elif sorted(index) == list(range(self.num_envs)):
-            setattr(self.venv.unwrapped, attr_name, value)
+            setattr(base, attr_name, value)
+            self._own.add(attr_name)
         else:
             raise ValueError(
                 f"set_attr({attr_name!r}, indices={indices!r}): {attr_name!r} is one value for "
                 f"the whole native batch of {self.num_envs} sub-environments, so it can only "
                 f"be set for all of them (indices=None)")
+
+    def set_options(self, options: list[dict] | dict | None = None) -> None:
+        """The next reset's options: one dict for every sub-environment, or a list of
+        ``num_envs`` (dicts or None), as SB3's."""
+        each = options if isinstance(options, list) else [options] * self.num_envs
+        if len(each) != self.num_envs or not all(o is None or isinstance(o, dict)
+                                                 for o in each):
+            raise ValueError(f"options={options!r} must be None, a dict, or a list of "
+                             f"{self.num_envs} (one per sub-environment) dicts or None")
+        super().set_options(options)
+
+    def _get_indices(self, indices: VecEnvIndices) -> list[int]:
+        """SB3's indices (None: all; an int; a list of ints), each in [0, num_envs)."""
+        index = list(range(self.num_envs)) if indices is None else (
+            [indices] if not isinstance(indices, list | tuple | range | np.ndarray)
+            else list(indices))
+        if not all(isinstance(i, int | np.integer) and not isinstance(i, bool | np.bool_)
+                   and 0 <= i < self.num_envs for i in index):
+            raise ValueError(f"indices={indices!r} must be None (all), an integer or a list "
+                             f"of integers in [0, {self.num_envs}): the sub-environments")
+        return [int(i) for i in index]
 
     def env_method(self, method_name: str, *method_args: Any, indices: VecEnvIndices = None,
                    **method_kwargs: Any) -> list[Any]:
@@ -202,16 +250,14 @@ class RollerVecEnv(VecEnv):
 
     @staticmethod
     def _entries(attr_name: str, value: Any, current: np.ndarray, count: int) -> np.ndarray:
-        """``value`` as ``count`` entries of the per-sub-environment array ``current``: numbers
-        of its kind (real and finite where it holds floats, as the state φ [rad], φ' [rad/s])."""
+        """``value`` as ``count`` entries of the state ``current`` (φ [rad] or φ' [rad/s]):
+        real numbers, one, or one per index (whether the state rolls is checked after)."""
         new = np.asarray(value)
-        wrong = (new.dtype.kind not in ("iuf" if current.dtype.kind == "f" else "biuf")
-                 or (new.dtype.kind == "f" and not np.isfinite(new).all()))
-        if wrong or new.ndim > current.ndim or (new.ndim and len(new) != count):
-            kind = "finite real numbers" if current.dtype.kind == "f" else "integers or bools"
+        if (np.ma.isMaskedArray(value) or new.dtype.kind not in "iuf" or new.ndim > 1
+                or (new.ndim and len(new) != count)):
             raise ValueError(f"set_attr({attr_name!r}, value={value!r}): {attr_name!r} holds "
-                             f"{kind}, one per sub-environment; give one, or one for each "
-                             f"of the {count} indices")
+                             "finite real numbers, one per sub-environment; give one, or one "
+                             f"for each of the {count} indices")
         return new
 
     def _per_env(self, value: Any) -> bool:
@@ -239,34 +285,64 @@ def _check_seed(seed: Any, n: int) -> None:
 
 def from_env_fns(env_fns: list[Any], **vec_env_kwargs: Any) -> VecEnv:
     """A ``vec_env_cls`` for SB3's ``make_vec_env`` (and rl-zoo3's
-    ``ExperimentManager.default_vec_env_cls``): for the environments of a roller-gym task,
-    the native batch (:class:`RollerVecEnv` reporting episodes as ``Monitor`` does), built
-    from the task ID and keyword arguments of the first environment (so training and
-    evaluation environments are of one type); ``DummyVecEnv`` for other tasks, when the
-    environments carry wrappers of their own, or when their integrator is one the batch does
-    not take (``"dop853"``)."""
-    if not env_fns:
-        raise ValueError("env_fns=[]: it needs at least one environment function")
-    probe = env_fns[0]()
-    wrappers, env, monitor, probe_file = set(), probe, True, None
-    while isinstance(env, gym.Wrapper):
-        wrappers.add(type(env).__name__)
-        writer = getattr(env, "results_writer", None)
+    ``ExperimentManager.default_vec_env_cls``): for environments of one roller-gym task made
+    alike (one ID, the same keyword arguments and time limit, no wrappers but the plain ones),
+    the native batch (:class:`RollerVecEnv` reporting episodes as ``Monitor`` does);
+    ``DummyVecEnv`` for anything else: other tasks, environments that differ, wrappers of
+    their own, no time limit (``max_episode_steps=-1``), or an integrator the batch does not
+    take (``"dop853"``). Like ``DummyVecEnv`` it takes no other keyword arguments.
+
+    Raises:
+        ValueError: ``env_fns`` is not a non-empty list of functions making environments, or
+            ``vec_env_kwargs`` are given.
+    """
+    if not isinstance(env_fns, list | tuple) or not env_fns:
+        raise ValueError(f"env_fns={env_fns!r} must be a non-empty list of functions that "
+                         "each make an environment")
+    if vec_env_kwargs:
+        raise ValueError(f"from_env_fns takes no keyword arguments (got "
+                         f"{', '.join(sorted(vec_env_kwargs))}), as DummyVecEnv takes none")
+    probes = []
+    for i, fn in enumerate(env_fns):
+        env = fn() if callable(fn) else None
+        if not isinstance(env, gym.Env):
+            got = f"made {env!r}" if callable(fn) else "is not callable"
+            raise ValueError(f"env_fns[{i}]={fn!r} must be a function that makes an "
+                             f"environment (it {got})")
+        probes.append(_probe(env))
+    first = probes[0]
+    native = (all(p[:3] == first[:3] for p in probes) and first[3] <= _PLAIN_WRAPPERS
+              and first[0] is not None and first[0].startswith("roller_gym/")
+              and first[1].get("integrator", DEFAULT_INTEGRATOR) in BATCH_INTEGRATORS
+              and first[2] is not None)  # (None: made without a time limit)
+    monitor = next((p[4] for p in probes if p[4] is not None), True)
+    for p in probes:  # the probes' own Monitor files: never written to
+        if native and p[5] is not None:
+            p[5].unlink(missing_ok=True)
+    if native:
+        return RollerVecEnv(first[0], n_envs=len(env_fns), monitor=monitor,
+                            max_episode_steps=first[2], **first[1])
+    return DummyVecEnv(list(env_fns))
+
+
+def _probe(env: gym.Env) -> tuple:
+    """What decides the batch for one made environment (closed after): its ID, keyword
+    arguments (but ``render_mode``), time limit and wrappers' names, the Monitor folder's
+    batch file and the probe's own Monitor file."""
+    wrappers, inner, monitor, probe_file = set(), env, None, None
+    while isinstance(inner, gym.Wrapper):
+        wrappers.add(type(inner).__name__)
+        writer = getattr(inner, "results_writer", None)
         if writer is not None:  # make_vec_env's monitor_dir: write there too
             probe_file = Path(writer.file_handler.name)
             monitor = str(probe_file.parent / "batch")
-        env = env.env
-    spec = probe.spec  # the outermost: it carries make()'s max_episode_steps
-    probe.close()
-    if (wrappers <= _PLAIN_WRAPPERS and spec is not None
-            and spec.id.startswith("roller_gym/")
-            and spec.kwargs.get("integrator", DEFAULT_INTEGRATOR) in BATCH_INTEGRATORS):
-        if probe_file is not None:  # the probe's own Monitor file: never written to
-            probe_file.unlink(missing_ok=True)
-        kwargs = {k: v for k, v in spec.kwargs.items() if k != "render_mode"}
-        return RollerVecEnv(spec.id, n_envs=len(env_fns), monitor=monitor,
-                            max_episode_steps=spec.max_episode_steps, **kwargs)
-    return DummyVecEnv(env_fns, **vec_env_kwargs)
+        inner = inner.env
+    spec = env.spec  # the outermost: it carries make()'s max_episode_steps
+    env.close()
+    if spec is None:
+        return None, {}, None, wrappers, monitor, probe_file
+    kwargs = {k: v for k, v in spec.kwargs.items() if k != "render_mode"}
+    return spec.id, kwargs, spec.max_episode_steps, wrappers, monitor, probe_file
 
 
 def _option_groups(options: list[dict | None], n: int) -> list[tuple[dict | None,

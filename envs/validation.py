@@ -18,6 +18,7 @@ from typing import Any
 import numba
 import numpy as np
 from roller_gym.physics import Scene
+from roller_gym.physics.scene import finite_real
 
 __all__ = ["actions", "check_integrable", "choice", "count", "integration_magnitudes",
            "integration_rates", "real", "subset"]
@@ -43,11 +44,10 @@ def real(name: str, value: Any, *, positive: bool = False, nonnegative: bool = F
         raise ValueError(f"{name}={value!r} is not allowed: it must be {allowed}"
                          f"{f' [{unit}]' if unit else ''} (a Python or NumPy number, not "
                          f"{type(value).__name__})")
-    x = float(value)
-    if not math.isfinite(x) or (positive and x <= 0) or (nonnegative and x < 0):
+    if not finite_real(value) or (positive and value <= 0) or (nonnegative and value < 0):
         raise ValueError(f"{name}={value!r} is out of range: it must be {allowed}"
                          f"{f' [{unit}]' if unit else ''}")
-    return x
+    return float(value)
 
 
 def count(name: str, value: Any, *, low: int = 1, high: int | None = None) -> int:

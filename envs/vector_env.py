@@ -206,7 +206,8 @@ class RollerVectorEnv(VectorEnv):
         scene, integrator = settings.scene, settings.integrator
         per_env = self._per_env_scenes(scene, num_envs)
         task_class = get_task(task, current=True)
-        resolved = [resolve_scene(s, task_class.default_scene) for s in per_env]
+        resolved = [resolve_scene(s, task_class.default_scene, f"scene[{i}]")
+                    for i, s in enumerate(per_env)]
         self.config = EnvConfig.build(
             task_class, replace(settings, scene=None) if per_env else settings,
             render_modes=self.metadata["render_modes"], scenes=resolved or None)
@@ -323,13 +324,6 @@ class RollerVectorEnv(VectorEnv):
                     self.phi_dot, self.steps, self._obs)
         self._stepper.forget(idx)  # a new episode does not continue the last one's substeps
 
-    def _start(self, idx: np.ndarray, options: Mapping[str, Any] | None) -> _Starts:
-        """Start new episodes in sub-environments ``idx`` (a reset); returns their starts
-        (their outcome at the start is the reset's info)."""
-        starts = self._draw(idx, self._episodes[idx], options)
-        self._apply(idx, starts, (options or {}).get("scene") is not None)
-        return starts
-
     def reset(
         self,
         *,
@@ -352,7 +346,9 @@ class RollerVectorEnv(VectorEnv):
         seeds = episode.vector_seeds(seed, n) or [None] * n
         given = np.array([s is not None for s in seeds])
         # Seeded rows start their streams anew, as do rows without a seed yet (a fresh one);
-        # the others go on to their next episode.
+        # the others go on to their next episode. Refused options leave every count as it was.
+        kept = [(name, getattr(self, name).copy())
+                for name in ("_seeds", "_episodes", "_ahead_for", "_has_seed")]
         anew = mask & (given | ~self._has_seed)
         if anew.any():
             rows = np.flatnonzero(anew)
@@ -363,14 +359,20 @@ class RollerVectorEnv(VectorEnv):
             self._ahead_for[rows] = _NONE  # those drawn ahead came from the old seeds
             self._has_seed[rows] = True
         self._episodes[mask & ~anew] += np.uint64(1)
+        idx = np.flatnonzero(mask)
+        try:
+            starts = self._draw(idx, self._episodes[idx], options)
+        except Exception:
+            for name, value in kept:
+                setattr(self, name, value)
+            raise
         if isinstance(seed, int | np.integer):
             self._np_random, self._np_random_seed = seeding.np_random(int(seed))
-        idx = np.flatnonzero(mask)
         if self._obs_handed_out:  # the caller's, who may have changed it: the others' anew
             self._obs = np.empty_like(self._obs)
             self._outcome.observe(self.phi, self.phi_dot, np.flatnonzero(~mask), self._obs)
             self._obs_handed_out = False
-        starts = self._start(idx, options)
+        self._apply(idx, starts, options.get("scene") is not None)
         self._done[idx] = False
         if not self._ready:
             self._started[idx] = True

@@ -76,13 +76,19 @@ def checked_env_kwargs(env_id: str, items: list[str], option: str) -> dict[str, 
     kwargs = key_values(items, option)
     spec = gym.spec(env_id)
     creator = spec.entry_point
-    params = inspect.signature(
-        creator if callable(creator) else load_env_creator(creator)).parameters
+    creator = creator if callable(creator) else load_env_creator(creator)
+    params = inspect.signature(creator).parameters
     allowed = [name for name in (*params, *MAKE_KWARGS) if name not in spec.kwargs]
     unknown = [key for key in kwargs if key not in allowed]
     if unknown and all(p.kind is not p.VAR_KEYWORD for p in params.values()):
         raise SystemExit(f"{option}: {unknown[0]!r} is not an argument of {env_id}; "
                          f"allowed: {', '.join(allowed)}")
+    # (Gymnasium's make fails on a render_mode that is not a string: AttributeError)
+    mode, modes = kwargs.get("render_mode"), getattr(creator, "metadata", {}).get(
+        "render_modes", ())
+    if mode is not None and mode not in modes:
+        raise SystemExit(f"{option}: render_mode={mode!r} is not allowed: it must be None or "
+                         f"one of {', '.join(map(repr, modes))}")
     try:
         gym.make(env_id, **kwargs).close()
     except (TypeError, ValueError) as exc:

@@ -41,7 +41,14 @@ def main(argv: Sequence[str] | None = None) -> None:
             parser.error("--render measures nothing: --quick does not apply")
         if not path.is_file():
             raise SystemExit(f"no results file at {path}: `roller-gym benchmark` measures one")
-        results = records.load_results(path)
+        try:
+            results = records.load_results(path)
+            page = report.write(results, args.out)
+        except (ValueError, KeyError, TypeError, AttributeError) as error:
+            raise SystemExit(f"{path} is not a results file `roller-gym benchmark` wrote "
+                             f"({type(error).__name__}: {error}); measure again without "
+                             "--render") from None
+        print(f"wrote {page}")
     else:
         from roller_gym.bench import workprecision  # MuJoCo, the environments, the kernels
 
@@ -50,7 +57,7 @@ def main(argv: Sequence[str] | None = None) -> None:
         results = workprecision.measure(workprecision.Config.make(args.quick), command)
         records.save_results(results, path)
         print(f"wrote {path}")
-    print(f"wrote {report.write(results, args.out)}")
+        print(f"wrote {report.write(results, args.out)}")
     print(f"wrote {maintainers.write(args.out)}")
     for v in work_precision_verdicts(results):
         print(f"{v.sentence.replace('**', '')}: {v.target}: {v.measured}")

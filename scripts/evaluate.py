@@ -244,7 +244,7 @@ def main(argv: list[str] | None = None) -> None:
             run_dirs += [d for d in found if d is not None]
         try:
             configs = [read_config(d) for d in run_dirs]
-        except FileNotFoundError as exc:
+        except (FileNotFoundError, ValueError) as exc:
             raise SystemExit(f"--models: {exc}") from None
         for d, c in zip(run_dirs, configs, strict=True):
             if c["env"] != env_id:

@@ -71,7 +71,7 @@ def main(argv: list[str] | None = None) -> None:
     else:
         try:
             config = read_config(args.policy)
-        except FileNotFoundError as exc:
+        except (FileNotFoundError, ValueError) as exc:
             raise SystemExit(f"policy: {exc}; or give one of: {', '.join(BASELINES)}") from None
         if args.env is not None and args.env != config["env"]:
             raise SystemExit(f"{args.policy} was trained on {config['env']}, not {args.env}")

@@ -33,6 +33,7 @@ from typing import Any
 import roller_gym  # registers the tasks
 from roller_gym.agents.hyperparams import ALGOS, config_file, hyperparams
 from roller_gym.agents.policies import ZOO_HINT, algorithm_class, find_run
+from roller_gym.physics.scene import finite_real
 from roller_gym.scripts import zoo_train
 from roller_gym.scripts.arguments import at_least, checked_env_kwargs, key_values, program_parser
 
@@ -91,10 +92,14 @@ ZOO_KEYS = ("n_timesteps", "n_envs", "normalize", "normalize_kwargs", "env_wrapp
 ZOO_SETS = ("env", "tensorboard_log", "seed", "verbose", "device")
 
 
+#: The hyperparameters that count (environments, steps, samples): integers >= 1.
+COUNT_KEYS = ("n_envs", "n_timesteps", "n_steps", "batch_size", "n_epochs")
+
+
 def checked_hyperparams(algo: str, items: list[str]) -> dict[str, Any]:
     """``--hyperparams`` (``KEY:VALUE`` items) as a dict, each key checked to be one
-    rl-zoo3 reads or a keyword argument of the algorithm's class, and ``n_envs`` and
-    ``n_timesteps`` checked to be positive integers, before rl-zoo3 starts (where a wrong one
+    rl-zoo3 reads or a keyword argument of the algorithm's class, and the counts
+    (:data:`COUNT_KEYS`) checked to be positive integers, before rl-zoo3 starts (where a wrong one
     ends in a traceback from its setup or the algorithm's).
 
     Raises:
@@ -110,9 +115,10 @@ def checked_hyperparams(algo: str, items: list[str]) -> dict[str, Any]:
         if key not in accepted:
             raise SystemExit(f"--hyperparams: {key!r} is not a hyperparameter of {algo}; "
                              f"allowed: {', '.join(sorted(accepted))}")
-        if key in ("n_envs", "n_timesteps") and not (
-                isinstance(value, int | float) and not isinstance(value, bool)
-                and math.isfinite(value) and value == int(value) and value >= 1):
+        whole = int | float if key == "n_timesteps" else int  # (rl-zoo3 rounds n_timesteps)
+        if key in COUNT_KEYS and not (
+                isinstance(value, whole) and finite_real(value) and value == int(value)
+                and value >= 1):
             raise SystemExit(f"--hyperparams: {key}:{value!r} is not allowed: it must be an "
                              "integer >= 1")
     return values

@@ -317,6 +317,10 @@ def test_train_passes_env_kwargs_to_rl_zoo3_as_python_literals():
     ("max_torque=-1", "--env-kwargs: max_torque=-1 is out of range"),
     ("bogus=3", "--env-kwargs: 'bogus' is not an argument of roller_gym/RollerStabilize-v2; "
                 "allowed: scene, dt, max_torque,"),
+    # (Gymnasium's make failed on it: AttributeError, 'int' object has no attribute 'endswith')
+    ("render_mode=1", "--env-kwargs: render_mode=1 is not allowed: it must be None or one of "
+                      "'human', 'rgb_array'"),
+    ("dt=1" + "0" * 400, r"--env-kwargs: dt=10{400} is out of range"),
 ])
 @pytest.mark.parametrize("show", [[], ["--show-command"]])
 def test_train_refuses_env_kwargs_the_env_refuses_before_rl_zoo3_starts(item, message, show,
@@ -357,6 +361,11 @@ def test_train_rllib_refuses_env_kwargs_the_env_refuses_before_ray_starts(item, 
     ("ppo", "n_timesteps:2.5", "--hyperparams: n_timesteps:2.5 is not allowed"),
     ("ppo", "n_timesteps:1e400", "--hyperparams: n_timesteps:inf is not allowed"),
     ("sac", "n_envs:True", "--hyperparams: n_envs:True is not allowed"),
+    # (make_vec_env's TypeError on a float; ZeroDivisionError; OverflowError)
+    ("sac", "n_envs:2.0", "--hyperparams: n_envs:2.0 is not allowed"),
+    ("ppo", "n_steps:0", "--hyperparams: n_steps:0 is not allowed"),
+    ("sac", "n_envs:" + "1" * 400, "--hyperparams: n_envs:1{400} is not allowed"),
+    ("ppo", "batch_size:-1", "--hyperparams: batch_size:-1 is not allowed"),
     ("sac", "bogus_key:3", "--hyperparams: 'bogus_key' is not a hyperparameter of sac; allowed: "
                            ".*learning_rate"),
     ("ppo", "buffer_size:10", "'buffer_size' is not a hyperparameter of ppo"),  # SAC's, not PPO's
@@ -487,3 +496,24 @@ def test_results_render_prints_its_stage(tmp_path):
     assert _stages(result.stderr, "results") == [
         f"rendering {report} and its plots from the task files under {tmp_path / 'r' / 'tasks'}/"]
     assert report.read_text().startswith("# Results")
+
+
+@NEEDS_RL_ZOO3
+def test_files_that_are_not_what_the_commands_wrote_are_named(tmp_path):
+    """A results file or a run's YAML that is not what roller-gym wrote ends the command with
+    one line naming the file (it ended in a traceback: JSONDecodeError, KeyError, yaml's
+    ScannerError)."""
+    from roller_gym.scripts import benchmark, evaluate
+
+    bench = tmp_path / "benchmarks"
+    bench.mkdir()
+    for text in ("{", '{"x": 1}'):
+        (bench / "workprecision.json").write_text(text)
+        with pytest.raises(SystemExit, match=r"workprecision.json is not a results file"):
+            benchmark.main(["--render", "--out", str(tmp_path)])
+    run = tmp_path / "run" / "roller_gym-RollerStabilize-v2"
+    run.mkdir(parents=True)
+    (run / "args.yml").write_text("env: roller_gym/RollerStabilize-v2\nalgo: sac\n")
+    (run / "config.yml").write_text("a: [\n")
+    with pytest.raises(SystemExit, match=r"config.yml is not a YAML file rl-zoo3 wrote"):
+        evaluate.main(["--models", str(tmp_path / "run")])

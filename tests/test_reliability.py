@@ -140,7 +140,10 @@ def test_numpy_numbers_are_numbers():
      ({"randomize": {"m": (0.8, "1.2")}}, r"randomize\['m'\]\[1\]"),
      ({"randomize": {"m": (-1, 1)}}, r"randomize\['m'\]"),  # Scene.m=-1.0 is not allowed
      ({"substeps": 2.0}, "substeps"), ({"substeps": True}, "substeps"),
-     ({"tolerance": complex(1e-8, 0)}, "tolerance")],
+     ({"tolerance": complex(1e-8, 0)}, "tolerance"),
+     # a Python int past float's range (OverflowError from float())
+     ({"dt": 10**400}, "dt"), ({"max_torque": -10**400}, "max_torque"),
+     ({"randomize": {"m": (1, 10**400)}}, r"randomize\['m'\]\[1\]")],
 )
 def test_wrong_types_are_refused_naming_the_argument(kwargs, name):
     with pytest.raises(ValueError, match=rf"{name}=.*(not allowed|out of range)"):
@@ -340,7 +343,25 @@ def _batch(num=2, **kwargs):
          r"shapes \{'m': \(2,\), 'r': \(3,\)\} are not a batch"),
         (lambda: Scene(m=np.ones((2, 2))), ValueError, r"shapes \{'m': \(2, 2\)\} are not"),
         (lambda: Scene(m=np.array([])), ValueError, r"shapes \{'m': \(0,\)\} are not"),
-        (lambda: Scene.stack([]), ValueError, r"scenes=\[\] has no scene"),
+        (lambda: Scene.stack([]), ValueError, r"scenes=\[\] must be a non-empty list"),
+        (lambda: Scene.stack([Scene(m=np.ones(2))]), ValueError,
+         r"scenes\[0\] is a batch of 2 rollers: stack takes scalar Scenes"),
+        (lambda: Scene(m=np.ones(2)).item(True), ValueError, r"i=True is not a roller"),
+        (lambda: preset([]), ValueError, r"unknown scene preset \[\]; allowed: "),
+        (lambda: Scene(m=np.ma.array([1.0, 2.0], mask=[0, 1])), ValueError,
+         r"Scene.m is a masked array"),
+        (lambda: Scene(m=[[1.0], [1.0, 2.0]]), ValueError, r"Scene.m=.* is not a number or a 1-D"),
+        (lambda: _batch().forget(7), ValueError, r"index=7 does not select rollers of the 2"),
+        (lambda: _batch().advance(np.ma.array([0.1, 99.0], mask=[0, 1]), 0.0, 0.0), ValueError,
+         r"phi is a masked array"),
+        (lambda: analysis.equilibria(Scene(), resolution=0), ValueError,
+         r"resolution=0 must be an integer in \[100, 1000000\]"),
+        (lambda: analysis.equilibria(Scene(), tau=np.ones(2)), ValueError,
+         r"tau=array\(\[1., 1.\]\) \[N·m\] must be a finite real number"),
+        (lambda: analysis.holding_torque("paper", 0.0), TypeError,
+         r"scene='paper' must be a Scene; for the preset"),
+        (lambda: _stepper(dt=10**400), ValueError, r"dt=1000.* \[s\] must be a number, finite"),
+        (lambda: _batch(10**400), ValueError, r"num=1000.* is too many"),
         (lambda: Scene.stack([Scene(), "paper"]), TypeError,
          r"scenes\[1\]='paper' must be a Scene.*preset\('paper'\)"),
         (lambda: Scene().item(5), ValueError, r"i=5 is not a roller"),
@@ -358,7 +379,9 @@ def _batch(num=2, **kwargs):
         (lambda: _stepper().advance("1", 0.0, 0.0), ValueError, r"phi='1' must be a real number"),
         (lambda: _stepper().advance(0.0, math.nan, 0.0), ValueError, r"phi_dot=nan is not finite"),
         (lambda: _stepper().advance(True, 0.0, 0.0), ValueError,
-         r"phi=True must be a real number, not a bool"),
+         r"phi=True must be a real number, not bool"),
+        (lambda: step(Scene(), np.zeros(2), np.zeros(3), 0.0, 0.05), ValueError,
+         r"the shapes \{'phi': \(2,\), 'phi_dot': \(3,\), 'tau': \(\)\} and the scene's"),
         (lambda: _stepper().advance(0.0, np.True_, 0.0), ValueError,
          r"phi_dot=np\.True_ must be a real number"),
         (lambda: step(Scene(), 0.0, 0.0, np.array([0.0, math.inf]), 0.05), ValueError,
@@ -388,7 +411,9 @@ def test_the_physics_api_refuses_bad_arguments_naming_them(call, error, message)
     step of True seconds ran), an index past the rollers (IndexError); a task ID of another
     version or namespace (it built the current task), the base class Task (AttributeError);
     states that are not finite real numbers (None and NaN stepped to NaN, "1" and True to 1
-    rad); a batch too large for the memory (NumPy's MemoryError)."""
+    rad); a batch too large for the memory (NumPy's MemoryError), a Python int past float's
+    range (OverflowError); masked arrays (the data under the mask was used), ragged lists,
+    a batch where scalars go, the analysis's arguments (NumPy's and numba's errors)."""
     with pytest.raises(error, match=message):
         call()
 
@@ -404,6 +429,22 @@ def test_a_start_state_is_refused_for_its_own_reason():
     with pytest.raises(ValueError, match=r"choose another phi, where the roller rests"):
         slippery.reset(options={"state": (2.7, 0.0)})
     env.reset(options={"state": (1e12, 0.0)})  # within the domain: a state like any other
+
+
+def test_a_refused_reset_leaves_the_episodes_as_they_were():
+    """A reset whose options are refused changes nothing: the next reset starts the episode
+    a twin environment that never saw the refused call starts (the episode count and the
+    vector env's seeds moved on before the options were checked)."""
+    single, twin = gym.make(HOLD), gym.make(HOLD)
+    single.reset(seed=3), twin.reset(seed=3)
+    with pytest.raises(ValueError, match="target"):
+        single.reset(options={"target": 1.0})
+    np.testing.assert_array_equal(single.reset()[0], twin.reset()[0])
+    vec, twin_vec = gym.make_vec(HOLD, num_envs=2), gym.make_vec(HOLD, num_envs=2)
+    vec.reset(seed=5), twin_vec.reset(seed=5)
+    with pytest.raises(ValueError, match="state"):
+        vec.reset(seed=99, options={"state": "bad"})
+    np.testing.assert_array_equal(vec.reset()[0], twin_vec.reset()[0])
 
 
 def test_a_reset_option_a_sub_environments_scene_refuses_names_it():

@@ -19,6 +19,7 @@ from roller_gym.sb3 import RollerVecEnv, from_env_fns
 from stable_baselines3 import A2C, PPO, SAC
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.vec_env import (
+    DummyVecEnv,
     VecCheckNan,
     VecMonitor,
     VecNormalize,
@@ -185,8 +186,10 @@ def test_attributes_per_sub_environment_as_in_dummy_vec_env():
     assert ours.get_attr("phi") == ref.get_attr("phi")
     ours.set_attr("curriculum_level", 3)  # a new attribute, for all of them
     assert ours.get_attr("curriculum_level", [0, 2]) == [3, 3]
-    with pytest.raises(ValueError, match="'render_mode' is one value for the whole"):
-        ours.set_attr("render_mode", None, [1])
+    with pytest.raises(ValueError, match="'render_mode' is the native batch's own"):
+        ours.set_attr("render_mode", None)
+    with pytest.raises(ValueError, match="'curriculum_level' is one value for the whole"):
+        ours.set_attr("curriculum_level", 4, [1])
     with pytest.raises(ValueError, match=r"env_method\('reset', indices=\[0\]\)"):
         ours.env_method("reset", indices=[0])
 
@@ -200,10 +203,37 @@ def test_set_attr_of_the_state_refuses_what_is_not_one_finite_angle_each(value, 
     venv = RollerVecEnv(IDS[0], n_envs=3, seed=0)
     venv.reset()
     before = venv.get_attr("phi")
-    with pytest.raises(ValueError, match=r"(?s)set_attr\('phi', value=.*'phi' holds finite "
-                                         r"real numbers, one per sub-environment"):
+    with pytest.raises(ValueError, match=r"(?s)set_attr\('phi', value=.*('phi' holds finite "
+                                         r"real numbers|refused by a reset: .*finite)"):
         venv.set_attr("phi", value, indices)
     assert venv.get_attr("phi") == before
+
+
+@pytest.mark.parametrize(("call", "message"), [
+    (lambda v: v.set_attr("autoreset_mode", "next_step"), r"'autoreset_mode' is the native"),
+    (lambda v: v.set_attr("max_episode_steps", "abc"), r"'max_episode_steps' is the native"),
+    (lambda v: v.set_attr("num_envs", 7), r"'num_envs' is the native batch's own"),
+    (lambda v: v.set_attr("phi", 1e300), r"sub-environment 0 would be refused by a reset: "
+                                         r".*phi must be within"),
+    (lambda v: v.set_attr("phi_dot", 1e300, [1]), r"sub-environment 1 would be refused by a "
+                                                   r"reset: .*does not roll"),
+    (lambda v: v.get_attr("phi", [5]), r"indices=\[5\] must be None \(all\), an integer or a "
+                                       r"list of integers in \[0, 3\)"),
+    (lambda v: v.set_attr("phi", 0.1, True), r"indices=True must be None"),
+    (lambda v: v.env_is_wrapped(gymnasium.Wrapper, [9]), r"indices=\[9\] must be None"),
+    (lambda v: v.set_options([{}]), r"options=\[\{\}\] must be None, a dict, or a list of 3"),
+    (lambda v: v.set_options("x"), r"options='x' must be None")])
+def test_what_would_break_the_batch_is_refused_where_it_is_given(call, message):
+    """The batch's own settings set through set_attr broke later steps (autoreset_mode: a
+    KeyError at the next episode's end; max_episode_steps: NumPy's UFuncTypeError); a state no
+    reset would start from was written; indices out of range and options of the wrong count
+    failed in NumPy or at the next reset (IndexError)."""
+    venv = RollerVecEnv(IDS[0], n_envs=3, seed=0, max_episode_steps=2)
+    venv.reset()
+    with pytest.raises(ValueError, match=message):
+        call(venv)
+    for _ in range(3):  # the batch still steps through an episode's end
+        venv.step(np.zeros((3, 1)))
 
 
 @pytest.mark.parametrize(("kwargs", "message"), [
@@ -245,5 +275,27 @@ def test_bad_actions_and_no_environments_are_refused_naming_them():
             venv.step(bad)
     *_, infos = venv.step(np.array([[1e39], [0.0]]))  # clipped, as the native batch does
     assert infos[0]["torque"] == venv.venv.unwrapped.task.max_torque
-    with pytest.raises(ValueError, match=r"env_fns=\[\]: it needs at least one"):
+    with pytest.raises(ValueError, match=r"env_fns=\[\] must be a non-empty list"):
         from_env_fns([])
+
+
+def test_from_env_fns_batches_only_environments_made_alike():
+    """Environments that differ (another task, another dt, no time limit) were all made as
+    the first one; now they go to DummyVecEnv, which makes each as asked. Bad functions and
+    keyword arguments are refused by name (they failed in SB3 or were dropped)."""
+    same = from_env_fns([lambda: gymnasium.make(IDS[0]), lambda: gymnasium.make(IDS[0])])
+    assert isinstance(same, RollerVecEnv)
+    for fns in ([lambda: gymnasium.make(IDS[0]), lambda: gymnasium.make(IDS[1])],
+                [lambda: gymnasium.make(IDS[0], dt=0.05), lambda: gymnasium.make(IDS[0], dt=0.1)],
+                [lambda: gymnasium.make(IDS[0], max_episode_steps=-1)]):
+        venv = from_env_fns(fns)
+        assert isinstance(venv, DummyVecEnv)
+        assert [e.spec.kwargs.get("dt") for e in venv.envs] == [
+            fn().spec.kwargs.get("dt") for fn in fns]
+    for bad, message in (((lambda: gymnasium.make(IDS[0])), r"must be a non-empty list"),
+                         ([None], r"env_fns\[0\]=None must be a function .*not callable"),
+                         ([lambda: 5], r"env_fns\[0\]=.* \(it made 5\)")):
+        with pytest.raises(ValueError, match=message):
+            from_env_fns(bad)
+    with pytest.raises(ValueError, match=r"takes no keyword arguments \(got foo\)"):
+        from_env_fns([lambda: gymnasium.make(IDS[0])], foo=1)

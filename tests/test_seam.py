@@ -233,8 +233,9 @@ def test_editing_an_inlined_source_recompiles_the_kernels(tmp_path):
 
 
 def test_the_id_decides_the_task():
-    """A ``task=`` that names another task than the ID's is refused, naming both; the ID's
-    own task (by name or ID) is accepted."""
+    """A ``task=`` that names another task than the ID's is refused, naming both, as is an
+    ID of the same task at another version or namespace; the ID's own task (by name or ID)
+    is accepted."""
     stabilize = "roller_gym/RollerStabilize-v2"
     for make in (gym.make, lambda i, **kw: gym.make_vec(i, num_envs=2, **kw)):
         with pytest.raises(ValueError, match=r"task='RollerHold' contradicts the ID "
@@ -242,6 +243,9 @@ def test_the_id_decides_the_task():
             make(stabilize, task="RollerHold")
         env = make(stabilize, task=stabilize)
         assert type(env.unwrapped.task).name == "RollerStabilize"
+        for other in ("RollerStabilize-v99", "x/RollerStabilize-v2"):  # (they were accepted)
+            with pytest.raises(ValueError, match=rf"task='{other}' is not a registered ID"):
+                make(stabilize, task=other)
 
 
 def test_a_kernel_numba_cannot_cache_is_warned_about_not_a_crash():

@@ -9,7 +9,6 @@ number of Python operations whatever the batch's size.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from typing import Any
@@ -20,6 +19,7 @@ from roller_gym.episode.streams import uniform
 from roller_gym.physics import Scene, trig
 from roller_gym.physics import equations as eq
 from roller_gym.physics.integrators import contact_state
+from roller_gym.physics.scene import finite_real
 
 __all__ = ["CANDIDATES", "ROUNDS", "SEED_MAX", "RestState", "Starts", "at_start", "check_seed",
            "per_scene_target", "put", "reset_mask", "reset_options", "scene_rows",
@@ -290,7 +290,8 @@ def _target_option(task: Any, value: Any, scene: Scene, i: int) -> float:
     try:
         return task.target_from_option(value, scene.item(i))
     except ValueError as error:
-        raise ValueError(f"sub-environment {i} ({scene.item(i)!r}): {error}") from None
+        which = f"sub-environment {i}" if scene.batch_size > 1 else "this episode's scene"
+        raise ValueError(f"{which} ({scene.item(i)!r}): {error}") from None
 
 
 def state_option(value: Any, scene: Scene, n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -302,9 +303,7 @@ def state_option(value: Any, scene: Scene, n: int) -> tuple[np.ndarray, np.ndarr
     """
     pair = tuple(value) if isinstance(value, tuple | list | np.ndarray) else None
     if (pair is None or len(pair) != 2
-            or not all(isinstance(x, int | float | np.integer | np.floating)
-                       and not isinstance(x, bool | np.bool_) for x in pair)
-            or not all(math.isfinite(x) for x in pair)):
+            or not all(finite_real(x) for x in pair)):
         raise ValueError(
             f"options['state']={value!r} must be a pair (phi [rad], phi_dot [rad/s]) of "
             "finite real numbers"

@@ -17,7 +17,7 @@ import numba
 import numba.extending
 import numpy as np
 from roller_gym.physics import equations as eq
-from roller_gym.physics.scene import Scene
+from roller_gym.physics.scene import Scene, finite_real, require_scene
 from scipy.optimize import brentq
 
 __all__ = [
@@ -42,11 +42,13 @@ Array = float | np.ndarray
 
 def acceleration(scene: Scene, phi: Array, phi_dot: Array, tau: Array) -> Array:
     """φ'' [rad/s²] at the state (φ [rad], φ' [rad/s]) under the drive τ [N·m]."""
+    scene = require_scene(scene)
     return eq.accel(phi, phi_dot, tau, *scene.params)
 
 
 def moment_of_inertia(scene: Scene, phi: Array) -> Array:
     """J_I [kg·m²], the moment of inertia about the instant center."""
+    scene = require_scene(scene)
     return eq.inertia(phi, scene.m, scene.r, scene.kappa, scene.e, scene.k)
 
 
@@ -63,6 +65,7 @@ class Kinematics:
 
 def kinematics(scene: Scene, phi: Array) -> Kinematics:
     """ψ, θ and the positions of O1, C and I at φ [rad]."""
+    scene = require_scene(scene)
     _, psi, theta = eq.shape_factors(phi, scene.r, scene.kappa)
     o1x, o1y, cx, cy, ix, iy = eq.positions(phi, scene.r, scene.kappa, scene.e)
     return Kinematics(psi, theta, (o1x, o1y), (cx, cy), (ix, iy))
@@ -70,12 +73,14 @@ def kinematics(scene: Scene, phi: Array) -> Kinematics:
 
 def energy(scene: Scene, phi: Array, phi_dot: Array) -> Array:
     """E = ½ J_I φ'² + V [J], zero at rest at φ = 0."""
+    scene = require_scene(scene)
     m, r, kappa, e, k, g, _ = scene.params
     return eq.energy(phi, phi_dot, m, r, kappa, e, k, g)
 
 
 def power(scene: Scene, phi_dot: Array, tau: Array) -> Array:
     """dE/dt = τφ' − c φ'² [W]."""
+    scene = require_scene(scene)
     return eq.denergy_dt(phi_dot, tau, scene.damping)
 
 
@@ -102,6 +107,7 @@ class Contact:
 
 def contact(scene: Scene, phi: Array, phi_dot: Array, tau: Array) -> Contact:
     """The contact forces at the state under the drive τ [N·m] (φ'' from the dynamics)."""
+    scene = require_scene(scene)
     m, r, kappa, e, _, g, _ = scene.params
     phi_ddot = acceleration(scene, phi, phi_dot, tau)
     normal, friction = eq.contact_forces(phi, phi_dot, phi_ddot, m, r, kappa, e, g)
@@ -111,6 +117,7 @@ def contact(scene: Scene, phi: Array, phi_dot: Array, tau: Array) -> Contact:
 
 def holding_torque(scene: Scene, phi: Array) -> Array:
     """The torque [N·m] that holds the roller at rest at φ: dV/dφ = m g (r sin ψ + e sin φ)."""
+    scene = require_scene(scene)
     m, r, kappa, e, _, g, _ = scene.params
     return eq.dpotential(phi, m, r, kappa, e, g)
 
@@ -123,6 +130,7 @@ def linearize(
     The derivatives of φ'' are :func:`~roller_gym.physics.equations.accel_jacobian`'s;
     ∂φ''/∂τ = 1/J_I. Shapes (..., 2, 2) and (..., 2, 1).
     """
+    scene = require_scene(scene)
     m, r, kappa, e, k, g, c = scene.params
     _, d_phi, d_w = eq.accel_jacobian(phi, phi_dot, tau, m, r, kappa, e, k, g, c)
     j = eq.inertia(phi, m, r, kappa, e, k)
@@ -145,6 +153,7 @@ def small_oscillation_frequency(scene: Scene, phi: Array = 0.0) -> Array:
     Raises:
         ValueError: φ is not a stable rest position (no oscillation).
     """
+    scene = require_scene(scene)
     A, _ = linearize(scene, phi, 0.0, holding_torque(scene, phi))
     stiffness = -A[..., 1, 0]
     if np.any(stiffness <= 0):
@@ -169,6 +178,11 @@ class Equilibrium:
 MAX_TURNS = 64
 
 
+#: The grid points per turn of φ :func:`equilibria` accepts: fewer may step over a pair of
+#: critical points, more costs seconds for nothing.
+RESOLUTIONS = (100, 1_000_000)
+
+
 def equilibria(scene: Scene, tau: float = 0.0, resolution: int = 4000) -> list[Equilibrium]:
     """The rest positions under the constant torque τ [N·m], sorted by φ.
 
@@ -187,10 +201,15 @@ def equilibria(scene: Scene, tau: float = 0.0, resolution: int = 4000) -> list[E
     no isolated rest positions (every position is neutral at τ = 0, none holds at τ ≠ 0):
     the result is empty.
     """
+    scene = require_scene(scene)
     if scene.batch_size is not None:
         raise ValueError("equilibria() takes a scalar scene; call it per element of a batch")
-    if not math.isfinite(tau):
-        raise ValueError(f"tau={tau!r} [N·m] must be finite")
+    if not finite_real(tau):
+        raise ValueError(f"tau={tau!r} [N·m] must be a finite real number")
+    if not (isinstance(resolution, int | np.integer) and not isinstance(resolution, bool)
+            and RESOLUTIONS[0] <= resolution <= RESOLUTIONS[1]):
+        raise ValueError(f"resolution={resolution!r} must be an integer in [{RESOLUTIONS[0]}, "
+                         f"{RESOLUTIONS[1]}] (grid points per turn of φ)")
     m, r, kappa, e, _, g, _ = scene.params
     if kappa == 0 and e == 0:
         return []

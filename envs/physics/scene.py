@@ -36,7 +36,18 @@ import numpy as np
 
 Number = float | np.ndarray
 
-__all__ = ["PRESETS", "Scene", "preset"]
+__all__ = ["PRESETS", "Scene", "finite_real", "preset"]
+
+
+def finite_real(x: Any) -> bool:
+    """Whether ``x`` is one real number (a Python or NumPy int or float, not a bool) that is
+    finite as a float: a Python int past float's range is not (float() overflows on it)."""
+    if not isinstance(x, int | float | np.integer | np.floating) or isinstance(x, bool | np.bool_):
+        return False
+    try:
+        return math.isfinite(x)
+    except OverflowError:
+        return False
 
 
 def _describe(value: np.ndarray) -> str:
@@ -84,6 +95,16 @@ class Scene:
             "mu": (lambda v: v >= 0, ">= 0"),
             "damping": (lambda v: v >= 0, ">= 0"),
         }
+        for f in fields(self):
+            raw = getattr(self, f.name)
+            if np.ma.isMaskedArray(raw):
+                raise ValueError(f"Scene.{f.name} is a masked array: give its numbers as a "
+                                 "plain array (the data under a mask would be used)")
+            try:
+                np.shape(raw)
+            except ValueError:  # a ragged list
+                raise ValueError(f"Scene.{f.name}={raw!r} is not a number or a 1-D array of "
+                                 "numbers") from None
         shapes = {f.name: np.shape(getattr(self, f.name)) for f in fields(self)}
         try:
             shape = np.broadcast_shapes(*shapes.values())
@@ -161,7 +182,8 @@ class Scene:
     def item(self, i: int) -> Scene:
         """The ``i``-th roller of a batch scene, as a scalar scene."""
         n = self.batch_size or 1
-        if not (isinstance(i, int | np.integer) and -n <= i < n):
+        if not (isinstance(i, int | np.integer) and not isinstance(i, bool | np.bool_)
+                and -n <= i < n):
             raise ValueError(f"i={i!r} is not a roller of this scene's {n}: it must be an "
                              f"integer in [{-n}, {n})")
         return Scene(
@@ -174,9 +196,13 @@ class Scene:
     @staticmethod
     def stack(scenes: list[Scene]) -> Scene:
         """One batch scene whose ``i``-th roller is ``scenes[i]``."""
-        if not scenes:
-            raise ValueError("scenes=[] has no scene to stack")
+        if not isinstance(scenes, list | tuple) or not scenes:
+            raise ValueError(f"scenes={scenes!r} must be a non-empty list of scalar Scenes")
         scenes = [require_scene(s, f"scenes[{i}]") for i, s in enumerate(scenes)]
+        batch = next((i for i, s in enumerate(scenes) if s.batch_size is not None), None)
+        if batch is not None:
+            raise ValueError(f"scenes[{batch}] is a batch of {scenes[batch].batch_size} "
+                             "rollers: stack takes scalar Scenes (a batch's i-th is .item(i))")
         return Scene(
             **{
                 f.name: np.array([float(getattr(s, f.name)) for s in scenes])
@@ -242,7 +268,7 @@ def preset(name: str) -> Scene:
     """The preset scene called ``name`` (one of :data:`PRESETS`)."""
     try:
         return PRESETS[name]
-    except KeyError:
+    except (KeyError, TypeError):  # (TypeError: not hashable)
         raise ValueError(
             f"unknown scene preset {name!r}; allowed: {', '.join(sorted(PRESETS))}"
         ) from None

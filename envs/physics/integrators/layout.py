@@ -143,8 +143,9 @@ def check_memory(argument: str, count: int, bytes_each: int) -> None:
         return
     need = count * bytes_each
     if need > total:
+        gib = min(need, 2**1000) / 2**30  # (a float: a count past float's range overflows)
         raise ValueError(f"{argument}={count} is too many: their arrays need about "
-                         f"{need / 2**30:.3g} GiB of memory (up to {bytes_each} bytes "
+                         f"{gib:.3g} GiB of memory (up to {bytes_each} bytes "
                          f"each), more than the machine's {total / 2**30:.3g} GiB; use fewer")
 
 

@@ -36,6 +36,7 @@ from roller_gym.physics.integrators.taylor_kernel import (
     _taylor_serial,
     _taylor_substep,
 )
+from roller_gym.physics.scene import finite_real
 
 
 @dataclass(frozen=True)
@@ -168,9 +169,9 @@ def _real(x: Any) -> bool:
 
 
 def _check_step_args(dt: float, tolerance: float, substeps: int | None) -> None:
-    if not (_real(dt) and math.isfinite(dt) and dt > 0):
+    if not (finite_real(dt) and dt > 0):
         raise ValueError(f"dt={dt!r} [s] must be a number, finite and > 0")
-    if not (_real(tolerance) and math.isfinite(tolerance) and tolerance > 0):
+    if not (finite_real(tolerance) and tolerance > 0):
         raise ValueError(f"tolerance={tolerance!r} must be a number, finite and > 0")
     if substeps is not None and not (
         _real(substeps) and isinstance(substeps, int | np.integer)

@@ -128,11 +128,15 @@ def _check_states(num: int | None = None, **values: Any) -> None:
     None one number, ANY_SHAPE numbers of any shape, else one or a 1-D array of ``num``."""
     shapes = {None: "a real number", ANY_SHAPE: "real numbers (a number or an array)"}
     for name, value in values.items():
+        if np.ma.isMaskedArray(value):
+            raise ValueError(f"{name} is a masked array: give plain numbers (the data under a "
+                             "mask would be used)")
         array = np.asarray(value) if not isinstance(value, float) else None
         if array is not None and (array.dtype.kind not in "iuf" or (num != ANY_SHAPE and (
                 array.ndim > 1 or (num is None and array.ndim)))):
             shape = shapes.get(num, f"a real number or a 1-D array of {num} of them")
-            raise ValueError(f"{name}={value!r} must be {shape}, not a bool or complex")
+            raise ValueError(f"{name}={value!r} must be {shape}, not "
+                             f"{type(value).__name__}")
         if array is not None and array.ndim and num not in shapes and array.shape != (num,):
             raise ValueError(f"{name} has {array.shape[0]} values for {num} rollers")
         if not np.isfinite(value if array is None else array).all():
@@ -316,11 +320,7 @@ class BatchStepper(_Base):
         """Put ``scene`` (scalar: broadcast; batch: one roller each) into rows ``index``
         (an index, slice, mask or index array of the rollers; all if None)."""
         scene = require_scene(scene)
-        try:
-            rows = np.arange(self.num)[slice(None) if index is None else index]
-        except IndexError as error:
-            raise ValueError(f"index={index!r} does not select rollers of the {self.num}: "
-                             f"{error}") from None
+        rows = self._rows(index)
         size = scene.batch_size
         if size is not None and size != np.size(rows):
             raise ValueError(f"scene has {size} rollers for {np.size(rows)} rows of index")
@@ -334,8 +334,22 @@ class BatchStepper(_Base):
         self.forget(rows)
 
     def forget(self, index=None) -> None:
-        """Start rollers ``index`` (all if None) afresh, as :meth:`Stepper.forget` does."""
-        self._io[_H_NEXT, slice(None) if index is None else index] = 0.0
+        """Start rollers ``index`` (all if None; as for :meth:`set_scenes`) afresh, as
+        :meth:`Stepper.forget` does."""
+        try:  # (an autoreset's: indexed directly, not through _rows)
+            self._io[_H_NEXT, slice(None) if index is None else index] = 0.0
+        except IndexError:
+            self._rows(index)  # names it
+            raise
+
+    def _rows(self, index: Any) -> np.ndarray:
+        """The rollers ``index`` selects (an index, slice, mask or index array; all if None),
+        or a ValueError naming it."""
+        try:
+            return np.arange(self.num)[slice(None) if index is None else index]
+        except IndexError as error:
+            raise ValueError(f"index={index!r} does not select rollers of the {self.num}: "
+                             f"{error}") from None
 
     def scene_table(self) -> np.ndarray:
         """The rollers' scene numbers, shape ``(len(SCENE_FIELDS), num)`` (a view)."""
@@ -469,8 +483,13 @@ def step(
     params = (*require_scene(scene).params, scene.mu)
     _check_states(ANY_SHAPE, phi=phi, phi_dot=phi_dot, tau=tau)
     scalar = all(np.ndim(x) == 0 for x in (phi, phi_dot, tau, *params))
-    arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (phi, phi_dot, tau,
-                                                                         *params)))
+    try:
+        arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (phi, phi_dot, tau,
+                                                                             *params)))
+    except ValueError:
+        shapes = {n: np.shape(x) for n, x in (("phi", phi), ("phi_dot", phi_dot), ("tau", tau))}
+        raise ValueError(f"the shapes {shapes} and the scene's batch of {scene.batch_size} do "
+                         "not broadcast together") from None
     shape = arrays[0].shape
     n = max(1, int(np.prod(shape)))
     stepper = BatchStepper(n, integrator=integrator, dt=dt, tolerance=tolerance, substeps=substeps)
