@@ -221,6 +221,9 @@ class RollerVecEnv(VecEnv):
                                                  for o in each):
             raise ValueError(f"options={options!r} must be None, a dict, or a list of "
                              f"{self.num_envs} (one per sub-environment) dicts or None")
+        if any(o and "reset_mask" in o for o in each):
+            raise ValueError(f"options={options!r}: SB3's reset() starts every "
+                             "sub-environment; a reset_mask does not apply here")
         super().set_options(options)
 
     def _get_indices(self, indices: VecEnvIndices) -> list[int]:
@@ -311,7 +314,7 @@ def from_env_fns(env_fns: list[Any], **vec_env_kwargs: Any) -> VecEnv:
                              f"environment (it {got})")
         probes.append(_probe(env))
     first = probes[0]
-    native = (all(p[:3] == first[:3] for p in probes) and first[3] <= _PLAIN_WRAPPERS
+    native = (all(p[:3] == first[:3] and p[3] <= _PLAIN_WRAPPERS for p in probes)
               and first[0] is not None and first[0].startswith("roller_gym/")
               and first[1].get("integrator", DEFAULT_INTEGRATOR) in BATCH_INTEGRATORS
               and first[2] is not None)  # (None: made without a time limit)

@@ -44,7 +44,8 @@ def real(name: str, value: Any, *, positive: bool = False, nonnegative: bool = F
         raise ValueError(f"{name}={value!r} is not allowed: it must be {allowed}"
                          f"{f' [{unit}]' if unit else ''} (a Python or NumPy number, not "
                          f"{type(value).__name__})")
-    if not finite_real(value) or (positive and value <= 0) or (nonnegative and value < 0):
+    if not finite_real(value) or (positive and float(value) <= 0) or (
+            nonnegative and float(value) < 0):
         raise ValueError(f"{name}={value!r} is out of range: it must be {allowed}"
                          f"{f' [{unit}]' if unit else ''}")
     return float(value)
@@ -53,7 +54,8 @@ def real(name: str, value: Any, *, positive: bool = False, nonnegative: bool = F
 def count(name: str, value: Any, *, low: int = 1, high: int | None = None) -> int:
     """``value`` as an int in [low, high], or ValueError naming ``name``."""
     allowed = f"an integer >= {low}" + (f" and <= {high}" if high is not None else "")
-    if (not isinstance(value, int | np.integer) or isinstance(value, bool | np.bool_)
+    if (not isinstance(value, int | np.integer)
+            or isinstance(value, bool | np.bool_ | np.timedelta64)
             or value < low or (high is not None and value > high)):
         raise ValueError(f"{name}={value!r} is not allowed: it must be {allowed} (a Python or "
                          "NumPy integer)")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import ast
 import inspect
+import math
 import os
 import sys
 from collections.abc import Callable
@@ -107,6 +108,24 @@ def at_least(least: int, most: int | None = None) -> Callable[[str], int]:
         except ValueError:
             value = least - 1
         if value < least or (most is not None and value > most):
+            raise argparse.ArgumentTypeError(f"{text!r} is not {allowed}")
+        return value
+
+    parse.__name__ = allowed
+    return parse
+
+
+def real_in(low: float, high: float, *, open_low: bool = False) -> Callable[[str], float]:
+    """An argparse ``type``: a finite real number in [low, high] ((low, high] with
+    ``open_low``), else argparse's error naming the option, the value and what is allowed."""
+    allowed = f"a number in {'(' if open_low else '['}{low:g}, {high:g}]"
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            value = math.nan
+        if not (low < value <= high if open_low else low <= value <= high):
             raise argparse.ArgumentTypeError(f"{text!r} is not {allowed}")
         return value
 

@@ -154,7 +154,18 @@ def zoo_arguments(args: argparse.Namespace, conf: str) -> list[str]:
         out += ["--hyperparams", *args.hyperparams]
     if args.progress:
         out.append("--progress")
+    own = sorted({a.split("=")[0] for a in args.zoo_args} & set(OWN_OPTIONS))
+    if own:
+        raise SystemExit(f"after --: {', '.join(own)} are set by roller-gym train from its own "
+                         "options (give them before --: --env, --algo, --seed, ...)")
     return out + list(args.zoo_args)
+
+
+#: rl_zoo3.train's options that roller-gym train sets itself (not to be given after --).
+OWN_OPTIONS = ("--algo", "--env", "--gym-packages", "-conf", "--conf-file", "--seed", "--device",
+               "--num-threads", "-f", "--log-folder", "-tb", "--tensorboard-log", "--eval-freq",
+               "--eval-episodes", "--save-freq", "--verbose", "-n", "--n-timesteps",
+               "--env-kwargs", "--hyperparams", "-params")
 
 
 def main(argv: list[str] | None = None) -> Path | None:

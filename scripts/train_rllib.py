@@ -35,7 +35,7 @@ from typing import Any
 import gymnasium as gym
 from roller_gym import ENV_IDS
 from roller_gym.extras import install_line
-from roller_gym.scripts.arguments import at_least, checked_env_kwargs, program_parser
+from roller_gym.scripts.arguments import at_least, checked_env_kwargs, program_parser, real_in
 
 VECTORIZE_MODES = {"sync": "sync", "async": "async", "native": "vector_entry_point"}
 
@@ -72,8 +72,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--minibatch-size", type=at_least(1), default=128, help="PPO's SGD minibatch")
     p.add_argument("--num-epochs", type=at_least(1), default=10,
                    help="PPO's epochs over each batch")
-    p.add_argument("--lr", type=float, default=3e-4, help="the learning rate")
-    p.add_argument("--gamma", type=float, default=0.99, help="the discount factor")
+    p.add_argument("--lr", type=real_in(0.0, 1.0, open_low=True), default=3e-4,
+                   help="the learning rate, in (0, 1]")
+    p.add_argument("--gamma", type=real_in(0.0, 1.0), default=0.99,
+                   help="the discount factor, in [0, 1]")
     p.add_argument("--hidden", type=at_least(1), nargs="+", default=[64, 64],
                    help="hidden layer sizes of the networks")
     p.add_argument("--address", default=None,

@@ -517,3 +517,20 @@ def test_files_that_are_not_what_the_commands_wrote_are_named(tmp_path):
     (run / "config.yml").write_text("a: [\n")
     with pytest.raises(SystemExit, match=r"config.yml is not a YAML file rl-zoo3 wrote"):
         evaluate.main(["--models", str(tmp_path / "run")])
+
+
+def test_train_refuses_its_own_options_after_the_double_dash(capsys):
+    """rl-zoo3 takes the last --env and --seed it is given: after --, they overrode
+    train's own (a task trained on hyperparameters checked for another)."""
+    from roller_gym.scripts import train
+
+    with pytest.raises(SystemExit, match=r"after --: --env, --seed are set by roller-gym "
+                                         r"train"):
+        train.main(["--show-command", "--", "--env", "roller_gym/RollerHold-v2", "--seed", "5"])
+
+
+@pytest.mark.parametrize(("option", "value"), [("--gamma", "5"), ("--lr", "nan"),
+                                               ("--lr", "0")])
+def test_train_rllib_refuses_a_discount_or_rate_out_of_range(option, value):
+    result = roller_gym("train-rllib", option, value, check=False)
+    assert result.returncode == 2 and f"argument {option}: '{value}' is not" in result.stderr

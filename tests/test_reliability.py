@@ -361,6 +361,19 @@ def _batch(num=2, **kwargs):
         (lambda: analysis.holding_torque("paper", 0.0), TypeError,
          r"scene='paper' must be a Scene; for the preset"),
         (lambda: _stepper(dt=10**400), ValueError, r"dt=1000.* \[s\] must be a number, finite"),
+        # a second pass: longdoubles past float64's range ran with dt = 0 or stepped from inf,
+        # a timedelta passed as an integer, a bool index selected every roller, the analysis
+        # took text and huge ints (TypeError, OverflowError), NumPy int16 scalars overflowed
+        (lambda: _stepper(dt=np.longdouble("1e-4000")), ValueError, r"dt=.* must be a number"),
+        (lambda: _stepper().advance(np.longdouble("1e4000"), 0.0, 0.0), ValueError,
+         r"phi=.* is not finite \(as a float64\)"),
+        (lambda: _stepper(integrator="rk4", substeps=np.timedelta64(5, "s")), ValueError,
+         r"substeps=.* must be None"),
+        (lambda: _batch(np.timedelta64(3, "s")), ValueError, r"num=.* must be an integer"),
+        (lambda: _batch().set_scenes(Scene(m=2.0), True), ValueError,
+         r"index=True does not select rollers"),
+        (lambda: analysis.holding_torque(Scene(), "a"), ValueError, r"phi='a' must be numbers"),
+        (lambda: analysis.energy(Scene(), 10**400, 0.0), ValueError, r"phi=1000.* must be num"),
         (lambda: _batch(10**400), ValueError, r"num=1000.* is too many"),
         (lambda: Scene.stack([Scene(), "paper"]), TypeError,
          r"scenes\[1\]='paper' must be a Scene.*preset\('paper'\)"),
@@ -456,3 +469,20 @@ def test_a_reset_option_a_sub_environments_scene_refuses_names_it():
     hold = gym.make_vec(HOLD, num_envs=2, scene=["paper", Scene(m=2.0)])
     with pytest.raises(ValueError, match=r"sub-environment 1 \(Scene\(m=2.0.*cannot be held"):
         hold.reset(options={"target": 0.3})  # (paper holds up to 0.43 rad)
+
+
+def test_numpy_integer_fields_are_the_same_scene_as_floats():
+    """A Scene of NumPy int16 scalars gave J_I = -10581 where floats give 54955 (k*k
+    overflowed in int16): every field is stored as a float."""
+    ints = Scene(m=np.int16(1), r=np.int16(150), R=np.int16(1000), e=np.int16(30),
+                 k=np.int16(200), g=np.int16(10))
+    floats = Scene(m=1.0, r=150.0, R=1000.0, e=30.0, k=200.0, g=10.0)
+    assert analysis.moment_of_inertia(ints, 0.3) == analysis.moment_of_inertia(floats, 0.3)
+    assert all(type(getattr(ints, name)) is float for name in ("m", "r", "R", "e", "k", "g"))
+
+
+def test_a_masked_reset_mask_is_refused():
+    """(Its mask was ignored: every sub-environment reset.)"""
+    vec = gym.make_vec(STABILIZE, num_envs=3, vectorization_mode="vector_entry_point")
+    with pytest.raises(ValueError, match=r"(?s)options\['reset_mask'\]=.*not a masked array"):
+        vec.reset(options={"reset_mask": np.ma.array([True] * 3, mask=[1, 1, 0])})

@@ -222,7 +222,10 @@ def test_set_attr_of_the_state_refuses_what_is_not_one_finite_angle_each(value, 
     (lambda v: v.set_attr("phi", 0.1, True), r"indices=True must be None"),
     (lambda v: v.env_is_wrapped(gymnasium.Wrapper, [9]), r"indices=\[9\] must be None"),
     (lambda v: v.set_options([{}]), r"options=\[\{\}\] must be None, a dict, or a list of 3"),
-    (lambda v: v.set_options("x"), r"options='x' must be None")])
+    (lambda v: v.set_options("x"), r"options='x' must be None"),
+    # (SB3's reset() restarted only the masked ones, and zeroed every episode's length)
+    (lambda v: v.set_options({"reset_mask": np.array([True, False, False])}),
+     r"SB3's reset\(\) starts every sub-environment; a reset_mask does not apply")])
 def test_what_would_break_the_batch_is_refused_where_it_is_given(call, message):
     """The batch's own settings set through set_attr broke later steps (autoreset_mode: a
     KeyError at the next episode's end; max_episode_steps: NumPy's UFuncTypeError); a state no
@@ -285,6 +288,9 @@ def test_from_env_fns_batches_only_environments_made_alike():
     keyword arguments are refused by name (they failed in SB3 or were dropped)."""
     same = from_env_fns([lambda: gymnasium.make(IDS[0]), lambda: gymnasium.make(IDS[0])])
     assert isinstance(same, RollerVecEnv)
+    scaled = from_env_fns([lambda: gymnasium.make(IDS[0]), lambda: gymnasium.wrappers.
+                           TransformReward(gymnasium.make(IDS[0]), lambda r: 100 * r)])
+    assert isinstance(scaled, DummyVecEnv)  # (the second one's wrapper was dropped)
     for fns in ([lambda: gymnasium.make(IDS[0]), lambda: gymnasium.make(IDS[1])],
                 [lambda: gymnasium.make(IDS[0], dt=0.05), lambda: gymnasium.make(IDS[0], dt=0.1)],
                 [lambda: gymnasium.make(IDS[0], max_episode_steps=-1)]):

@@ -143,10 +143,11 @@ def reset_mask(value: Any, n: int) -> np.ndarray:
     if value is None:
         return np.ones(n, dtype=bool)
     mask = np.asarray(value)
-    if mask.dtype != np.bool_ or mask.shape != (n,) or not mask.any():
+    if (np.ma.isMaskedArray(value) or mask.dtype != np.bool_ or mask.shape != (n,)
+            or not mask.any()):
         raise ValueError(
             f"options['reset_mask']={value!r} must be a boolean array of shape ({n},) with at "
-            "least one True"
+            "least one True (not a masked array)"
         )
     return mask
 

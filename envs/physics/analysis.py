@@ -12,6 +12,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numba
 import numba.extending
@@ -40,15 +41,31 @@ __all__ = [
 Array = float | np.ndarray
 
 
+def _check_numbers(**values: Any) -> None:
+    """Raise a ValueError naming the first of ``values`` (states, torques) that is not
+    numbers NumPy computes with (a number or an array of them; complex and bool included,
+    for complex-step derivatives)."""
+    for name, value in values.items():
+        try:
+            kind = np.asarray(value).dtype.kind
+        except ValueError:  # a ragged list
+            kind = "O"
+        if kind not in "biufc":
+            raise ValueError(f"{name}={value!r} must be numbers: a number or an array of them "
+                             "(within float64's range)")
+
+
 def acceleration(scene: Scene, phi: Array, phi_dot: Array, tau: Array) -> Array:
     """φ'' [rad/s²] at the state (φ [rad], φ' [rad/s]) under the drive τ [N·m]."""
     scene = require_scene(scene)
+    _check_numbers(phi=phi, phi_dot=phi_dot, tau=tau)
     return eq.accel(phi, phi_dot, tau, *scene.params)
 
 
 def moment_of_inertia(scene: Scene, phi: Array) -> Array:
     """J_I [kg·m²], the moment of inertia about the instant center."""
     scene = require_scene(scene)
+    _check_numbers(phi=phi)
     return eq.inertia(phi, scene.m, scene.r, scene.kappa, scene.e, scene.k)
 
 
@@ -66,6 +83,7 @@ class Kinematics:
 def kinematics(scene: Scene, phi: Array) -> Kinematics:
     """ψ, θ and the positions of O1, C and I at φ [rad]."""
     scene = require_scene(scene)
+    _check_numbers(phi=phi)
     _, psi, theta = eq.shape_factors(phi, scene.r, scene.kappa)
     o1x, o1y, cx, cy, ix, iy = eq.positions(phi, scene.r, scene.kappa, scene.e)
     return Kinematics(psi, theta, (o1x, o1y), (cx, cy), (ix, iy))
@@ -74,6 +92,7 @@ def kinematics(scene: Scene, phi: Array) -> Kinematics:
 def energy(scene: Scene, phi: Array, phi_dot: Array) -> Array:
     """E = ½ J_I φ'² + V [J], zero at rest at φ = 0."""
     scene = require_scene(scene)
+    _check_numbers(phi=phi, phi_dot=phi_dot)
     m, r, kappa, e, k, g, _ = scene.params
     return eq.energy(phi, phi_dot, m, r, kappa, e, k, g)
 
@@ -81,6 +100,7 @@ def energy(scene: Scene, phi: Array, phi_dot: Array) -> Array:
 def power(scene: Scene, phi_dot: Array, tau: Array) -> Array:
     """dE/dt = τφ' − c φ'² [W]."""
     scene = require_scene(scene)
+    _check_numbers(phi_dot=phi_dot, tau=tau)
     return eq.denergy_dt(phi_dot, tau, scene.damping)
 
 
@@ -108,6 +128,7 @@ class Contact:
 def contact(scene: Scene, phi: Array, phi_dot: Array, tau: Array) -> Contact:
     """The contact forces at the state under the drive τ [N·m] (φ'' from the dynamics)."""
     scene = require_scene(scene)
+    _check_numbers(phi=phi, phi_dot=phi_dot, tau=tau)
     m, r, kappa, e, _, g, _ = scene.params
     phi_ddot = acceleration(scene, phi, phi_dot, tau)
     normal, friction = eq.contact_forces(phi, phi_dot, phi_ddot, m, r, kappa, e, g)
@@ -118,6 +139,7 @@ def contact(scene: Scene, phi: Array, phi_dot: Array, tau: Array) -> Contact:
 def holding_torque(scene: Scene, phi: Array) -> Array:
     """The torque [N·m] that holds the roller at rest at φ: dV/dφ = m g (r sin ψ + e sin φ)."""
     scene = require_scene(scene)
+    _check_numbers(phi=phi)
     m, r, kappa, e, _, g, _ = scene.params
     return eq.dpotential(phi, m, r, kappa, e, g)
 
@@ -131,6 +153,7 @@ def linearize(
     ∂φ''/∂τ = 1/J_I. Shapes (..., 2, 2) and (..., 2, 1).
     """
     scene = require_scene(scene)
+    _check_numbers(phi=phi, phi_dot=phi_dot, tau=tau)
     m, r, kappa, e, k, g, c = scene.params
     _, d_phi, d_w = eq.accel_jacobian(phi, phi_dot, tau, m, r, kappa, e, k, g, c)
     j = eq.inertia(phi, m, r, kappa, e, k)
@@ -154,6 +177,7 @@ def small_oscillation_frequency(scene: Scene, phi: Array = 0.0) -> Array:
         ValueError: φ is not a stable rest position (no oscillation).
     """
     scene = require_scene(scene)
+    _check_numbers(phi=phi)
     A, _ = linearize(scene, phi, 0.0, holding_torque(scene, phi))
     stiffness = -A[..., 1, 0]
     if np.any(stiffness <= 0):

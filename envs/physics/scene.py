@@ -40,12 +40,14 @@ __all__ = ["PRESETS", "Scene", "finite_real", "preset"]
 
 
 def finite_real(x: Any) -> bool:
-    """Whether ``x`` is one real number (a Python or NumPy int or float, not a bool) that is
-    finite as a float: a Python int past float's range is not (float() overflows on it)."""
-    if not isinstance(x, int | float | np.integer | np.floating) or isinstance(x, bool | np.bool_):
+    """Whether ``x`` is one real number (a Python or NumPy int or float, not a bool or a
+    timedelta) that is finite as a float64 and not rounded to 0 there: a Python int or a
+    longdouble past float64's range is not."""
+    if (not isinstance(x, int | float | np.integer | np.floating)
+            or isinstance(x, bool | np.bool_ | np.timedelta64)):
         return False
-    try:
-        return math.isfinite(x)
+    try:  # as a float64 (a longdouble past its range is inf there, or 0 below it)
+        return math.isfinite(float(x)) and (float(x) != 0.0 or x == 0)
     except OverflowError:
         return False
 
@@ -135,6 +137,7 @@ class Scene:
                         "be > r (inside a cylinder), math.inf (a flat floor) or a finite negative "
                         "number (on top of a drum of radius -R)"
                     )
+                object.__setattr__(self, f.name, value if value.ndim > 0 else float(value))
                 continue
             check, allowed = rules[f.name]
             if not np.all(check(value)) or np.isinf(value).any():
@@ -142,8 +145,8 @@ class Scene:
                     f"Scene.{f.name}={_describe(value)} is out of range: it must be finite and "
                     f"{allowed}"
                 )
-            if value.ndim > 0:
-                object.__setattr__(self, f.name, value)
+            # stored as float64 (NumPy int scalars overflowed in the formulas: k*k in int16)
+            object.__setattr__(self, f.name, value if value.ndim > 0 else float(value))
         if np.asarray(self.R).ndim > 0:
             object.__setattr__(self, "R", np.asarray(self.R, dtype=float))
 

@@ -165,13 +165,13 @@ def scheme(integrator: str) -> Scheme:
 def _real(x: Any) -> bool:
     """A real number: a Python or NumPy int or float, not a bool."""
     return isinstance(x, int | float | np.integer | np.floating) and not isinstance(
-        x, bool | np.bool_)
+        x, bool | np.bool_ | np.timedelta64)
 
 
 def _check_step_args(dt: float, tolerance: float, substeps: int | None) -> None:
-    if not (finite_real(dt) and dt > 0):
+    if not (finite_real(dt) and float(dt) > 0):
         raise ValueError(f"dt={dt!r} [s] must be a number, finite and > 0")
-    if not (finite_real(tolerance) and tolerance > 0):
+    if not (finite_real(tolerance) and float(tolerance) > 0):
         raise ValueError(f"tolerance={tolerance!r} must be a number, finite and > 0")
     if substeps is not None and not (
         _real(substeps) and isinstance(substeps, int | np.integer)

@@ -139,8 +139,10 @@ def _check_states(num: int | None = None, **values: Any) -> None:
                              f"{type(value).__name__}")
         if array is not None and array.ndim and num not in shapes and array.shape != (num,):
             raise ValueError(f"{name} has {array.shape[0]} values for {num} rollers")
-        if not np.isfinite(value if array is None else array).all():
-            raise ValueError(f"{name}={value!r} is not finite")
+        with np.errstate(over="ignore"):  # (a longdouble past float64's range: inf there)
+            finite = np.isfinite(value if array is None else array.astype(float)).all()
+        if not finite:
+            raise ValueError(f"{name}={value!r} is not finite (as a float64)")
 
 
 @numba.extending.register_jitable
@@ -298,7 +300,8 @@ class BatchStepper(_Base):
 
     def __init__(self, num: int, *, integrator: str = DEFAULT_INTEGRATOR, dt: float,
                  tolerance: float, substeps: int | None = None) -> None:
-        if not (isinstance(num, int | np.integer) and not isinstance(num, bool) and num >= 1):
+        if not (isinstance(num, int | np.integer) and num >= 1
+                and not isinstance(num, bool | np.bool_ | np.timedelta64)):
             raise ValueError(f"num={num!r} must be an integer >= 1")
         check_memory("num", int(num), BYTES_PER_ROLLER)
         super().__init__(int(num), integrator, dt, tolerance, substeps)
@@ -336,6 +339,8 @@ class BatchStepper(_Base):
     def forget(self, index=None) -> None:
         """Start rollers ``index`` (all if None; as for :meth:`set_scenes`) afresh, as
         :meth:`Stepper.forget` does."""
+        if isinstance(index, bool | np.bool_):
+            self._rows(index)  # names it
         try:  # (an autoreset's: indexed directly, not through _rows)
             self._io[_H_NEXT, slice(None) if index is None else index] = 0.0
         except IndexError:
@@ -345,6 +350,9 @@ class BatchStepper(_Base):
     def _rows(self, index: Any) -> np.ndarray:
         """The rollers ``index`` selects (an index, slice, mask or index array; all if None),
         or a ValueError naming it."""
+        if isinstance(index, bool | np.bool_):  # (NumPy reads True as every roller)
+            raise ValueError(f"index={index!r} does not select rollers: give an integer, a "
+                             "slice, a boolean mask of the rollers or an index array")
         try:
             return np.arange(self.num)[slice(None) if index is None else index]
         except IndexError as error:
@@ -522,6 +530,7 @@ def predicted_substeps(
         raise ValueError(f"integrator={integrator!r} chooses its own steps; no prediction is made")
     _check_step_args(dt, tolerance, None)
     _check_states(ANY_SHAPE, phi_dot=phi_dot)
+    dt, tolerance = float(dt), float(tolerance)
     arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (phi_dot,
                                                                        *require_scene(scene).params)))
     flat = [a.reshape(-1) for a in arrays]
