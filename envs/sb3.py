@@ -29,6 +29,7 @@ import numpy as np
 from gymnasium.vector import AutoresetMode
 from roller_gym.episode import INFO_KEYS, state_option, vector_seeds
 from roller_gym.physics.integrators import DEFAULT_INTEGRATOR
+from roller_gym.physics.scene import whole_number
 from roller_gym.vector_env import BATCH_INTEGRATORS
 from stable_baselines3.common.vec_env import DummyVecEnv
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices
@@ -231,8 +232,7 @@ class RollerVecEnv(VecEnv):
         index = list(range(self.num_envs)) if indices is None else (
             [indices] if not isinstance(indices, list | tuple | range | np.ndarray)
             else list(indices))
-        if not all(isinstance(i, int | np.integer) and not isinstance(i, bool | np.bool_)
-                   and 0 <= i < self.num_envs for i in index):
+        if not all(whole_number(i) and 0 <= i < self.num_envs for i in index):
             raise ValueError(f"indices={indices!r} must be None (all), an integer or a list "
                              f"of integers in [0, {self.num_envs}): the sub-environments")
         return [int(i) for i in index]

@@ -18,7 +18,7 @@ from typing import Any
 import numba
 import numpy as np
 from roller_gym.physics import Scene
-from roller_gym.physics.scene import finite_real
+from roller_gym.physics.scene import finite_real, whole_number
 
 __all__ = ["actions", "check_integrable", "choice", "count", "integration_magnitudes",
            "integration_rates", "real", "subset"]
@@ -54,9 +54,7 @@ def real(name: str, value: Any, *, positive: bool = False, nonnegative: bool = F
 def count(name: str, value: Any, *, low: int = 1, high: int | None = None) -> int:
     """``value`` as an int in [low, high], or ValueError naming ``name``."""
     allowed = f"an integer >= {low}" + (f" and <= {high}" if high is not None else "")
-    if (not isinstance(value, int | np.integer)
-            or isinstance(value, bool | np.bool_ | np.timedelta64)
-            or value < low or (high is not None and value > high)):
+    if (not whole_number(value) or value < low or (high is not None and value > high)):
         raise ValueError(f"{name}={value!r} is not allowed: it must be {allowed} (a Python or "
                          "NumPy integer)")
     return int(value)

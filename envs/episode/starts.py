@@ -19,7 +19,7 @@ from roller_gym.episode.streams import uniform
 from roller_gym.physics import Scene, trig
 from roller_gym.physics import equations as eq
 from roller_gym.physics.integrators import contact_state
-from roller_gym.physics.scene import finite_real
+from roller_gym.physics.scene import finite_real, whole_number
 
 __all__ = ["CANDIDATES", "ROUNDS", "SEED_MAX", "RestState", "Starts", "at_start", "check_seed",
            "per_scene_target", "put", "reset_mask", "reset_options", "scene_rows",
@@ -78,8 +78,7 @@ SEED_MAX = 2**64 - 1
 
 
 def _valid_seed(s: Any) -> bool:
-    return s is None or (isinstance(s, int | np.integer) and not isinstance(s, bool)
-                         and 0 <= s <= SEED_MAX)
+    return s is None or (whole_number(s) and 0 <= s <= SEED_MAX)
 
 
 def check_seed(seed: Any) -> int | None:

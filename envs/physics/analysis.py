@@ -18,7 +18,7 @@ import numba
 import numba.extending
 import numpy as np
 from roller_gym.physics import equations as eq
-from roller_gym.physics.scene import Scene, finite_real, require_scene
+from roller_gym.physics.scene import Scene, finite_real, require_scene, whole_number
 from scipy.optimize import brentq
 
 __all__ = [
@@ -230,8 +230,7 @@ def equilibria(scene: Scene, tau: float = 0.0, resolution: int = 4000) -> list[E
         raise ValueError("equilibria() takes a scalar scene; call it per element of a batch")
     if not finite_real(tau):
         raise ValueError(f"tau={tau!r} [N·m] must be a finite real number")
-    if not (isinstance(resolution, int | np.integer) and not isinstance(resolution, bool)
-            and RESOLUTIONS[0] <= resolution <= RESOLUTIONS[1]):
+    if not (whole_number(resolution) and RESOLUTIONS[0] <= resolution <= RESOLUTIONS[1]):
         raise ValueError(f"resolution={resolution!r} must be an integer in [{RESOLUTIONS[0]}, "
                          f"{RESOLUTIONS[1]}] (grid points per turn of φ)")
     m, r, kappa, e, _, g, _ = scene.params

@@ -36,7 +36,7 @@ import numpy as np
 
 Number = float | np.ndarray
 
-__all__ = ["PRESETS", "Scene", "finite_real", "preset"]
+__all__ = ["PRESETS", "Scene", "finite_real", "preset", "whole_number"]
 
 
 def finite_real(x: Any) -> bool:
@@ -50,6 +50,12 @@ def finite_real(x: Any) -> bool:
         return math.isfinite(float(x)) and (float(x) != 0.0 or x == 0)
     except OverflowError:
         return False
+
+
+def whole_number(x: Any) -> bool:
+    """Whether ``x`` is one integer: a Python or NumPy int, not a bool or a timedelta (NumPy
+    counts both among its integers)."""
+    return isinstance(x, int | np.integer) and not isinstance(x, bool | np.bool_ | np.timedelta64)
 
 
 def _describe(value: np.ndarray) -> str:
@@ -185,8 +191,7 @@ class Scene:
     def item(self, i: int) -> Scene:
         """The ``i``-th roller of a batch scene, as a scalar scene."""
         n = self.batch_size or 1
-        if not (isinstance(i, int | np.integer) and not isinstance(i, bool | np.bool_)
-                and -n <= i < n):
+        if not (whole_number(i) and -n <= i < n):
             raise ValueError(f"i={i!r} is not a roller of this scene's {n}: it must be an "
                              f"integer in [{-n}, {n})")
         return Scene(

@@ -8,7 +8,6 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from roller_gym.physics import _taylor_series as series
@@ -36,7 +35,7 @@ from roller_gym.physics.integrators.taylor_kernel import (
     _taylor_serial,
     _taylor_substep,
 )
-from roller_gym.physics.scene import finite_real
+from roller_gym.physics.scene import finite_real, whole_number
 
 
 @dataclass(frozen=True)
@@ -162,20 +161,13 @@ def scheme(integrator: str) -> Scheme:
                          f"{', '.join(INTEGRATORS)}") from None
 
 
-def _real(x: Any) -> bool:
-    """A real number: a Python or NumPy int or float, not a bool."""
-    return isinstance(x, int | float | np.integer | np.floating) and not isinstance(
-        x, bool | np.bool_ | np.timedelta64)
-
-
 def _check_step_args(dt: float, tolerance: float, substeps: int | None) -> None:
     if not (finite_real(dt) and float(dt) > 0):
         raise ValueError(f"dt={dt!r} [s] must be a number, finite and > 0")
     if not (finite_real(tolerance) and float(tolerance) > 0):
         raise ValueError(f"tolerance={tolerance!r} must be a number, finite and > 0")
     if substeps is not None and not (
-        _real(substeps) and isinstance(substeps, int | np.integer)
-        and 1 <= substeps <= MAX_SUBSTEPS
+        whole_number(substeps) and 1 <= substeps <= MAX_SUBSTEPS
     ):
         raise ValueError(
             f"substeps={substeps!r} must be None (automatic) or an integer in [1, {MAX_SUBSTEPS}]"

@@ -47,7 +47,7 @@ from roller_gym.physics.integrators.rules import (
 )
 from roller_gym.physics.integrators.schemes import DEFAULT_INTEGRATOR, _check_step_args, scheme
 from roller_gym.physics.packed import pack
-from roller_gym.physics.scene import Scene, require_scene
+from roller_gym.physics.scene import Scene, require_scene, whole_number
 
 
 class _Base:
@@ -300,8 +300,7 @@ class BatchStepper(_Base):
 
     def __init__(self, num: int, *, integrator: str = DEFAULT_INTEGRATOR, dt: float,
                  tolerance: float, substeps: int | None = None) -> None:
-        if not (isinstance(num, int | np.integer) and num >= 1
-                and not isinstance(num, bool | np.bool_ | np.timedelta64)):
+        if not (whole_number(num) and num >= 1):
             raise ValueError(f"num={num!r} must be an integer >= 1")
         check_memory("num", int(num), BYTES_PER_ROLLER)
         super().__init__(int(num), integrator, dt, tolerance, substeps)
