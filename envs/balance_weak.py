@@ -76,6 +76,7 @@ __all__ = ["BalanceWeakTask"]
 @register
 class BalanceWeakTask(BalanceTask):
     name = "RollerBalanceWeak"
+    tier = "hard"
     version = 0
     default_max_torque = 0.1
     reward_threshold = 283.7  # the swing-up's mean return on seeds 10000–10099 (298.6) − 5 %

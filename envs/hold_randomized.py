@@ -90,6 +90,7 @@ __all__ = ["HoldRandomizedTask"]
 @register
 class HoldRandomizedTask(HoldTask):
     name = "RollerHoldRandomized"
+    tier = "hard"
     version = 0
     # LQR on the nominal scene: its mean return on seeds 10000–10099 (118.8) − 5 %, the floor
     reward_threshold = 112.9

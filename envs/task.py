@@ -75,8 +75,8 @@ from roller_gym.rest import (  # the scene's rates and rest positions, importabl
     wrap_rate,
 )
 
-__all__ = ["NAMESPACE", "OBSERVATION_FIELDS", "SPEED_SCALE", "TASKS", "TASK_CONSTANTS", "Task",
-           "get_task", "hold_range", "hold_ranges", "objective", "observation_values",
+__all__ = ["NAMESPACE", "OBSERVATION_FIELDS", "SPEED_SCALE", "TASKS", "TASK_CONSTANTS", "TIERS",
+           "Task", "get_task", "hold_range", "hold_ranges", "objective", "observation_values",
            "per_scene", "position_error", "psi_rate", "register", "state_observation",
            "step_reward", "step_success", "target_observation", "unstable_rest_positions",
            "wrap_rate"]
@@ -103,6 +103,8 @@ OBSERVATION_FIELDS: dict[str, tuple[str, str]] = {
 _TARGET_FIELDS = ("cos_psi_target", "sin_psi_target", "cos_phi_target", "sin_phi_target",
                   "target_speed")
 
+#: The suite's tiers (:attr:`Task.tier`), in the order the results page shows them.
+TIERS = ("base", "hard")
 #: The registry: task name -> task class (see :func:`register`).
 TASKS: dict[str, type[Task]] = {}
 
@@ -116,6 +118,8 @@ def register(cls: type[Task]) -> type[Task]:
     if unknown:
         raise ValueError(f"{cls.name}.observation names unknown fields {sorted(unknown)}; "
                          f"known: {', '.join(OBSERVATION_FIELDS)}")
+    if cls.tier not in TIERS:
+        raise ValueError(f"{cls.name}.tier is {cls.tier!r}; it must be one of {TIERS}")
     compiled = [name for name in _COMPILED if getattr(cls, name) is not getattr(Task, name)]
     if compiled:
         raise ValueError(
@@ -183,6 +187,10 @@ class Task:
     #: The observation's fields, in order (names of :data:`OBSERVATION_FIELDS`).
     observation: ClassVar[tuple[str, ...]] = ("cos_psi", "sin_psi", "cos_phi", "sin_phi",
                                               "speed")
+    #: The suite's tier: ``"base"``, where the classical controller is the reference an agent
+    #: should reach, or ``"hard"``, where it is not the ceiling and algorithms can differ
+    #: (the results page aggregates each tier on its own).
+    tier: ClassVar[str] = "base"
     #: The classical controller that solves the task: ``"lqr"`` or ``"swing_up"``
     #: (:func:`roller_gym.agents.controller_for`), and its label in tables.
     classical: ClassVar[str] = "lqr"

@@ -195,6 +195,7 @@ def measure(args: argparse.Namespace, env_id: str) -> dict[str, Any]:
         "evaluation_seeds": [0, args.episodes - 1],
         "reward_threshold": threshold,
         "classical": classical_label(env_id),
+        "tier": task.tier,
         "success_band": task.success_band if "success_band" in task.parameters else None,
         "evaluation_s": time.perf_counter() - start,
         "train_wall_s": args.train_wall_s,

@@ -27,6 +27,7 @@ from roller_gym.scripts.evaluate import (
     SEED_SUCCESS_FLOOR,
     SUCCESS_TARGET,
 )
+from roller_gym.task import TIERS
 
 #: The per-task files' layout version; :func:`load` reads this one only.
 FORMAT = 2
@@ -100,7 +101,7 @@ def _task_summary(record: dict[str, Any], targets: dict[str, float]) -> dict[str
     classical = by["classical"][0]["return_mean"]
     runs = [e for e in record["evaluations"] if "seed" in e]
     row: dict[str, Any] = {
-        "date": record["date"][:10], "machine": record["machine"],
+        "tier": record["tier"], "date": record["date"][:10], "machine": record["machine"],
         "versions": record["versions"], "command": record["command"],
         "episodes": record["episodes"], "evaluation_seeds": record["evaluation_seeds"],
         "threshold": record["reward_threshold"], "classical": record["classical"],
@@ -167,6 +168,11 @@ def _curve_band(curves: list[dict[str, Any]]) -> dict[str, list[float]] | None:
             "episodes": len(curves[0]["returns"][0])}
 
 
+def _pair(a: str, b: str, poi: tuple[float, float, float]) -> dict[str, Any]:
+    """P(a > b) with its interval, and whether they differ: the interval excludes one half."""
+    return {"a": a, "b": b, "poi": _iv(poi), "differs": bool(poi[1] > 0.5 or poi[2] < 0.5)}
+
+
 def _overall(tasks: dict[str, dict[str, Any]]) -> dict[str, Any] | None:
     """Over the tasks where every algorithm has runs: returns normalized by the classical
     controller's, success, and the probabilities of improvement."""
@@ -184,14 +190,16 @@ def _overall(tasks: dict[str, dict[str, Any]]) -> dict[str, Any] | None:
                           for t in names] for i in range(seeds)])
 
     norm = {a: matrix(a, "return", scale=True) for a in algos}
-    taus = np.linspace(0.0, 1.1, 45)
+    # up to the best run's score (a tier whose agents pass the classical controller), at least 1.1
+    top = max(1.1, math.ceil(10 * max(float(s.max()) for s in norm.values())) / 10)
+    taus = np.linspace(0.0, top, 45)
     return {
         "tasks": names, "seeds": seeds,
         "normalized_iqm": {a: _iv(stats.interval(s)) for a, s in norm.items()},
         "success_iqm": {a: _iv(stats.interval(matrix(a, "success"))) for a in algos},
         "poi_vs_classical": {a: _iv(stats.probability_of_improvement(s, np.ones((1, len(names)))))
                              for a, s in norm.items()},
-        "pairs": [{"a": x, "b": y, "poi": _iv(stats.probability_of_improvement(norm[x], norm[y]))}
+        "pairs": [_pair(x, y, stats.probability_of_improvement(norm[x], norm[y]))
                   for i, x in enumerate(algos) for y in algos[i + 1:]],
         "taus": taus.tolist(), "profiles": stats.performance_profile(norm, taus),
     }
@@ -206,8 +214,11 @@ def summarize(records: list[dict[str, Any]]) -> dict[str, Any]:
                "return_tolerance": RETURN_TOLERANCE}
     current, earlier = latest(records)
     tasks = {r["task"]: _task_summary(r, targets) for r in current}
+    tiers = {tier: _overall({k: t for k, t in tasks.items() if t["tier"] == tier})
+             for tier in TIERS}
     return {"confidence": stats.CONFIDENCE, "reps": stats.REPS, "targets": targets,
-            "last_evaluations": LAST_EVALUATIONS, "tasks": tasks, "overall": _overall(tasks),
+            "last_evaluations": LAST_EVALUATIONS, "tasks": tasks,
+            "tiers": {tier: o for tier, o in tiers.items() if o is not None},
             "superseded": [{"task": r["task"], "date": r["date"][:10]} for r in earlier]}
 
 
@@ -314,9 +325,63 @@ def _task_section(task: str, row: dict[str, Any], summary: dict[str, Any]) -> li
     return lines
 
 
+#: How the page names each tier's aggregate, and what the tier is for.
+TIER_TITLES = {
+    "base": ("the base tasks", "the classical controller is the reference an agent should "
+             "reach"),
+    "hard": ("the hard tier", "the classical controller is not the ceiling: what it is for is "
+             "to separate the algorithms"),
+}
+
+
+def _figure(tier: str) -> str:
+    """The file name of a tier's aggregate figure."""
+    return "aggregate.png" if tier == "base" else f"aggregate-{tier}.png"
+
+
+def _separation(pairs: list[dict[str, Any]], confidence: float) -> str:
+    """Which pairs of algorithms the probability of improvement tells apart (its interval
+    excludes one half) and which it does not."""
+    apart = [p for p in pairs if p["differs"]]
+    together = [p for p in pairs if not p["differs"]]
+
+    def names(ps: list[dict[str, Any]]) -> str:
+        return ", ".join(f"{p['a'].upper()} and {p['b'].upper()} ({_fmt(p['poi'], True)})"
+                         for p in ps)
+
+    if not apart:
+        return (f"No pair of algorithms differs here: every {confidence:.0%} interval of "
+                "P(A > B) contains one half at this number of seeds.")
+    text = (f"These algorithms differ (the {confidence:.0%} interval of P(A > B) excludes one "
+            f"half): {names(apart)}.")
+    return text + (f" These do not: {names(together)}." if together else "")
+
+
+def _tier_section(tier: str, overall: dict[str, Any], summary: dict[str, Any],
+                  figures: str) -> list[str]:
+    """A tier's aggregate over its tasks."""
+    title, purpose = TIER_TITLES[tier]
+    ci = f"{summary['confidence']:.0%} CI"
+    lines = [f"## Over {title}: {', '.join(file_name(t) for t in overall['tasks'])}", "",
+             f"Here {purpose}. {overall['seeds']} seeds per algorithm and task; returns "
+             "divided by the classical controller's on the same task.", "",
+             "| algorithm | return / classical, IQM | success, IQM | P(better than "
+             "classical) |", "|---|---:|---:|---:|"]
+    lines += [f"| {a.upper()} | {_fmt(overall['normalized_iqm'][a], digits=3)} "
+              f"| {_fmt(overall['success_iqm'][a], pct=True)} "
+              f"| {_fmt(overall['poi_vs_classical'][a], pct=True)} |"
+              for a in overall["normalized_iqm"]]
+    lines += ["", f"| | P(A > B) over the tasks [{ci}] |", "|---|---:|"]
+    lines += [f"| {p['a'].upper()} vs {p['b'].upper()} | {_fmt(p['poi'], True)} |"
+              for p in overall["pairs"]]
+    lines += ["", _separation(overall["pairs"], summary["confidence"]), "",
+              f"![IQM and performance profiles]({figures}/{_figure(tier)})", ""]
+    return lines
+
+
 def page(summary: dict[str, Any], figures: str) -> str:
     """The Markdown page from the summary; ``figures``: the plots' folder relative to it."""
-    t, tasks, overall = summary["targets"], summary["tasks"], summary["overall"]
+    t, tasks = summary["targets"], summary["tasks"]
     lines = [
         "# Results", "",
         "SAC, TD3 and PPO (stable-baselines3 through rl-zoo3, with the hyperparameter files of "
@@ -352,21 +417,8 @@ def page(summary: dict[str, Any], figures: str) -> str:
                   "`docs/results/tasks/`: " + ", ".join(
                       f"`{s['task']}` (measured {s['date']})" for s in summary["superseded"])
                   + ".", ""]
-    if overall:
-        lines += [f"## Over {', '.join(file_name(t) for t in overall['tasks'])}", "",
-                  f"{overall['seeds']} seeds per algorithm and task; returns divided by the "
-                  "classical controller's on the same task.", "",
-                  "| algorithm | return / classical, IQM | success, IQM | P(better than "
-                  "classical) |", "|---|---:|---:|---:|"]
-        lines += [f"| {a.upper()} | {_fmt(overall['normalized_iqm'][a], digits=3)} "
-                  f"| {_fmt(overall['success_iqm'][a], pct=True)} "
-                  f"| {_fmt(overall['poi_vs_classical'][a], pct=True)} |"
-                  for a in overall["normalized_iqm"]]
-        lines += ["", f"| | P(A > B) over the tasks [{summary['confidence']:.0%} CI] |",
-                  "|---|---:|"]
-        lines += [f"| {p['a'].upper()} vs {p['b'].upper()} | {_fmt(p['poi'], True)} |"
-                  for p in overall["pairs"]]
-        lines += ["", f"![IQM and performance profiles]({figures}/aggregate.png)", ""]
+    for tier, overall in summary["tiers"].items():
+        lines += _tier_section(tier, overall, summary, figures)
     for task, row in tasks.items():
         lines += _task_section(task, row, summary)
     lines += ["## Learning curves", "",
@@ -405,9 +457,15 @@ def plot(summary: dict[str, Any], folder: Path) -> None:
     fig.savefig(folder / "learning-curves.png", dpi=100)
     plt.close(fig)
 
-    overall = summary["overall"]
-    if overall is None:
-        return
+    for tier, overall in summary["tiers"].items():
+        _plot_aggregate(overall, summary["confidence"], colors, folder / _figure(tier))
+
+
+def _plot_aggregate(overall: dict[str, Any], confidence: float, colors: dict[str, str],
+                    path: Path) -> None:
+    """A tier's IQMs and performance profiles."""
+    import matplotlib.pyplot as plt
+
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 3.6))
     algos = list(overall["normalized_iqm"])
     for i, algo in enumerate(algos):
@@ -418,7 +476,7 @@ def plot(summary: dict[str, Any], folder: Path) -> None:
                          color=colors[algo], label=label if i == 0 else None)
     ax1.set_yticks(range(len(algos)), [a.upper() for a in algos])
     ax1.axvline(1.0, color="k", linewidth=0.5)
-    ax1.set(title=f"IQM over seeds and tasks ({summary['confidence']:.0%} CI)", xlabel="score")
+    ax1.set(title=f"IQM over seeds and tasks ({confidence:.0%} CI)", xlabel="score")
     ax1.legend(fontsize=7)
     ax1.grid(alpha=0.3)
     for algo, prof in overall["profiles"].items():
@@ -430,7 +488,7 @@ def plot(summary: dict[str, Any], folder: Path) -> None:
     ax2.legend(fontsize=7)
     ax2.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(folder / "aggregate.png", dpi=100)
+    fig.savefig(path, dpi=100)
     plt.close(fig)
 
 

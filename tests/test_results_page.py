@@ -30,17 +30,18 @@ def _run(name, seed, ret, success, means=(0.0, 200.0, 200.0), last=(1.0, 1.0, 1.
                       "successes": successes}}
 
 
-def _record(runs, threshold=190.0):
-    baselines = [{"env": TASK, "name": n, "return_mean": r, "success_rate": x,
+def _record(runs, threshold=190.0, task=TASK, tier="base"):
+    baselines = [{"env": task, "name": n, "return_mean": r, "success_rate": x,
                   "evaluation_s": 1.0}
                  for n, r, x in (("classical", 200.0, 1.0), ("zero", 10.0, 0.0),
                                  ("random", 1.0, 0.0))]
-    return {"format": results_page.FORMAT, "task": TASK, "date": "2026-01-01T00:00:00+00:00",
+    runs = [dict(r, env=task) for r in runs]
+    return {"format": results_page.FORMAT, "task": task, "date": "2026-01-01T00:00:00+00:00",
             "command": "roller-gym results", "machine": "x86_64, 2 CPU cores, Linux",
             "versions": {"numpy": "2.4.6"}, "episodes": 100, "evaluation_seeds": [0, 99],
             "reward_threshold": {"value": threshold, "classical_return": 200.0,
                                  "calibration_seeds": [10000, 10099], "registered": 184.1},
-            "classical": "LQR", "success_band": 0.05, "evaluation_s": 60.0,
+            "classical": "LQR", "tier": tier, "success_band": 0.05, "evaluation_s": 60.0,
             "train_wall_s": 3600.0, "evaluations": baselines + runs}
 
 
@@ -159,7 +160,7 @@ def test_a_newer_version_supersedes_the_earlier_ones_results(tmp_path):
         name = record["task"].split("/")[1]
         (tmp_path / "tasks" / f"{name}.json").write_text(json.dumps(record))
     summary = results_page.render(tmp_path, tmp_path / "RESULTS.md")
-    assert list(summary["tasks"]) == [TASK] and summary["overall"]["tasks"] == [TASK]
+    assert list(summary["tasks"]) == [TASK] and summary["tiers"]["base"]["tasks"] == [TASK]
     assert summary["superseded"] == [{"task": "roller_gym/RollerHold-v1", "date": "2025-12-31"}]
     text = (tmp_path / "RESULTS.md").read_text()
     assert "`roller_gym/RollerHold-v1` (measured 2025-12-31)" in text
@@ -198,3 +199,53 @@ def test_the_round_of_make_results_covers_every_registered_task():
     makefile = (DOCS.parent / "Makefile").read_text()
     listed = re.search(r"^TASKS := ((?:.*\\\n)*.*)$", makefile, re.M).group(1)
     assert sorted(listed.replace("\\", " ").split()) == sorted(roller_gym.ENV_IDS)
+
+
+def test_each_tier_is_aggregated_over_its_own_tasks_and_says_which_algorithms_differ(tmp_path):
+    """A base task and a hard one: two aggregates, each over its own task. On the hard one SAC
+    beats TD3 on every seed (P = 1, an interval that excludes one half) and ties PPO seed for
+    seed (P = one half): the page says the first pair differs and the second does not."""
+    hard = "roller_gym/RollerHoldRandomized-v0"
+    base_runs = [_run(a, s, 195.0 + s, 1.0) for a in ("sac", "td3", "ppo") for s in range(5)]
+    hard_runs = ([_run("sac", s, 150.0 + s, 0.8) for s in range(5)]
+                 + [_run("td3", s, 100.0 + s, 0.3) for s in range(5)]
+                 + [_run("ppo", s, 150.0 + s, 0.8) for s in range(5)])
+    (tmp_path / "tasks").mkdir()
+    for record in (_record(base_runs), _record(hard_runs, task=hard, tier="hard")):
+        name = record["task"].split("/")[1]
+        (tmp_path / "tasks" / f"{name}.json").write_text(json.dumps(record))
+    summary = results_page.render(tmp_path, tmp_path / "RESULTS.md")
+    assert summary["tiers"]["base"]["tasks"] == [TASK]
+    assert summary["tiers"]["hard"]["tasks"] == [hard]
+    pairs = {(p["a"], p["b"]): p for p in summary["tiers"]["hard"]["pairs"]}
+    assert pairs["sac", "td3"]["poi"] == [1.0, 1.0, 1.0] and pairs["sac", "td3"]["differs"]
+    assert pairs["sac", "ppo"]["poi"][0] == 0.5 and not pairs["sac", "ppo"]["differs"]
+    assert pairs["td3", "ppo"]["poi"] == [0.0, 0.0, 0.0] and pairs["td3", "ppo"]["differs"]
+    # over the classical return of 200: SAC's IQM of 150 … 154 drops one seed at each end
+    assert summary["tiers"]["hard"]["normalized_iqm"]["sac"][0] == pytest.approx(152.0 / 200)
+    text = (tmp_path / "RESULTS.md").read_text()
+    hard_part = text[text.index("## Over the hard tier"):text.index(f"## {TASK}")]
+    assert "These algorithms differ" in hard_part
+    assert "SAC and TD3 (100% [100%, 100%])" in hard_part
+    assert "These do not: SAC and PPO (50%" in hard_part
+    assert (tmp_path / "aggregate.png").exists() and (tmp_path / "aggregate-hard.png").exists()
+
+
+def test_a_tier_where_no_interval_excludes_one_half_says_so(tmp_path):
+    runs = [_run(a, s, 195.0 + s, 1.0) for a in ("sac", "td3") for s in range(5)]
+    summary = results_page.summarize([_record(runs)])
+    (pair,) = summary["tiers"]["base"]["pairs"]
+    assert pair["poi"][0] == 0.5 and not pair["differs"]
+    assert "No pair of algorithms differs here" in results_page.page(summary, "results")
+
+
+def test_a_task_of_an_unknown_tier_is_refused_at_registration():
+    from roller_gym.hold import HoldTask
+    from roller_gym.task import register
+
+    class Odd(HoldTask):
+        name = "RollerOddTier"
+        tier = "medium"
+
+    with pytest.raises(ValueError, match=r"RollerOddTier.tier is 'medium'; it must be one of"):
+        register(Odd)
