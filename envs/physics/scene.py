@@ -58,6 +58,18 @@ def whole_number(x: Any) -> bool:
     return isinstance(x, int | np.integer) and not isinstance(x, bool | np.bool_ | np.timedelta64)
 
 
+def _real(x: Any) -> bool:
+    """Whether ``x`` is a real number of any size (not a bool)."""
+    return (isinstance(x, int | float | np.integer | np.floating)
+            and not isinstance(x, bool | np.bool_))
+
+
+def _short(raw: Any) -> str:
+    """``raw``'s repr, its middle cut where it is long (an integer of 400 digits)."""
+    text = repr(raw)
+    return text if len(text) <= 60 else f"{text[:28]}...{text[-28:]}"
+
+
 def _describe(value: np.ndarray) -> str:
     return repr(value.item()) if value.ndim == 0 else f"array {value!r}"
 
@@ -128,8 +140,11 @@ class Scene:
                 value = np.asarray(raw)
             except (TypeError, ValueError):
                 value = np.asarray(None)
+            if value.dtype.kind == "O" and value.size and all(map(_real, value.flat)):
+                raise ValueError(f"Scene.{f.name}={_short(raw)} is out of range: an integer "
+                                 "past float64's range (about ±1.8e308); it must be finite")
             if value.dtype.kind not in "iuf":  # not text, bool, complex or objects
-                raise ValueError(f"Scene.{f.name}={raw!r} is not a real number (SI units); "
+                raise ValueError(f"Scene.{f.name}={_short(raw)} is not a real number (SI units); "
                                  f"it must be an int or a float, or an array of them")
             value = value.astype(float)
             if np.isnan(value).any():
