@@ -82,7 +82,9 @@ class Settings:
         "slow: a reference; the single environment only: under SB3 and ``roller-gym train`` a "
         "batch of them is a ``DummyVecEnv``)."))
     substeps: int | None = field(default=None, metadata=_doc(
-        "a fixed number of substeps per control step instead of the automatic rule."))
+        "a fixed number of substeps per control step instead of the automatic rule; "
+        "``info[\"tol_met\"]`` then says whether they met the tolerance by the scheme's error "
+        "estimate (euler, midpoint: by their prediction of the substeps it needs)."))
     randomize: Mapping[str, tuple[float, float]] | None = field(default=None, metadata=_doc(
         "``{field: (low, high)}``: Scene fields drawn uniformly at each reset (domain "
         "randomization), e.g. ``{\"m\": (0.8, 1.2), \"e\": (0.03, 0.05)}``. At "

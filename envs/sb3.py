@@ -19,6 +19,7 @@ Importing this module needs stable-baselines3 (the ``train`` extra).
 
 from __future__ import annotations
 
+import pickle
 import time
 from collections.abc import Sequence
 from pathlib import Path
@@ -115,14 +116,23 @@ class RollerVecEnv(VecEnv):
         n = self.num_envs
         seeds = None if all(s is None for s in self._seeds) else list(self._seeds)
         groups = _option_groups(self._options, n)
-        self.reset_infos = [{} for _ in range(n)]
-        for options, mask in groups:
-            if len(groups) > 1:  # the sub-environments that share these options
-                options = {**(options or {}), "reset_mask": mask}
-            obs, info = self.venv.reset(seed=seeds, options=options)
-            rows = _rows(info, n)
-            for i in np.flatnonzero(mask):
-                self.reset_infos[i] = rows[i]
+        # one reset per group of sub-environments that share options: all of them, or none
+        # where a later group's options are refused (the batch as it was before the first)
+        snapshot = pickle.dumps(self.venv) if len(groups) > 1 else None
+        infos: list[dict[str, Any]] = [{} for _ in range(n)]
+        try:
+            for options, mask in groups:
+                if len(groups) > 1:  # the sub-environments that share these options
+                    options = {**(options or {}), "reset_mask": mask}
+                obs, info = self.venv.reset(seed=seeds, options=options)
+                rows = _rows(info, n)
+                for i in np.flatnonzero(mask):
+                    infos[i] = rows[i]
+        except Exception:
+            if snapshot is not None:
+                self.venv.__dict__.update(pickle.loads(snapshot).__dict__)
+            raise
+        self.reset_infos = infos
         self._returns[:], self._lengths[:] = 0.0, 0
         self._reset_seeds()
         self._reset_options()
@@ -314,7 +324,7 @@ def from_env_fns(env_fns: list[Any], **vec_env_kwargs: Any) -> VecEnv:
                              f"environment (it {got})")
         probes.append(_probe(env))
     first = probes[0]
-    native = (all(p[:3] == first[:3] and p[3] <= _PLAIN_WRAPPERS for p in probes)
+    native = (all(_same(p[:3], first[:3]) and p[3] <= _PLAIN_WRAPPERS for p in probes)
               and first[0] is not None and first[0].startswith("roller_gym/")
               and first[1].get("integrator", DEFAULT_INTEGRATOR) in BATCH_INTEGRATORS
               and first[2] is not None)  # (None: made without a time limit)
@@ -330,8 +340,8 @@ def from_env_fns(env_fns: list[Any], **vec_env_kwargs: Any) -> VecEnv:
 
 def _probe(env: gym.Env) -> tuple:
     """What decides the batch for one made environment (closed after): its ID, keyword
-    arguments (but ``render_mode``), time limit and wrappers' names, the Monitor folder's
-    batch file and the probe's own Monitor file."""
+    arguments, time limit and wrappers' names, the Monitor folder's batch file and the
+    probe's own Monitor file."""
     wrappers, inner, monitor, probe_file = set(), env, None, None
     while isinstance(inner, gym.Wrapper):
         wrappers.add(type(inner).__name__)
@@ -344,8 +354,24 @@ def _probe(env: gym.Env) -> tuple:
     env.close()
     if spec is None:
         return None, {}, None, wrappers, monitor, probe_file
-    kwargs = {k: v for k, v in spec.kwargs.items() if k != "render_mode"}
-    return spec.id, kwargs, spec.max_episode_steps, wrappers, monitor, probe_file
+    return spec.id, dict(spec.kwargs), spec.max_episode_steps, wrappers, monitor, probe_file
+
+
+def _same(a: Any, b: Any) -> bool:
+    """Whether two environments' arguments are equal, NumPy arrays among them (compared by
+    value, where ``==`` gives an array)."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        return a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
+    if isinstance(a, list | tuple) and isinstance(b, list | tuple):
+        return (type(a) is type(b) and len(a) == len(b)
+                and all(_same(x, y) for x, y in zip(a, b, strict=True)))
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return (isinstance(a, np.ndarray) and isinstance(b, np.ndarray)
+                and a.dtype == b.dtype and np.array_equal(a, b))
+    try:
+        return bool(a == b)
+    except (TypeError, ValueError):  # an object whose == is not a truth value
+        return a is b
 
 
 def _option_groups(options: list[dict | None], n: int) -> list[tuple[dict | None,

@@ -383,8 +383,6 @@ class RollerVectorEnv(VectorEnv):
     def step(
         self, actions: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
-        tau = self.torque  # the context's row, written in place
-        validation.actions(actions, (self.num_envs, 1), self.task.max_torque, tau)
         if not self._ready:
             never = np.flatnonzero(~self._started)
             raise RuntimeError(
@@ -395,6 +393,8 @@ class RollerVectorEnv(VectorEnv):
                 f"step() with autoreset_mode=DISABLED: the episodes of sub-environments "
                 f"{_some(np.flatnonzero(self._done))} have ended; start new ones first with "
                 f"reset(options={{'reset_mask': mask}}) (mask: terminated | truncated)")
+        tau = self.torque  # the context's row, written in place (as it is, if refused)
+        validation.actions(actions, (self.num_envs, 1), self.task.max_torque, tau)
         self.steps += 1
         if self.task.moving_target:
             self.target[:], self.target_rate[:] = self.task.target_at(

@@ -12,8 +12,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-__all__ = ["at_least", "checked_env_kwargs", "key_values", "output_folder", "program_parser",
-           "stage"]
+__all__ = ["COUNT_MAX", "THREADS_MAX", "at_least", "check_env_kwargs", "checked_env_kwargs",
+           "key_values", "output_folder", "program_parser", "real_in", "stage"]
 
 
 def program_parser(command: str, doc: str, **kwargs: Any) -> argparse.ArgumentParser:
@@ -42,14 +42,16 @@ def key_values(items: list[str], option: str, separator: str = "=",
     ``{"m": (0.8, 1.2)}``, ``None``), else strings.
 
     Raises:
-        SystemExit: an item is not KEY<separator>VALUE; the message names ``option`` and
-            gives ``example``.
+        SystemExit: an item is not KEY<separator>VALUE, or a key is given twice; the message
+            names ``option`` and gives ``example``.
     """
     out: dict[str, Any] = {}
     for item in items:
         key, sep, value = item.partition(separator)
         if not sep or not key:
             raise SystemExit(f"{option}: {item!r} is not KEY{separator}VALUE (e.g. {example})")
+        if key in out:
+            raise SystemExit(f"{option}: {key!r} is given twice; give each key once")
         try:
             out[key] = ast.literal_eval(value)
         except (ValueError, SyntaxError):
@@ -71,10 +73,21 @@ def checked_env_kwargs(env_id: str, items: list[str], option: str) -> dict[str, 
         SystemExit: an item is not KEY=VALUE, or the environment refuses the arguments; the
             message names ``option``.
     """
+    kwargs = key_values(items, option)
+    check_env_kwargs(env_id, kwargs, option)
+    return kwargs
+
+
+def check_env_kwargs(env_id: str, kwargs: dict[str, Any], option: str) -> None:
+    """Check the keyword arguments ``kwargs`` of ``gymnasium.make(env_id, ...)`` by building
+    the environment once with them (see :func:`checked_env_kwargs`).
+
+    Raises:
+        SystemExit: the environment refuses them; the message names ``option``.
+    """
     import gymnasium as gym
     from gymnasium.envs.registration import load_env_creator
 
-    kwargs = key_values(items, option)
     spec = gym.spec(env_id)
     creator = spec.entry_point
     creator = creator if callable(creator) else load_env_creator(creator)
@@ -94,20 +107,26 @@ def checked_env_kwargs(env_id: str, items: list[str], option: str) -> dict[str, 
         gym.make(env_id, **kwargs).close()
     except (TypeError, ValueError) as exc:
         raise SystemExit(f"{option}: {exc}") from None
-    return kwargs
 
 
-def at_least(least: int, most: int | None = None) -> Callable[[str], int]:
-    """An argparse ``type``: an integer of at least ``least`` (and at most ``most``), else
+#: The largest count any option takes unless it says otherwise: what a C long holds (the
+#: libraries a count reaches convert it to one).
+COUNT_MAX = 2**63 - 1
+#: The most threads an option may ask for.
+THREADS_MAX = 1024
+
+
+def at_least(least: int, most: int = COUNT_MAX) -> Callable[[str], int]:
+    """An argparse ``type``: an integer of at least ``least`` and at most ``most``, else
     argparse's error naming the option, the value and what is allowed."""
-    allowed = f"an integer >= {least}" + (f" and <= {most}" if most is not None else "")
+    allowed = f"an integer >= {least}" + (f" and <= {most}" if most < COUNT_MAX else "")
 
     def parse(text: str) -> int:
         try:
             value = int(text)
         except ValueError:
             value = least - 1
-        if value < least or (most is not None and value > most):
+        if value < least or value > most:
             raise argparse.ArgumentTypeError(f"{text!r} is not {allowed}")
         return value
 

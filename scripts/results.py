@@ -53,7 +53,7 @@ from roller_gym.agents.policies import (
 )
 from roller_gym.bench.records import package_versions
 from roller_gym.scripts import results_page
-from roller_gym.scripts.arguments import at_least, output_folder, program_parser, stage
+from roller_gym.scripts.arguments import at_least, output_folder, program_parser, real_in, stage
 from roller_gym.scripts.evaluate import RETURN_TOLERANCE, classical_label, evaluate
 from roller_gym.task import get_task
 
@@ -79,7 +79,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "and the figures to <out>/ (default docs/results)")
     p.add_argument("--report", default="docs/RESULTS.md",
                    help="the page to write (default docs/RESULTS.md)")
-    p.add_argument("--train-wall-s", type=float, default=None,
+    p.add_argument("--train-wall-s", type=real_in(0.0, 1e9), default=None,
                    help="the wall time [s] the task's trainings took, for the page (make "
                         "results passes it)")
     p.add_argument("--render-only", "--render", action="store_true", dest="render_only",

@@ -35,7 +35,15 @@ from roller_gym.agents.hyperparams import ALGOS, config_file, hyperparams
 from roller_gym.agents.policies import ZOO_HINT, algorithm_class, find_run
 from roller_gym.physics.scene import finite_real
 from roller_gym.scripts import zoo_train
-from roller_gym.scripts.arguments import at_least, checked_env_kwargs, key_values, program_parser
+from roller_gym.scripts.arguments import (
+    THREADS_MAX,
+    at_least,
+    check_env_kwargs,
+    checked_env_kwargs,
+    key_values,
+    output_folder,
+    program_parser,
+)
 
 #: Algorithms that learn from whole rollouts of n_envs x n_steps environment steps.
 ON_POLICY = ("ppo",)
@@ -66,7 +74,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="episodes per periodic evaluation (default 10)")
     p.add_argument("--checkpoints", type=at_least(0), default=5,
                    help="number of checkpoints over the run (default 5; 0: none)")
-    p.add_argument("--threads", type=at_least(1), default=1,
+    p.add_argument("--threads", type=at_least(1, THREADS_MAX), default=1,
                    help="torch threads (default 1: small networks gain nothing from more)")
     p.add_argument("--verbose", type=int, default=1, choices=(0, 1, 2),
                    help="rl-zoo3's and stable-baselines3's output (0: none, 1: progress "
@@ -92,8 +100,11 @@ ZOO_KEYS = ("n_timesteps", "n_envs", "normalize", "normalize_kwargs", "env_wrapp
 ZOO_SETS = ("env", "tensorboard_log", "seed", "verbose", "device")
 
 
-#: The hyperparameters that count (environments, steps, samples): integers >= 1.
-COUNT_KEYS = ("n_envs", "n_timesteps", "n_steps", "batch_size", "n_epochs")
+#: The hyperparameters that count (environments, steps, samples, stacked frames): integers >= 1.
+COUNT_KEYS = ("n_envs", "n_timesteps", "n_steps", "batch_size", "n_epochs", "buffer_size",
+              "frame_stack", "learning_starts", "gradient_steps")
+#: The largest count a hyperparameter may take (a larger buffer could not be allocated).
+HYPERPARAM_COUNT_MAX = 10**9
 
 
 def checked_hyperparams(algo: str, items: list[str]) -> dict[str, Any]:
@@ -116,12 +127,29 @@ def checked_hyperparams(algo: str, items: list[str]) -> dict[str, Any]:
             raise SystemExit(f"--hyperparams: {key!r} is not a hyperparameter of {algo}; "
                              f"allowed: {', '.join(sorted(accepted))}")
         whole = int | float if key == "n_timesteps" else int  # (rl-zoo3 rounds n_timesteps)
+        least = 0 if key == "learning_starts" else 1
         if key in COUNT_KEYS and not (
                 isinstance(value, whole) and finite_real(value) and value == int(value)
-                and value >= 1):
+                and least <= value <= HYPERPARAM_COUNT_MAX):
             raise SystemExit(f"--hyperparams: {key}:{value!r} is not allowed: it must be an "
-                             "integer >= 1")
+                             f"integer >= {least} and <= {HYPERPARAM_COUNT_MAX:.0e}")
+        if key == "learning_rate" and not _learning_rate(value):
+            raise SystemExit(f"--hyperparams: learning_rate:{value!r} is not allowed: it must "
+                             "be a number > 0, or lin_<number> (from it down to 0)")
+        if key == "env_kwargs" and not isinstance(value, dict):
+            raise SystemExit(f"--hyperparams: env_kwargs:{value!r} is not allowed: it must be a "
+                             "dict of the environment's keyword arguments (or use --env-kwargs)")
     return values
+
+
+def _learning_rate(value: Any) -> bool:
+    """Whether ``value`` is a learning rate rl-zoo3 takes: a number > 0 or "lin_<number>"."""
+    if isinstance(value, str) and value.startswith("lin_"):
+        try:
+            value = float(value[4:])
+        except ValueError:
+            return False
+    return finite_real(value) and value > 0
 
 
 def zoo_arguments(args: argparse.Namespace, conf: str) -> list[str]:
@@ -150,6 +178,8 @@ def zoo_arguments(args: argparse.Namespace, conf: str) -> list[str]:
     env_kwargs = checked_env_kwargs(args.env, args.env_kwargs, "--env-kwargs")
     if env_kwargs:  # rl-zoo3 evaluates each value as Python: pass its repr
         out += ["--env-kwargs", *(f"{k}:{v!r}" for k, v in env_kwargs.items())]
+    if "env_kwargs" in hp:  # from --hyperparams: checked as --env-kwargs are
+        check_env_kwargs(args.env, {**hp["env_kwargs"], **env_kwargs}, "--hyperparams env_kwargs")
     if args.hyperparams:
         out += ["--hyperparams", *args.hyperparams]
     if args.progress:
@@ -181,6 +211,7 @@ def main(argv: list[str] | None = None) -> Path | None:
         if args.show_command:
             print(shlex.join([sys.executable, "-m", zoo_train.MODULE, *zoo_argv]))
             return None
+        output_folder(args.log_folder, "--log-folder")
         zoo_train.train(zoo_argv)
     run_dir = find_run(args.log_folder, args.algo, args.env)
     print(f"\nrun saved in {run_dir}; evaluate it against the baselines with\n"

@@ -35,7 +35,13 @@ from typing import Any
 import gymnasium as gym
 from roller_gym import ENV_IDS
 from roller_gym.extras import install_line
-from roller_gym.scripts.arguments import at_least, checked_env_kwargs, program_parser, real_in
+from roller_gym.scripts.arguments import (
+    THREADS_MAX,
+    at_least,
+    checked_env_kwargs,
+    program_parser,
+    real_in,
+)
 
 VECTORIZE_MODES = {"sync": "sync", "async": "async", "native": "vector_entry_point"}
 
@@ -81,14 +87,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--address", default=None,
                    help="a running Ray cluster to join (HOST:PORT, 'auto', or ray://HOST:PORT "
                         "with ray[client]); default: start a local Ray on this machine")
-    p.add_argument("--num-cpus", type=at_least(1), default=None,
+    p.add_argument("--num-cpus", type=at_least(1, THREADS_MAX), default=None,
                    help="CPUs of the local Ray (default: all of this machine's)")
     p.add_argument("--checkpoint-dir", type=Path, default=None,
                    help="where to save the checkpoint (default runs/rllib-ALGO-ENV)")
-    p.add_argument("--torch-threads", type=at_least(1), default=1,
+    p.add_argument("--torch-threads", type=at_least(1, THREADS_MAX), default=1,
                    help="torch threads of the learner (in this process); small networks gain "
                         "nothing from more, and on a busy machine more threads are much slower")
-    p.add_argument("--seed", type=at_least(0), default=0, help="the seed of training")
+    p.add_argument("--seed", type=at_least(0, 2**32 - 1), default=0,
+                   help="the seed of training (at most 2**32 - 1, as torch's and NumPy's)")
     return p
 
 

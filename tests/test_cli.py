@@ -104,6 +104,15 @@ def test_an_unknown_option_before_the_command_is_named():
      f"argument --seed: '{2**32}' is not an integer >= 0 and <= {2**32 - 1}"),
     ("train", ["--eval-freq", "x"], "argument --eval-freq: 'x' is not an integer >= 1"),
     ("evaluate", ["--episodes", "0"], "argument --episodes: '0' is not an integer >= 1"),
+    # past a C long (OverflowError in rl-zoo3 or torch once training ran), or past the threads
+    # any machine has
+    ("train", ["--threads", "1" + "0" * 400], "argument --threads: '1000"),
+    ("train", ["--threads", "5000"], "argument --threads: '5000' is not an integer >= 1 and "
+                                     "<= 1024"),
+    ("train", ["--eval-episodes", str(2**63)], f"argument --eval-episodes: '{2**63}' is not"),
+    ("train-rllib", ["--seed", str(2**32)], f"argument --seed: '{2**32}' is not an integer"),
+    ("results", ["--train-wall-s", "nan"], "argument --train-wall-s: 'nan' is not a number in"),
+    ("results", ["--train-wall-s", "-5"], "argument --train-wall-s: '-5' is not a number in"),
 ])
 def test_counts_out_of_range_are_refused_naming_the_option(command, argv, message,
                                                            monkeypatch, capsys):
@@ -287,6 +296,18 @@ def test_key_values_refuses_an_item_that_is_not_key_value_naming_the_option():
     with pytest.raises(SystemExit, match="--hyperparams: '=1' is not KEY:VALUE"):
         key_values(["=1"], "--hyperparams", ":")
     assert key_values(["n_envs:2"], "--hyperparams", ":") == {"n_envs": 2}
+    with pytest.raises(SystemExit, match="--env-kwargs: 'dt' is given twice; give each key once"):
+        key_values(["dt=0.05", "dt=0.1"], "--env-kwargs")
+
+
+def test_train_refuses_a_log_folder_it_cannot_create_before_rl_zoo3_starts(monkeypatch):
+    pytest.importorskip("rl_zoo3")
+    import rl_zoo3.train
+    from roller_gym.scripts import train
+
+    monkeypatch.setattr(rl_zoo3.train, "train", lambda: pytest.fail("rl-zoo3 started"))
+    with pytest.raises(SystemExit, match="--log-folder: cannot create the folder '/proc/x'"):
+        train.main(["--log-folder", "/proc/x", "--steps", "64"])
 
 
 def test_train_and_train_rllib_parse_env_kwargs_with_the_one_parser():
@@ -371,6 +392,15 @@ def test_train_rllib_refuses_env_kwargs_the_env_refuses_before_ray_starts(item, 
     ("ppo", "buffer_size:10", "'buffer_size' is not a hyperparameter of ppo"),  # SAC's, not PPO's
     ("td3", "seed:3", "'seed' is set by roller-gym train from its own options"),
     ("sac", "bogus", r"--hyperparams: 'bogus' is not KEY:VALUE \(e.g. learning_rate:3e-4\)"),
+    # (NameError, "Maximum allowed dimension exceeded", AssertionError in rl-zoo3 or SB3; the
+    # environment's arguments given here skipped the check of --env-kwargs)
+    ("sac", "learning_rate:abc", "--hyperparams: learning_rate:'abc' is not allowed: it must "
+                                 "be a number > 0, or lin_<number>"),
+    ("sac", "learning_rate:-1e-3", "--hyperparams: learning_rate:-0.001 is not allowed"),
+    ("sac", "buffer_size:" + "1" * 400, "--hyperparams: buffer_size:1{400} is not allowed"),
+    ("sac", "frame_stack:0", "--hyperparams: frame_stack:0 is not allowed"),
+    ("sac", "env_kwargs:{'dt':0}", "--hyperparams env_kwargs: dt=0 is out of range"),
+    ("sac", "env_kwargs:3", "--hyperparams: env_kwargs:3 is not allowed: it must be a dict"),
 ])
 def test_train_refuses_hyperparams_before_rl_zoo3_starts(algo, item, message, tmp_path,
                                                           monkeypatch):

@@ -489,3 +489,71 @@ def test_a_masked_reset_mask_is_refused():
     vec = gym.make_vec(STABILIZE, num_envs=3, vectorization_mode="vector_entry_point")
     with pytest.raises(ValueError, match=r"(?s)options\['reset_mask'\]=.*not a masked array"):
         vec.reset(options={"reset_mask": np.ma.array([True] * 3, mask=[1, 1, 0])})
+
+
+def test_the_reference_scheme_gives_up_a_step_it_cannot_finish_in_the_budget():
+    """dop853 (scipy, in Python) at 1e8 rad/s would take ~1e9 substeps: it fails the step,
+    as the compiled schemes do past MAX_SUBSTEPS, instead of running for hours; at 1e3 rad/s
+    it still finishes, within tol of rk8 at a tight tolerance."""
+    from roller_gym.physics.integrators import MAX_SUBSTEPS
+
+    r = step(preset("paper"), 0.0, 1e8, 0.0, 0.05, integrator="dop853", tolerance=1e-8)
+    assert not r.finite and not r.tol_met and 0 < r.substeps < MAX_SUBSTEPS
+    env = gym.make("roller_gym/RollerStabilize-v2", integrator="dop853")
+    env.reset(seed=0, options={"state": (0.0, 1e8)})
+    _, reward, terminated, _, info = env.step(np.zeros(1, np.float32))
+    assert terminated and info["nonfinite"] and not info["tol_met"] and reward == 0.0
+    fast = step(preset("paper"), 0.0, 1e3, 0.0, 0.05, integrator="dop853", tolerance=1e-8)
+    ref = step(preset("paper"), 0.0, 1e3, 0.0, 0.05, integrator="rk8", tolerance=1e-12)
+    assert fast.finite and fast.tol_met and abs(fast.phi - ref.phi) <= 1e-8 * abs(ref.phi)
+
+
+@pytest.mark.parametrize("integrator", ["euler", "midpoint"])
+def test_fixed_substeps_claim_the_tolerance_only_where_the_prediction_meets_it(integrator):
+    """With ``substeps`` fixed, euler and midpoint have no error estimate: tol_met says what
+    their prediction says, so it is never True on a step that misses tol against a reference
+    (DOP853 at 1e-13), on 40 random states of rim_mass, and it is True where the substeps are
+    as many as the prediction asks for."""
+    scene, tol, dt = preset("rim_mass"), 1e-8, 0.05
+    rng = np.random.default_rng(11)
+    for phi, w, tau in zip(rng.uniform(-3, 3, 40), rng.uniform(-5, 5, 40),
+                           rng.uniform(-0.3, 0.3, 40), strict=True):
+        got = step(scene, phi, w, tau, dt, integrator=integrator, substeps=1, tolerance=tol)
+        ref = step(scene, phi, w, tau, dt, integrator="dop853", tolerance=1e-13)
+        if abs(got.phi - ref.phi) > tol or abs(got.phi_dot - ref.phi_dot) > tol:
+            assert not got.tol_met, (phi, w, tau)
+    mild = preset("paper")
+    need = int(predicted_substeps(mild, 0.5, dt, 1e-3, integrator))
+    assert 4 <= need < 1000
+    for n, met in ((need, True), (need // 4, False)):
+        assert step(mild, 0.0, 0.5, 0.0, dt, integrator=integrator, substeps=n,
+                    tolerance=1e-3).tol_met is met
+
+
+def test_a_refused_vector_step_leaves_the_torque_as_it_was():
+    """A step refused (an ended episode under DISABLED autoreset, or before any reset)
+    leaves the torque the environment holds (and render() draws) unchanged."""
+    v = gym.make_vec(HOLD, num_envs=2, autoreset_mode="disabled", max_episode_steps=1)
+    with pytest.raises(RuntimeError, match="call reset"):
+        v.step(np.ones((2, 1)))
+    np.testing.assert_array_equal(v.unwrapped.torque, [0.0, 0.0])
+    v.reset(seed=0)
+    v.step(np.zeros((2, 1)))
+    with pytest.raises(RuntimeError, match="have ended"):
+        v.step(np.ones((2, 1)))
+    np.testing.assert_array_equal(v.unwrapped.torque, [0.0, 0.0])
+
+
+def test_an_empty_batch_steps_to_an_empty_result_and_shapes_that_do_not_broadcast_say_so():
+    r = step(preset("paper"), np.zeros(0), 0.0, 0.0, 0.05)
+    ref = step(preset("paper"), np.zeros(1), 0.0, 0.0, 0.05)
+    for name in ("phi", "substeps", "tol_met"):
+        got, one = getattr(r, name), getattr(ref, name)
+        assert got.shape == (0,) and got.dtype == one.dtype, name
+    with pytest.raises(ValueError, match=r"phi_dot of shape \(2,\) and the scene's batch of 3"):
+        predicted_substeps(Scene(m=[1.0, 1.0, 1.0]), np.zeros(2), 0.05, 1e-8, "euler")
+
+
+def test_a_vector_seed_may_be_a_range_as_its_message_allows():
+    vec, twin = gym.make_vec(STABILIZE, num_envs=3), gym.make_vec(STABILIZE, num_envs=3)
+    np.testing.assert_array_equal(vec.reset(seed=range(3))[0], twin.reset(seed=[0, 1, 2])[0])

@@ -305,3 +305,44 @@ def test_from_env_fns_batches_only_environments_made_alike():
             from_env_fns(bad)
     with pytest.raises(ValueError, match=r"takes no keyword arguments \(got foo\)"):
         from_env_fns([lambda: gymnasium.make(IDS[0])], foo=1)
+
+
+def test_a_refused_reset_of_per_sub_environment_options_resets_none():
+    """Options set per sub-environment reset in groups: where a later group's are refused,
+    the earlier groups' sub-environments are as they were (they had already started anew),
+    and the batch steps on as a twin that never saw the refused reset."""
+    env, twin = (RollerVecEnv(IDS[0], n_envs=2, seed=0) for _ in range(2))
+    env.reset(), twin.reset()
+    before = env.get_attr("phi")
+    env.set_options([{"state": (0.1, 0.0)}, {"state": (1e6, 0.0)}])
+    with pytest.raises(ValueError, match=r"options\['state'\]=\(1000000.0, 0.0\)"):
+        env.reset()
+    assert env.get_attr("phi") == before
+    actions = np.full((2, 1), 0.3, np.float32)
+    for _ in range(3):
+        env.step_async(actions), twin.step_async(actions)
+        np.testing.assert_array_equal(env.step_wait()[0], twin.step_wait()[0])
+
+
+@pytest.mark.parametrize("kwargs", [{"info_keys": np.array(["phi", "is_success"])},
+                                    {"randomize": {"m": np.array([0.9, 1.1])}}])
+def test_from_env_fns_compares_numpy_arguments_by_value(kwargs):
+    """Arguments holding NumPy arrays (which the environments take) made alike give the
+    native batch (comparing them with == raised "truth value of an array is ambiguous")."""
+    vec = make_vec_env(IDS[0], n_envs=2, vec_env_cls=from_env_fns, env_kwargs=kwargs)
+    assert isinstance(vec, RollerVecEnv)
+    differ = [lambda: gymnasium.make(IDS[0], **kwargs),
+              lambda: gymnasium.make(IDS[0], info_keys=np.array(["phi"]))]
+    assert isinstance(from_env_fns(differ), DummyVecEnv)
+
+
+def test_from_env_fns_keeps_the_render_mode():
+    """render_mode reaches the batch: frames as DummyVecEnv's (it was dropped: None)."""
+    vec = make_vec_env(IDS[0], n_envs=2, vec_env_cls=from_env_fns,
+                       env_kwargs={"render_mode": "rgb_array"})
+    dummy = make_vec_env(IDS[0], n_envs=2, env_kwargs={"render_mode": "rgb_array"})
+    assert isinstance(vec, RollerVecEnv) and vec.render_mode == "rgb_array"
+    vec.seed(1), dummy.seed(1)
+    vec.reset(), dummy.reset()
+    for got, want in zip(vec.get_images(), dummy.get_images(), strict=True):
+        np.testing.assert_array_equal(got, want)

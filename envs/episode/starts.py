@@ -109,13 +109,13 @@ def vector_seeds(seed: Any, n: int) -> list[int | None] | None:
                 f"{n - 1} for num_envs={n}, which must be at most 2**64 - 1: seed must be at "
                 f"most {SEED_MAX - n + 1}")
         return [int(seed) + i for i in range(n)]
-    if isinstance(seed, list | tuple | np.ndarray) and all(_valid_seed(s) for s in seed):
+    if isinstance(seed, list | tuple | range | np.ndarray) and all(_valid_seed(s) for s in seed):
         if len(seed) != n:
             raise ValueError(f"seed has {len(seed)} entries for num_envs={n}; it needs {n}")
         return [None if s is None else int(s) for s in seed]
     raise ValueError(
-        f"seed={seed!r} must be None, an integer in [0, 2**64 - 1], or a sequence of {n} of "
-        "them"
+        f"seed={seed!r} must be None, an integer in [0, 2**64 - 1], or a list, tuple, range or "
+        f"array of {n} of them"
     )
 
 

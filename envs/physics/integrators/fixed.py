@@ -111,18 +111,20 @@ def _fixed_steps(io, cfg, substep):
                     break
                 top = max(top, abs(w))
             finite = math.isfinite(phi) and math.isfinite(w)
-            if nfixed > 0 or (not finite and n >= MAX_SUBSTEPS):
+            if not finite and n >= MAX_SUBSTEPS:
+                needed = 2 * n
                 break
             needed = (_substeps(top, m, r, kappa, e, k, g, c, dt, tol, cfg[_CF_ORDER],
                                 cfg[_CF_CONSTANT], cfg[_CF_STABLE], cfg[_CF_SWEEP])
                       if finite else 2 * n)
-            if needed <= n:
+            if nfixed > 0 or needed <= n or _attempt == 19:  # fixed: the prediction judges
                 break
             n = min(needed, MAX_SUBSTEPS)
-        # the tolerance is met as far as the prediction tells, unless it asked for more
-        # substeps than MAX_SUBSTEPS
+        # the tolerance is met as far as the prediction tells: the substeps taken (n) are as
+        # many as it asks for over the speeds met (fixed ones too), and it asked for fewer
+        # than MAX_SUBSTEPS (its cap: "at least that many")
         _finish(io, col, True, phi, w, tau, n, lift, slip, math.nan,
-                nfixed > 0 or needed < MAX_SUBSTEPS)
+                needed <= n and needed < MAX_SUBSTEPS)
 
 
 # Each fixed-substep scheme's kernel: the shared loop around its substep function. A function

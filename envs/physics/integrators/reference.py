@@ -1,6 +1,6 @@
-"""The reference scheme ``dop853``: scipy's ``solve_ivp(method="DOP853")`` on a whole batch
-as one system, its outcome written to ``io`` as the compiled kernels write theirs (slow: for
-checking the others).
+"""The reference scheme ``dop853``: scipy's DOP853 (as ``solve_ivp(method="DOP853")`` runs it,
+at most MAX_SUBSTEPS steps) on a whole batch as one system, its outcome written to ``io`` as the
+compiled kernels write theirs (slow: for checking the others).
 """
 
 from __future__ import annotations
@@ -18,8 +18,13 @@ from roller_gym.physics.integrators.layout import (
     _W_IN,
     SCENE_FIELDS,
 )
-from roller_gym.physics.integrators.rules import _EPS, _finish
-from scipy.integrate import solve_ivp
+from roller_gym.physics.integrators.rules import _EPS, MAX_SUBSTEPS, _finish
+from scipy.integrate import DOP853
+
+#: How far past MAX_SUBSTEPS the steps a dop853 step has taken so far may project (their count
+#: times the step's length over the time covered) before it is given up: room for its step
+#: sizes to grow.
+PACE_MARGIN = 4.0
 
 
 def _dop853_kernel(io: np.ndarray, tab: None, cfg: np.ndarray) -> None:
@@ -33,18 +38,27 @@ def _dop853_kernel(io: np.ndarray, tab: None, cfg: np.ndarray) -> None:
         return np.concatenate((y[n:], eq.accel(y[:n], y[n:], tau, m, r, kappa, e, k, g, c)))
 
     with np.errstate(all="ignore"):
-        sol = solve_ivp(rhs, (0.0, dt), np.concatenate((phi, w)), method="DOP853", rtol=tol,
-                        atol=tol)
-        y = sol.y[:, -1] if sol.success else np.full(2 * n, np.nan)
+        # scipy's solve_ivp has no step budget: its solver, stepped at most MAX_SUBSTEPS times
+        # (past it, the step fails as the compiled schemes' do), and given up early where
+        # its pace so far would need PACE_MARGIN times the budget (it runs in Python, about a
+        # millisecond a step: the full budget takes minutes)
+        solver = DOP853(rhs, 0.0, np.concatenate((phi, w)), dt, rtol=tol, atol=tol)
+        taken = 0
+        while solver.status == "running" and taken < MAX_SUBSTEPS:
+            solver.step()
+            taken += 1
+            if taken % 1000 == 0 and taken * dt > PACE_MARGIN * MAX_SUBSTEPS * solver.t:
+                break
+        success = solver.status == "finished"
+        y = solver.y if success else np.full(2 * n, np.nan)
         # scipy raises an rtol below 100 ε to 100 ε (and warns): tol is then not what it met
-        met = bool(sol.success) and tol >= 100.0 * _EPS
+        met = success and tol >= 100.0 * _EPS
         a0 = eq.accel(phi, w, tau, m, r, kappa, e, k, g, c)
         normal, friction = eq.contact_forces(phi, w, a0, m, r, kappa, e, g)
         lift, slip = eq.margins(normal, friction, m, g, mu)
     for col in range(n):
-        _finish_py(io, col, bool(sol.success), float(y[col]), float(y[n + col]),
-                   float(tau[col]), sol.t.size - 1, float(lift[col]), float(slip[col]),
-                   math.nan, met)
+        _finish_py(io, col, success, float(y[col]), float(y[n + col]), float(tau[col]), taken,
+                   float(lift[col]), float(slip[col]), math.nan, met)
 
 
 _finish_py = _finish  # register_jitable leaves it a Python function too

@@ -498,7 +498,9 @@ def step(
         raise ValueError(f"the shapes {shapes} and the scene's batch of {scene.batch_size} do "
                          "not broadcast together") from None
     shape = arrays[0].shape
-    n = max(1, int(np.prod(shape)))
+    if arrays[0].size == 0:  # no states: a result of their (empty) shape
+        return StepResult(*(np.empty(shape, dtype=_KIND[f]) for f in STEP_FIELDS))
+    n = int(np.prod(shape))
     stepper = BatchStepper(n, integrator=integrator, dt=dt, tolerance=tolerance, substeps=substeps)
     stepper._put_scenes([a.reshape(-1) for a in arrays[3:]], slice(None))
     with warnings.catch_warnings():
@@ -530,8 +532,12 @@ def predicted_substeps(
     _check_step_args(dt, tolerance, None)
     _check_states(ANY_SHAPE, phi_dot=phi_dot)
     dt, tolerance = float(dt), float(tolerance)
-    arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (phi_dot,
-                                                                       *require_scene(scene).params)))
+    try:
+        arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float)
+                                       for x in (phi_dot, *require_scene(scene).params)))
+    except ValueError:
+        raise ValueError(f"phi_dot of shape {np.shape(phi_dot)} and the scene's batch of "
+                         f"{scene.batch_size} do not broadcast together") from None
     flat = [a.reshape(-1) for a in arrays]
     out = np.array([
         _substeps(abs(v[0]), *v[1:], dt, tolerance, sch.order, sch.constant, sch.stable_step,
