@@ -105,9 +105,7 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         self._steps = 0  # of this episode: its time is _steps · dt, as in the vector env
         self.phi, self.phi_dot, self.torque = float(start.phi[0]), float(start.phi_dot[0]), 0.0
         self._stepper.forget()  # a new episode does not continue the last one's substeps
-        at_start = episode.at_start(start.scene, start.phi, start.phi_dot)
-        self._outcome.context[C.torque, 0] = 0.0  # none yet; the rest is set above
-        self._outcome.run(episode.result_table(at_start, (1,)))
+        self._advance.start(self.phi, self.phi_dot)  # its outcome, by the step's own kernel
         if self.render_mode == "human":
             self.render()
         return self._observation.copy(), self._info()

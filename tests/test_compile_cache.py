@@ -59,7 +59,7 @@ for env in envs:
 hits = {{}}
 for env in envs:  # the task's kernels (made per task, not module attributes)
     k = env.unwrapped._outcome.kernels
-    for value in (k.loop, k.single, k.parallel, *k.fused.values(), *k.one.values()):
+    for value in (k.loop, k.parallel, *k.fused.values(), *k.one.values()):
         if sum(value.stats.cache_hits.values()):
             hits["task." + value.py_func.__qualname__] = bool(value.targetoptions.get("parallel"))
 for name, module in list(sys.modules.items()):

@@ -391,7 +391,7 @@ def test_a_pickled_environment_runs_the_kernels_it_was_compiled_for():
             run(pickle.loads(pickle.dumps(env)), 1)
     assert compiles.names == []
     kernels = envs[0].unwrapped._outcome.kernels
-    for kernel in (kernels.single, kernels.loop, *kernels.fused.values(), *kernels.one.values()):
+    for kernel in (kernels.loop, *kernels.fused.values(), *kernels.one.values()):
         assert len(kernel.signatures) <= 1, (kernel.py_func.__qualname__, kernel.signatures)
 
 

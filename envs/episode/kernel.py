@@ -50,6 +50,7 @@ from roller_gym.physics.integrators import (
     BatchStepper,
     Stepper,
     as_row_table,
+    at_rest,
     missed,
     put_inputs,
     row_table,
@@ -130,14 +131,16 @@ class TaskKernels:
 
     ``loop`` and ``parallel``: the outcome of every roller on one core or on all, as
     ``(result, context, constants, observed, out, flags, obs, scratch)``, ``result`` laid out
-    as a stepper's (:func:`~roller_gym.physics.integrators.row_table`); ``single``: the same
-    for a batch of one roller (what a single environment's reset runs). The serial fused
+    as a stepper's (:func:`~roller_gym.physics.integrators.row_table`); ``interpreted``: the
+    same for one roller under ``NUMBA_DISABLE_JIT`` (``loop``'s streaming stores run compiled
+    only). The serial fused
     kernels call ``loop``, the parallel ones inline its code. ``fused``: the physics and the
     outcome in one call, by the stepper's kernel they run in place of; ``one``: the single
-    environment's step, by the stepper's serial kernel."""
+    environment's step, by the stepper's serial kernel, and with ``advance`` False its reset
+    (the outcome of the state itself, no step taken: one kernel compiled for both)."""
 
     loop: Callable
-    single: Callable
+    interpreted: Callable
     parallel: Callable
     fused: dict[Callable, Callable]
     one: dict[Callable, Callable]
@@ -174,14 +177,12 @@ def task_kernels(task: type) -> TaskKernels:
     # numbers cross into a parallel loop as the array (numba rebuilds a tuple that crosses
     # into one by its class's name, which Constants is not in scope under).
     @jit
-    def single(result, context, constants, observed, out, flags, obs, scratch):
-        outcome_one(reward, success, K(*_numbers(constants, n)), result, context, observed,
-                    out, flags, obs)
-
-    @jit
     def loop(result, context, constants, observed, out, flags, obs, scratch):
         outcome_range(reward, success, K(*_numbers(constants, n)), np.int64(0),
                       result.shape[1], result, context, observed, out, flags, obs, scratch)
+
+    def interpreted(result, context, constants, observed, out, flags, obs, scratch):
+        outcome_one(reward, success, K(*constants), result, context, observed, out, flags, obs)
 
     def call_loop(result, context, constants, observed, out, flags, obs, scratch):
         loop(result, context, constants, observed, out, flags, obs, scratch)
@@ -232,18 +233,24 @@ def task_kernels(task: type) -> TaskKernels:
         call_loop(result, context, constants, observed, out, flags, obs, scratch)
 
     @jit
-    def taylor_one(phi, phi_dot, tau, packed):
+    def taylor_one(phi, phi_dot, tau, packed, advance):
         io, tab, cfg, context, constants, observed, out, flags, obs = _unpack_one(packed)
         _inputs_one(phi, phi_dot, tau, io, context)
-        _TAYLOR_ONE(io, tab, cfg)
+        if advance:
+            _TAYLOR_ONE(io, tab, cfg)
+        else:
+            at_rest(io, 0)
         return _outcome_one_roller(reward, success, K(*_numbers(constants, n)), io, context,
                                    observed, out, flags, obs)
 
     @jit
-    def rk_one(phi, phi_dot, tau, packed):
+    def rk_one(phi, phi_dot, tau, packed, advance):
         io, tab, cfg, context, constants, observed, out, flags, obs = _unpack_one(packed)
         _inputs_one(phi, phi_dot, tau, io, context)
-        _RK_ONE(io, tab, cfg)
+        if advance:
+            _RK_ONE(io, tab, cfg)
+        else:
+            at_rest(io, 0)
         return _outcome_one_roller(reward, success, K(*_numbers(constants, n)), io, context,
                                    observed, out, flags, obs)
 
@@ -251,7 +258,7 @@ def task_kernels(task: type) -> TaskKernels:
     # ``parallel`` does
     fused = {_TAYLOR.kernels()[1]: taylor_and_outcome, _RK.kernels()[1]: rk_and_outcome,
              _TAYLOR_SERIAL: taylor_then_outcome, _RK_SERIAL: rk_then_outcome}
-    return TaskKernels(loop, single, parallel, fused,
+    return TaskKernels(loop, interpreted, parallel, fused,
                        {_TAYLOR_SERIAL: taylor_one, _RK_SERIAL: rk_one})
 
 
@@ -279,9 +286,12 @@ class OutcomeKernel:
     (``CONTEXT_FIELDS`` × rollers, for the caller to fill) are its buffers; :meth:`run`
     overwrites the first three. With ``fresh``, every run writes a new ``table``, ``flags``
     and ``observation`` instead, which the caller may then hand out (see :func:`info_rows`).
+    Its kernel is ``loop``, or ``parallel`` for at least PARALLEL_THRESHOLD rollers unless
+    ``serial`` (the outcome of episodes' starts: one kernel for any number, the one the serial
+    fused kernels call).
     """
 
-    def __init__(self, task: Any, num: int, fresh: bool = False) -> None:
+    def __init__(self, task: Any, num: int, fresh: bool = False, serial: bool = False) -> None:
         self.kernels = task_kernels(type(task))
         self.constants = np.array(task.constants, dtype=float)
         self.observed = np.array([_FIELD_NUMBER[f] for f in task.observation],
@@ -291,9 +301,10 @@ class OutcomeKernel:
         self.flags = flag_table(num)
         self.observation = np.empty((num, self.observed.size), dtype=np.float32)
         self.fresh = fresh
-        parallel = num >= PARALLEL_THRESHOLD
-        self._kernel = (self.kernels.parallel if parallel else
-                        self.kernels.single if num == 1 else self.kernels.loop)
+        parallel = num >= PARALLEL_THRESHOLD and not serial
+        self._kernel = self.kernels.parallel if parallel else self.kernels.loop
+        if num == 1 and numba.config.DISABLE_JIT:
+            self._kernel = self.kernels.interpreted
         self._scratch = np.empty(0 if parallel else SCRATCH_SIZE)
 
     def run(self, result: np.ndarray) -> np.ndarray:
@@ -327,10 +338,11 @@ class OutcomeKernel:
         """:meth:`step` for one Stepper, with the kernels and buffers looked up once: a
         function ``step(φ [rad], φ' [rad/s], τ [N·m])`` for the single environment, which
         also writes τ into :attr:`context` and returns what the environment reads back:
-        (φ [rad], φ' [rad/s], reward, terminated) as Python float and bool. One compiled call
-        where the stepper's kernel has one (:attr:`TaskKernels.one`; not with ``NUMBA_DISABLE_JIT``,
-        where nothing is compiled to unpack its arrays). Not for ``fresh`` buffers, which
-        every step renews."""
+        (φ [rad], φ' [rad/s], reward, terminated) as Python float and bool. Its attribute
+        ``start(φ, φ')`` writes the outcome of an episode's start at that state instead (zero
+        torque, no step taken). One compiled call each where the stepper's kernel has one
+        (:attr:`TaskKernels.one`; not with ``NUMBA_DISABLE_JIT``, where nothing is compiled to
+        unpack its arrays). Not for ``fresh`` buffers, which every step renews."""
         if self.fresh:
             raise ValueError("a fresh OutcomeKernel renews its buffers every step: use step()")
         one = self.kernels.one.get(stepper.kernel)
@@ -348,6 +360,14 @@ class OutcomeKernel:
             row = table.tolist()
             return row[O.phi], row[O.phi_dot], row[O.reward], bool(flags[F.terminated])
 
+        def start(phi: float, phi_dot: float) -> None:
+            from roller_gym.episode.starts import at_start  # (a module above this one)
+
+            torque[0] = 0.0
+            self.run(result_table(at_start(stepper.scene_table(), np.array([phi]),
+                                           np.array([phi_dot])), (1,)))
+
+        step.start = start
         return step
 
     def _buffers(self) -> tuple[np.ndarray, ...]:
@@ -390,7 +410,7 @@ def outcome(task: Any, result: Any, context: Mapping[str, Any]) -> Outcome:
     context = [context[name] for name in CONTEXT_FIELDS]
     shape = np.broadcast(*values, *context).shape
     n = math.prod(shape)
-    kernel = OutcomeKernel(task, n)
+    kernel = OutcomeKernel(task, n, serial=True)
     context_rows = kernel.context.reshape(len(context), *shape)
     for row, value in enumerate(context):  # broadcast as they are written
         context_rows[row] = value

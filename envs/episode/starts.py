@@ -275,8 +275,10 @@ class RestState:
     tol_met: Any = True
 
 
-def at_start(scene: Scene, phi: np.ndarray, phi_dot: np.ndarray) -> RestState:
-    """The contact forces, energy and margins of start states under zero torque."""
+def at_start(scene: Scene | np.ndarray, phi: np.ndarray, phi_dot: np.ndarray) -> RestState:
+    """The contact forces, energy and margins of start states under zero torque (``scene``:
+    a Scene, or its numbers as :func:`~roller_gym.physics.integrators.contact_state` takes
+    them)."""
     a, normal, friction, energy, lift, slip = contact_state(scene, phi, phi_dot, 0.0)
     n = len(phi)
     return RestState(phi, phi_dot, a, np.zeros(n, np.int64), np.ones(n, bool), normal,

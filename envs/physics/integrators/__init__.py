@@ -49,6 +49,7 @@ from roller_gym.physics.integrators.rules import (
     MAX_SUBSTEPS,
     PARALLEL_THRESHOLD,
     ROUNDOFF_FACTOR,
+    at_rest,
 )
 from roller_gym.physics.integrators.schemes import (
     DEFAULT_INTEGRATOR,
@@ -113,6 +114,7 @@ __all__ = [
     "StepResult",
     "Stepper",
     "as_row_table",
+    "at_rest",
     "contact_state",
     "missed",
     "predicted_substeps",

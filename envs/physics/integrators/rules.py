@@ -33,6 +33,7 @@ from roller_gym.physics.integrators.layout import (
     _PHI_IN,
     _RR,
     _SLIP,
+    _TAU,
     _TOL_MET,
     _W,
     _W_IN,
@@ -157,6 +158,14 @@ def _finish(io, col, ok, phi, w, tau, nsub, lift, slip, err, tol_met):
                                                                   k, g, c, mu)
     _write(io, col, ok, phi, w, nsub, a, normal, friction, energy, min(lift, lift_end),
            min(slip, slip_end), err, tol_met)
+
+
+@_jit  # as the schemes' one-roller kernels: their flags, so _finish compiles once for both
+def at_rest(io, col):
+    """One roller's outputs for no step at all (an episode's start): its inputs' own fields,
+    as a step ending there writes them (no substeps, no error, the tolerance met)."""
+    _finish(io, col, True, io[_PHI_IN, col], io[_W_IN, col], io[_TAU, col], 0.0, math.inf,
+            math.inf, 0.0, True)
 
 
 @_jit

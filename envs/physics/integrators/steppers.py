@@ -104,6 +104,10 @@ class _Base:
         caller fusing more work into the step looks its fused kernel up by it: :meth:`run`)."""
         return self._kernel
 
+    def scene_table(self) -> np.ndarray:
+        """The rollers' scene numbers, shape ``(len(SCENE_FIELDS), num)`` (a view)."""
+        return self._io[: len(SCENE_FIELDS)]
+
     def _warn(self, stacklevel: int) -> None:
         if self.substeps is not None:  # fixed substeps: tol_met informs, no warning
             return
@@ -224,13 +228,15 @@ class Stepper(_Base):
 
         ``one``: a compiled step of this roller that does more than the physics (the single
         environment's: the step, its outcome and what the environment reads back, in one
-        call), run as ``one(φ, φ', τ, packed)``, where ``packed`` is the
+        call), run as ``one(φ, φ', τ, packed, advance)``, where ``packed`` is the
         :func:`~roller_gym.physics.packed.pack` table of (io, tableau, cfg, *extra): this
         stepper's buffers, then the caller's (unlike :meth:`run`'s ``fused``, which takes
         the arrays themselves). It writes the inputs (:func:`put_inputs`), runs
-        :attr:`kernel` and returns a tuple whose first element is :func:`missed`; ``step``
-        then returns the rest of the tuple. Its attribute ``arrays`` holds the packed arrays,
-        which live as long as it does.
+        :attr:`kernel` (with ``advance`` False, :func:`at_rest` instead: the state's own
+        fields, no step taken) and returns a tuple whose first element is :func:`missed`;
+        ``step`` then returns the rest of the tuple, and its attribute ``start(φ, φ')`` the
+        same for no step at zero torque (an episode's start). Its attribute ``arrays`` holds
+        the packed arrays, which live as long as it does.
         """
         args = (self._io, self._tab, self._cfg)
         if one is None:
@@ -247,11 +253,15 @@ class Stepper(_Base):
         packed = pack(*args, *extra)
 
         def step_one(phi: float, phi_dot: float, tau: float) -> tuple:
-            out = one(phi, phi_dot, tau, packed)
+            out = one(phi, phi_dot, tau, packed, True)
             if out[0]:
                 self._warn(3)
             return out[1:]
 
+        def start(phi: float, phi_dot: float) -> tuple:
+            return one(phi, phi_dot, 0.0, packed, False)[1:]
+
+        step_one.start = start
         step_one.arrays = (*args, *extra)  # the packed table's memory: alive as long as step_one
         return step_one
 
@@ -357,10 +367,6 @@ class BatchStepper(_Base):
         except IndexError as error:
             raise ValueError(f"index={index!r} does not select rollers of the {self.num}: "
                              f"{error}") from None
-
-    def scene_table(self) -> np.ndarray:
-        """The rollers' scene numbers, shape ``(len(SCENE_FIELDS), num)`` (a view)."""
-        return self._io[: len(SCENE_FIELDS)]
 
     @property
     def parallel(self) -> bool:
