@@ -131,16 +131,13 @@ class TaskKernels:
 
     ``loop`` and ``parallel``: the outcome of every roller on one core or on all, as
     ``(result, context, constants, observed, out, flags, obs, scratch)``, ``result`` laid out
-    as a stepper's (:func:`~roller_gym.physics.integrators.row_table`); ``interpreted``: the
-    same for one roller under ``NUMBA_DISABLE_JIT`` (``loop``'s streaming stores run compiled
-    only). The serial fused
+    as a stepper's (:func:`~roller_gym.physics.integrators.row_table`). The serial fused
     kernels call ``loop``, the parallel ones inline its code. ``fused``: the physics and the
     outcome in one call, by the stepper's kernel they run in place of; ``one``: the single
     environment's step, by the stepper's serial kernel, and with ``advance`` False its reset
     (the outcome of the state itself, no step taken: one kernel compiled for both)."""
 
     loop: Callable
-    interpreted: Callable
     parallel: Callable
     fused: dict[Callable, Callable]
     one: dict[Callable, Callable]
@@ -180,9 +177,6 @@ def task_kernels(task: type) -> TaskKernels:
     def loop(result, context, constants, observed, out, flags, obs, scratch):
         outcome_range(reward, success, K(*_numbers(constants, n)), np.int64(0),
                       result.shape[1], result, context, observed, out, flags, obs, scratch)
-
-    def interpreted(result, context, constants, observed, out, flags, obs, scratch):
-        outcome_one(reward, success, K(*constants), result, context, observed, out, flags, obs)
 
     def call_loop(result, context, constants, observed, out, flags, obs, scratch):
         loop(result, context, constants, observed, out, flags, obs, scratch)
@@ -258,8 +252,16 @@ def task_kernels(task: type) -> TaskKernels:
     # ``parallel`` does
     fused = {_TAYLOR.kernels()[1]: taylor_and_outcome, _RK.kernels()[1]: rk_and_outcome,
              _TAYLOR_SERIAL: taylor_then_outcome, _RK_SERIAL: rk_then_outcome}
-    return TaskKernels(loop, interpreted, parallel, fused,
+    return TaskKernels(loop, parallel, fused,
                        {_TAYLOR_SERIAL: taylor_one, _RK_SERIAL: rk_one})
+
+
+def _outcome_interpreted(task: type, result: np.ndarray, context: np.ndarray,
+                         constants: np.ndarray, observed: np.ndarray, out: np.ndarray,
+                         flags: np.ndarray, obs: np.ndarray, scratch: np.ndarray) -> None:
+    """``loop`` of a task for one roller, interpreted (``NUMBA_DISABLE_JIT``): the same bits."""
+    outcome_one(task.reward, task.success, task.Constants(*constants), result, context,
+                observed, out, flags, obs)
 
 
 @dataclass
@@ -303,8 +305,8 @@ class OutcomeKernel:
         self.fresh = fresh
         parallel = num >= PARALLEL_THRESHOLD and not serial
         self._kernel = self.kernels.parallel if parallel else self.kernels.loop
-        if num == 1 and numba.config.DISABLE_JIT:
-            self._kernel = self.kernels.interpreted
+        if num == 1 and numba.config.DISABLE_JIT:  # loop's streaming stores run compiled only
+            self._kernel = functools.partial(_outcome_interpreted, kernel_owner(type(task)))
         self._scratch = np.empty(0 if parallel else SCRATCH_SIZE)
 
     def run(self, result: np.ndarray) -> np.ndarray:
