@@ -41,6 +41,7 @@ from roller_gym.episode.record import (
     F,
     O,
 )
+from roller_gym.episode.starts import at_start
 from roller_gym.physics.compiling import inlined, named
 from roller_gym.physics.integrators import (
     CHUNK,
@@ -363,8 +364,6 @@ class OutcomeKernel:
             return row[O.phi], row[O.phi_dot], row[O.reward], bool(flags[F.terminated])
 
         def start(phi: float, phi_dot: float) -> None:
-            from roller_gym.episode.starts import at_start  # (a module above this one)
-
             torque[0] = 0.0
             self.run(result_table(at_start(stepper.scene_table(), np.array([phi]),
                                            np.array([phi_dot])), (1,)))

@@ -39,12 +39,18 @@ Number = float | np.ndarray
 __all__ = ["PRESETS", "Scene", "finite_real", "preset", "whole_number"]
 
 
+def _real(x: Any) -> bool:
+    """Whether ``x`` is one real number of any size: a Python or NumPy int or float, not a
+    bool or a timedelta (NumPy counts both among its integers)."""
+    return (isinstance(x, int | float | np.integer | np.floating)
+            and not isinstance(x, bool | np.bool_ | np.timedelta64))
+
+
 def finite_real(x: Any) -> bool:
     """Whether ``x`` is one real number (a Python or NumPy int or float, not a bool or a
     timedelta) that is finite as a float64 and not rounded to 0 there: a Python int or a
     longdouble past float64's range is not."""
-    if (not isinstance(x, int | float | np.integer | np.floating)
-            or isinstance(x, bool | np.bool_ | np.timedelta64)):
+    if not _real(x):
         return False
     try:  # as a float64 (a longdouble past its range is inf there, or 0 below it)
         return math.isfinite(float(x)) and (float(x) != 0.0 or x == 0)
@@ -56,12 +62,6 @@ def whole_number(x: Any) -> bool:
     """Whether ``x`` is one integer: a Python or NumPy int, not a bool or a timedelta (NumPy
     counts both among its integers)."""
     return isinstance(x, int | np.integer) and not isinstance(x, bool | np.bool_ | np.timedelta64)
-
-
-def _real(x: Any) -> bool:
-    """Whether ``x`` is a real number of any size (not a bool)."""
-    return (isinstance(x, int | float | np.integer | np.floating)
-            and not isinstance(x, bool | np.bool_))
 
 
 def _short(raw: Any) -> str:
