@@ -42,6 +42,7 @@ from roller_gym.agents.classical import (
 )
 from roller_gym.agents.hyperparams import CLASSICAL
 from roller_gym.extras import install_line, missing
+from roller_gym.physics.scene import shown
 from roller_gym.task import get_task
 
 __all__ = [
@@ -98,7 +99,7 @@ def algorithm_class(algo: str) -> type:
 
     classes = {"sac": SAC, "td3": TD3, "ppo": PPO}
     if algo.lower() not in classes:
-        raise ValueError(f"algo={algo!r} is not one of {', '.join(classes)}")
+        raise ValueError(f"algo={shown(algo)} is not one of {', '.join(classes)}")
     return classes[algo.lower()]
 
 
@@ -164,7 +165,7 @@ def read_config(run_dir: str | Path) -> dict[str, Any]:
     found = sorted(run_dir.glob("*/args.yml"))
     if not found:
         raise FileNotFoundError(
-            f"run_dir={str(run_dir)!r} holds no <env name>/args.yml: it is not an experiment "
+            f"run_dir={shown(str(run_dir))} holds no <env name>/args.yml: it is not an experiment "
             "folder of roller-gym train / rl_zoo3.train (they look like runs/sac/"
             "roller_gym-RollerStabilize-v2_1)")
     params_dir = found[0].parent
@@ -285,7 +286,7 @@ def baseline(name: str, env: gym.Env, seed: int = 0) -> Controller:
         return ZeroTorque()
     if name == "random":
         return RandomPolicy(seed)
-    raise ValueError(f"baseline {name!r} is not one of {', '.join(BASELINES)}")
+    raise ValueError(f"baseline {shown(name)} is not one of {', '.join(BASELINES)}")
 
 
 #: The info keys :func:`rollout` reads at every step.

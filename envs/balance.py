@@ -70,6 +70,7 @@ import numpy as np
 from roller_gym import feasibility
 from roller_gym.physics import Scene, contact
 from roller_gym.physics.analysis import nearest_unstable_rests
+from roller_gym.physics.scene import shown
 from roller_gym.task import Task, register, unstable_rest_positions
 
 __all__ = ["BalanceTask"]
@@ -96,11 +97,11 @@ class BalanceTask(Task):
         """φ_b > 0 [rad], the unstable rest position (its mirror −φ_b counts as well)."""
         phi_b = float(unstable_rest_targets(scene)[0])
         if math.isnan(phi_b):
-            raise ValueError(f"{scene!r} has no unstable rest position to balance at")
+            raise ValueError(f"{shown(scene)} has no unstable rest position to balance at")
         c = contact(scene, phi_b, 0.0, 0.0)
         if c.lifting or c.slipping:
             raise ValueError(
-                f"the unstable rest position phi={phi_b:.4f} rad of {scene!r} is not "
+                f"the unstable rest position phi={phi_b:.4f} rad of {shown(scene)} is not "
                 f"reachable: N={float(c.normal):.4g} N, F={float(c.friction):.4g} N, "
                 f"mu={scene.mu}"
             )

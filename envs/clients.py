@@ -19,6 +19,7 @@ import warnings
 from dataclasses import dataclass
 
 from gymnasium.vector import AutoresetMode
+from roller_gym.physics.scene import shown
 
 __all__ = ["CLIENTS", "Client", "check_caller", "importing_id"]
 
@@ -77,9 +78,9 @@ def check_caller(env: object, mode: AutoresetMode) -> None:
             if mode in client.miscounts:
                 warnings.warn(
                     f"{client.name} is stepping a roller-gym vector environment in "
-                    f"autoreset_mode={mode.name.lower()!r}, which it accepts but miscounts: "
+                    f"autoreset_mode={shown(mode.name.lower())}, which it accepts but miscounts: "
                     f"{client.why}. Make it with gymnasium.make_vec(ID, num_envs=N, "
-                    f"autoreset_mode={client.autoreset_mode.name.lower()!r}).",
+                    f"autoreset_mode={shown(client.autoreset_mode.name.lower())}).",
                     UserWarning, stacklevel=3)
             return
         frame = frame.f_back

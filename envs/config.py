@@ -23,6 +23,7 @@ from roller_gym import feasibility, validation
 from roller_gym.episode import INFO_KEYS
 from roller_gym.physics import INTEGRATORS, Scene, preset
 from roller_gym.physics.integrators import DEFAULT_INTEGRATOR, MAX_SUBSTEPS
+from roller_gym.physics.scene import shown
 from roller_gym.task import Task
 
 __all__ = ["DEFAULT_DT", "DEFAULT_TOLERANCE", "EnvConfig", "Settings", "resolve_scene",
@@ -49,7 +50,7 @@ def resolve_scene(scene: Scene | str | None, default: str, name: str = "scene") 
                              "of them, one per sub-environment)")
         return scene
     raise ValueError(
-        f"{name}={scene!r} is not allowed: pass an roller_gym.Scene or a preset name "
+        f"{name}={shown(scene)} is not allowed: pass an roller_gym.Scene or a preset name "
         "(see roller_gym.PRESETS)"
     )
 
@@ -111,7 +112,7 @@ class Settings:
         if unknown:
             allowed = ", ".join(inspect.signature(owner).parameters)
             raise TypeError(f"{owner.__name__} got an unexpected keyword argument "
-                            f"{unknown[0]!r}; allowed: {allowed}")
+                            f"{shown(unknown[0])}; allowed: {allowed}")
         return cls(**keywords)
 
 
@@ -133,7 +134,7 @@ def settings_table() -> str:
     for f in fields(Settings):
         meaning = re.sub(r":\w+:(`[^`]+`)", r"\1", f.metadata["doc"])  # Sphinx roles dropped
         meaning = meaning.replace("``", "`").replace("|", "\\|")
-        rows.append(f"| `{f.name}` | {meaning} | `{f.default!r}` |")
+        rows.append(f"| `{f.name}` | {meaning} | `{shown(f.default)}` |")
     return "\n".join(rows)
 
 
@@ -219,7 +220,7 @@ class EnvConfig:
                 shared = sum(1 for s in scenes if s == one)
                 raise ValueError(f"scene[{i}] (sub-environment {i}"
                                  f"{f' and {shared - 1} more of that scene' if shared > 1 else ''}"
-                                 f", {one!r}): {exc}") from None
+                                 f", {shown(one)}): {exc}") from None
         return cls(task, scene, dt, tolerance, integrator, substeps or 0, ranges, render_mode,
                    info_keys)
 
@@ -245,34 +246,36 @@ def check_randomize(task: Task, scene: Scene, dt: float,
     if randomize is None:
         return {}
     if not isinstance(randomize, Mapping):
-        raise ValueError(f"randomize={randomize!r} is not allowed: it must be a mapping "
+        raise ValueError(f"randomize={shown(randomize)} is not allowed: it must be a mapping "
                          "{field: (low, high)} of Scene fields, e.g. {'m': (0.8, 1.2)}")
     ranges: dict[str, tuple[float, float]] = {}
     for name, bounds in randomize.items():
         if name not in _SCENE_FIELDS:
-            raise ValueError(f"randomize names {name!r}, not a Scene field; allowed: "
+            raise ValueError(f"randomize names {shown(name)}, not a Scene field; allowed: "
                              f"{', '.join(_SCENE_FIELDS)}")
         if not (isinstance(bounds, tuple | list | np.ndarray) and len(bounds) == 2):
-            raise ValueError(f"randomize[{name!r}]={bounds!r} must be a (low, high) pair of "
+            raise ValueError(f"randomize[{shown(name)}]={shown(bounds)} must be a (low, high) "
+                             "pair of "
                              "finite real numbers")
-        low = validation.real(f"randomize[{name!r}][0]", bounds[0])
-        high = validation.real(f"randomize[{name!r}][1]", bounds[1])
+        low = validation.real(f"randomize[{shown(name)}][0]", bounds[0])
+        high = validation.real(f"randomize[{shown(name)}][1]", bounds[1])
         if low > high:
-            raise ValueError(f"randomize[{name!r}]={bounds!r} needs finite low <= high")
+            raise ValueError(f"randomize[{shown(name)}]={shown(bounds)} needs finite low <= high")
         ranges[name] = (low, high)
     for name, (low, high) in ranges.items():  # each field's own rule, on the whole interval
         for end in (low, high):
             try:
                 scene.replace(**{name: end})
             except ValueError as exc:
-                raise ValueError(f"randomize[{name!r}]={randomize[name]!r} reaches a scene "
+                raise ValueError(f"randomize[{shown(name)}]={shown(randomize[name])} reaches a "
+                                 "scene "
                                  f"that is not allowed: {exc}") from None
     if "R" in ranges:
         low, high = ranges["R"]
         r_high = ranges.get("r", (0.0, float(scene.r)))[1]
         if not (high < 0 or low > r_high):
             raise ValueError(
-                f"randomize['R']={ranges['R']!r} passes through R in [0, r] (r up to "
+                f"randomize['R']={shown(ranges['R'])} passes through R in [0, r] (r up to "
                 f"{r_high} m), which is no scene: R must stay > r (inside a cylinder) or < 0 "
                 "(on a drum) over the whole range"
             )

@@ -39,6 +39,7 @@ from roller_gym import validation
 from roller_gym.intervals import Interval
 from roller_gym.physics import Scene, equations
 from roller_gym.physics.analysis import MAX_TURNS, nearest_unstable_rests
+from roller_gym.physics.scene import shown
 from roller_gym.task import Task, unstable_rest_positions
 
 __all__ = ["MAX_BOXES", "Params", "box_params", "check_ranges", "problem",
@@ -412,7 +413,7 @@ def _check_ranges_cached(task_class: type[Task], max_torque: float,
 
     if (type(task).check_scene is not Task.check_scene
             and type(task).scene_proven is Task.scene_proven):
-        return (f"randomize={ranges!r} cannot be used with {task.name}: the task has its own "
+        return (f"randomize={shown(ranges)} cannot be used with {task.name}: the task has its own "
                 "condition on the scene (check_scene) and no proof of it over a range of "
                 "scenes (scene_proven), so that every scene of the range can pose it cannot be "
                 "shown; use a fixed scene")
@@ -485,7 +486,7 @@ def _counterexample(ranges: Mapping[str, tuple[float, float]], point: Mapping[st
     others = {n: v for n, v in point.items() if n != name}
     where = f"{name} = {point[name]:.6g}" + (f" (other fields at {others})" if others else "")
     feasible = "none" if part is None else _inward(*part)
-    return (f"randomize[{name!r}]={ranges[name]!r} cannot be used: at {where} {reason}; "
+    return (f"randomize[{shown(name)}]={shown(ranges[name])} cannot be used: at {where} {reason}; "
             f"feasible part of the range: {feasible}")
 
 
@@ -496,7 +497,7 @@ def _inward(low: float, high: float, digits: int = 6) -> str:
         a, b = (_round_to(x, n, up) for x, up in ((low, True), (high, False)))
         if a <= b:
             return f"[{a:.{n}g}, {b:.{n}g}]"
-    return f"[{low!r}, {high!r}]"
+    return f"[{shown(low)}, {shown(high)}]"
 
 
 def _round_to(x: float, digits: int, up: bool) -> float:
@@ -540,7 +541,7 @@ def _not_proven(ranges: Mapping[str, tuple[float, float]], proven: list[Box],
     where = "; ".join(show(b) for b in stalled[:MAX_STALLED])
     if len(stalled) > MAX_STALLED:
         where += f"; and {len(stalled) - MAX_STALLED} more boxes"
-    return (f"randomize={dict(ranges)!r} cannot be used: it may be feasible (no scene of it "
+    return (f"randomize={shown(dict(ranges))} cannot be used: it may be feasible (no scene of it "
             "was found where the task cannot be posed), but that the task can be posed in "
             f"every scene of it could not be proven {how} (the proof does not close on "
             f"{where}); proven: {done}. Narrow the ranges to a proven part")

@@ -72,6 +72,7 @@ from typing import Any
 import numpy as np
 from roller_gym import validation
 from roller_gym.physics import Scene
+from roller_gym.physics.scene import shown
 from roller_gym.task import Task, hold_range, hold_ranges, register, wrap_rate
 
 __all__ = ["HoldTask"]
@@ -98,7 +99,7 @@ class HoldTask(Task):
         if not (math.isfinite(phi) and low <= phi <= high):
             lo, hi = sorted((low * q, high * q))  # q < 0 on a drum
             raise ValueError(
-                f"options['target']={value!r} rad cannot be held in this scene with "
+                f"options['target']={shown(value)} rad cannot be held in this scene with "
                 f"max_torque={self.max_torque} N·m: allowed [{lo:.4f}, {hi:.4f}] rad"
             )
         return phi

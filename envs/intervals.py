@@ -27,6 +27,7 @@ import math
 from typing import Any, ClassVar
 
 import numpy as np
+from roller_gym.physics.scene import shown
 
 __all__ = ["TRIG_ULPS", "Interval"]
 
@@ -59,7 +60,7 @@ class Interval:
         return cls(values.min(axis=axis), values.max(axis=axis))
 
     def __repr__(self) -> str:
-        return f"Interval({self.lo!r}, {self.hi!r})"
+        return f"Interval({shown(self.lo)}, {shown(self.hi)})"
 
     def contains(self, x: Any) -> np.ndarray:
         """Whether lo <= x <= hi, elementwise."""

@@ -12,6 +12,7 @@ import inspect
 from dataclasses import dataclass
 from typing import Any
 
+from roller_gym.physics.scene import shown
 from roller_gym.task import get_task
 
 __all__ = ["TaskEntry"]
@@ -56,7 +57,7 @@ class TaskEntry:
             given = kwargs.pop("task")
             ours = get_task(self.task)
             if get_task(given, current=True) is not ours:
-                raise ValueError(f"task={given!r} contradicts the ID {ours.env_id()}, whose "
-                                 f"task is {self.task!r}: make {get_task(given).env_id()} "
+                raise ValueError(f"task={shown(given)} contradicts the ID {ours.env_id()}, whose "
+                                 f"task is {shown(self.task)}: make {get_task(given).env_id()} "
                                  "instead, or leave task= out")
         return self._env_class()(task=self.task, **kwargs)

@@ -16,6 +16,7 @@ import numpy as np
 from roller_gym.physics import Scene, equations, equilibria
 from roller_gym.physics.compiling import inlined
 from roller_gym.physics.integrators import SCENE_FIELDS, scene_arrays
+from roller_gym.physics.scene import shown
 
 __all__ = ["hold_range", "hold_ranges", "per_scene", "psi_rate", "unstable_rest_positions",
            "wrap_rate"]
@@ -83,7 +84,7 @@ def hold_ranges(scene: Scene, max_torque: float, torque_share: float = 0.8,
     the cost is proportional to the range's width, not to ``points``.
     """
     if points < 1:
-        raise ValueError(f"points={points!r} must be >= 1")
+        raise ValueError(f"points={shown(points)} must be >= 1")
     if not all(isinstance(getattr(scene, f.name), float | np.ndarray)
                for f in dataclasses.fields(Scene)):  # e.g. an int or float32 number
         scene = Scene(**{f.name: np.asarray(getattr(scene, f.name), float)[()]

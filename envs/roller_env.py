@@ -22,6 +22,7 @@ from roller_gym.episode import INFO_KEYS, INFO_ROW, OutcomeKernel
 from roller_gym.episode.record import C
 from roller_gym.physics import Scene
 from roller_gym.physics.integrators import Stepper
+from roller_gym.physics.scene import shown
 from roller_gym.task import Task, get_task, psi_rate, wrap_rate
 
 __all__ = ["RollerEnv"]
@@ -137,7 +138,7 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         if self.render_mode is None:
             gym.logger.warn(
                 "render() was called without a render_mode; pass render_mode='rgb_array' or "
-                f"'human' to gymnasium.make({self.spec.id if self.spec else ''!r}, ...)"
+                f"'human' to gymnasium.make({shown(self.spec.id if self.spec else '')}, ...)"
             )
             return None
         if self._renderer is None:

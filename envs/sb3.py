@@ -30,7 +30,7 @@ import numpy as np
 from gymnasium.vector import AutoresetMode
 from roller_gym.episode import INFO_KEYS, state_option, vector_seeds
 from roller_gym.physics.integrators import DEFAULT_INTEGRATOR
-from roller_gym.physics.scene import whole_number
+from roller_gym.physics.scene import shown, whole_number
 from roller_gym.vector_env import BATCH_INTEGRATORS
 from stable_baselines3.common.vec_env import DummyVecEnv
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices
@@ -69,9 +69,9 @@ class RollerVecEnv(VecEnv):
     def __init__(self, env_id: str, n_envs: int = 1, seed: int | None = None,
                  monitor: bool | str = False, **env_kwargs: Any) -> None:
         if isinstance(n_envs, bool) or not isinstance(n_envs, int | np.integer) or n_envs < 1:
-            raise ValueError(f"n_envs={n_envs!r} must be a positive integer")
+            raise ValueError(f"n_envs={shown(n_envs)} must be a positive integer")
         if not isinstance(monitor, bool | str):
-            raise ValueError(f"monitor={monitor!r} must be True, False or a path (str)")
+            raise ValueError(f"monitor={shown(monitor)} must be True, False or a path (str)")
         _check_seed(seed, int(n_envs))  # before anything is built
         fixed = {"num_envs", "vectorization_mode", "autoreset_mode"} & set(env_kwargs)
         if fixed:
@@ -79,7 +79,7 @@ class RollerVecEnv(VecEnv):
                              "(n_envs sub-environments of the native batch, autoreset on the "
                              "same step as SB3 expects); leave them out")
         if not (isinstance(env_id, str) and env_id.rpartition(":")[2].startswith("roller_gym/")):
-            raise ValueError(f"env_id={env_id!r} is not a roller-gym task ID "
+            raise ValueError(f"env_id={shown(env_id)} is not a roller-gym task ID "
                              "('roller_gym/<Task>-v<N>'): RollerVecEnv batches roller-gym's "
                              "tasks only; for other environments use SB3's make_vec_env")
         self.venv = gym.make_vec(env_id, num_envs=n_envs, vectorization_mode="vector_entry_point",
@@ -203,13 +203,15 @@ class RollerVecEnv(VecEnv):
                 try:
                     state_option((float(phi[i]), float(phi_dot[i])), scenes[i], 1)
                 except ValueError as error:
-                    raise ValueError(f"set_attr({attr_name!r}, value={value!r}): the state of "
+                    raise ValueError(f"set_attr({shown(attr_name)}, value={shown(value)}): the "
+                                     "state of "
                                      f"sub-environment {i} would be refused by a reset: "
                                      f"{error}") from None
             current[index] = new[index]
         elif hasattr(base, attr_name) and attr_name not in self._own:
             raise ValueError(
-                f"set_attr({attr_name!r}, indices={indices!r}): {attr_name!r} is the native "
+                f"set_attr({shown(attr_name)}, indices={shown(indices)}): {shown(attr_name)} is "
+                "the native "
                 f"batch's own, one value for the whole batch of {self.num_envs} "
                 "sub-environments or its bookkeeping, and is not set this way: give settings "
                 "where the batch is made (RollerVecEnv(..., name=value)), a target or a "
@@ -220,7 +222,8 @@ class RollerVecEnv(VecEnv):
             self._own.add(attr_name)
         else:
             raise ValueError(
-                f"set_attr({attr_name!r}, indices={indices!r}): {attr_name!r} is one value for "
+                f"set_attr({shown(attr_name)}, indices={shown(indices)}): {shown(attr_name)} is "
+                "one value for "
                 f"the whole native batch of {self.num_envs} sub-environments, so it can only "
                 f"be set for all of them (indices=None)")
 
@@ -230,10 +233,10 @@ class RollerVecEnv(VecEnv):
         each = options if isinstance(options, list) else [options] * self.num_envs
         if len(each) != self.num_envs or not all(o is None or isinstance(o, dict)
                                                  for o in each):
-            raise ValueError(f"options={options!r} must be None, a dict, or a list of "
+            raise ValueError(f"options={shown(options)} must be None, a dict, or a list of "
                              f"{self.num_envs} (one per sub-environment) dicts or None")
         if any(o and "reset_mask" in o for o in each):
-            raise ValueError(f"options={options!r}: SB3's reset() starts every "
+            raise ValueError(f"options={shown(options)}: SB3's reset() starts every "
                              "sub-environment; a reset_mask does not apply here")
         super().set_options(options)
 
@@ -243,7 +246,7 @@ class RollerVecEnv(VecEnv):
             [indices] if not isinstance(indices, list | tuple | range | np.ndarray)
             else list(indices))
         if not all(whole_number(i) and 0 <= i < self.num_envs for i in index):
-            raise ValueError(f"indices={indices!r} must be None (all), an integer or a list "
+            raise ValueError(f"indices={shown(indices)} must be None (all), an integer or a list "
                              f"of integers in [0, {self.num_envs}): the sub-environments")
         return [int(i) for i in index]
 
@@ -254,7 +257,7 @@ class RollerVecEnv(VecEnv):
         index = list(self._get_indices(indices))
         if sorted(index) != list(range(self.num_envs)):
             raise ValueError(
-                f"env_method({method_name!r}, indices={indices!r}): the native batch's "
+                f"env_method({shown(method_name)}, indices={shown(indices)}): the native batch's "
                 f"methods act on all {self.num_envs} sub-environments at once, so indices "
                 f"may only be None (all of them); DummyVecEnv over single environments calls "
                 f"each on its own")
@@ -268,7 +271,8 @@ class RollerVecEnv(VecEnv):
         new = np.asarray(value)
         if (np.ma.isMaskedArray(value) or new.dtype.kind not in "iuf" or new.ndim > 1
                 or (new.ndim and len(new) != count)):
-            raise ValueError(f"set_attr({attr_name!r}, value={value!r}): {attr_name!r} holds "
+            raise ValueError(f"set_attr({shown(attr_name)}, value={shown(value)}): "
+                             f"{shown(attr_name)} holds "
                              "finite real numbers, one per sub-environment; give one, or one "
                              f"for each of the {count} indices")
         return new
@@ -292,7 +296,7 @@ def _check_seed(seed: Any, n: int) -> None:
     the vector environments' rule (:func:`vector_seeds`) and refusing its list of seeds."""
     vector_seeds(seed, n)
     if seed is not None and not isinstance(seed, int | np.integer):
-        raise ValueError(f"seed={seed!r} must be None or an integer: SB3 seeds "
+        raise ValueError(f"seed={shown(seed)} must be None or an integer: SB3 seeds "
                          "sub-environment i with seed + i (a list of seeds is not SB3's)")
 
 
@@ -310,7 +314,7 @@ def from_env_fns(env_fns: list[Any], **vec_env_kwargs: Any) -> VecEnv:
             ``vec_env_kwargs`` are given.
     """
     if not isinstance(env_fns, list | tuple) or not env_fns:
-        raise ValueError(f"env_fns={env_fns!r} must be a non-empty list of functions that "
+        raise ValueError(f"env_fns={shown(env_fns)} must be a non-empty list of functions that "
                          "each make an environment")
     if vec_env_kwargs:
         raise ValueError(f"from_env_fns takes no keyword arguments (got "
@@ -319,8 +323,8 @@ def from_env_fns(env_fns: list[Any], **vec_env_kwargs: Any) -> VecEnv:
     for i, fn in enumerate(env_fns):
         env = fn() if callable(fn) else None
         if not isinstance(env, gym.Env):
-            got = f"made {env!r}" if callable(fn) else "is not callable"
-            raise ValueError(f"env_fns[{i}]={fn!r} must be a function that makes an "
+            got = f"made {shown(env)}" if callable(fn) else "is not callable"
+            raise ValueError(f"env_fns[{i}]={shown(fn)} must be a function that makes an "
                              f"environment (it {got})")
         probes.append(_probe(env))
     first = probes[0]

@@ -66,6 +66,7 @@ from roller_gym import rewards
 from roller_gym.physics import Scene, equations, trig
 from roller_gym.physics.compiling import inlined
 from roller_gym.physics.integrators import contact_state, scene_arrays
+from roller_gym.physics.scene import shown
 from roller_gym.rest import (  # the scene's rates and rest positions, importable from here too
     hold_range,
     hold_ranges,
@@ -113,13 +114,13 @@ def register(cls: type[Task]) -> type[Task]:
     """Class decorator: add a task to :data:`TASKS` (``import roller_gym`` then registers
     ``roller_gym/<name>-v<version>`` with Gymnasium)."""
     if cls.name in TASKS:
-        raise ValueError(f"a task named {cls.name!r} is registered already")
+        raise ValueError(f"a task named {shown(cls.name)} is registered already")
     unknown = set(cls.observation) - set(OBSERVATION_FIELDS)
     if unknown:
         raise ValueError(f"{cls.name}.observation names unknown fields {sorted(unknown)}; "
                          f"known: {', '.join(OBSERVATION_FIELDS)}")
     if cls.tier not in TIERS:
-        raise ValueError(f"{cls.name}.tier is {cls.tier!r}; it must be one of {TIERS}")
+        raise ValueError(f"{cls.name}.tier is {shown(cls.tier)}; it must be one of {TIERS}")
     compiled = [name for name in _COMPILED if getattr(cls, name) is not getattr(Task, name)]
     if compiled:
         raise ValueError(
@@ -163,12 +164,12 @@ def get_task(task: str | type[Task], current: bool = False) -> type[Task]:
         return task
     name = task.split("/")[-1].split("-v")[0] if isinstance(task, str) else None
     if name not in TASKS:
-        raise ValueError(f"task={task!r} is not a registered task; allowed: "
+        raise ValueError(f"task={shown(task)} is not a registered task; allowed: "
                          f"{', '.join(TASKS)}")
     found = TASKS[name]
     if current and task != name and task != found.env_id():  # an ID: namespace and version
-        raise ValueError(f"task={task!r} is not a registered ID; {name}'s is "
-                         f"{found.env_id()!r} (or give the name {name!r})")
+        raise ValueError(f"task={shown(task)} is not a registered ID; {name}'s is "
+                         f"{shown(found.env_id())} (or give the name {shown(name)})")
     return found
 
 
@@ -230,7 +231,7 @@ class Task:
     def __init__(self, max_torque: float | None = None) -> None:
         self.max_torque = float(self.default_max_torque if max_torque is None else max_torque)
         if not (math.isfinite(self.max_torque) and self.max_torque > 0):
-            raise ValueError(f"max_torque={max_torque!r} [N·m] must be finite and > 0")
+            raise ValueError(f"max_torque={shown(max_torque)} [N·m] must be finite and > 0")
 
     @classmethod
     def env_id(cls) -> str:
@@ -252,7 +253,7 @@ class Task:
         try:
             return cls.observation.index(field)
         except ValueError:
-            raise ValueError(f"{cls.name} does not observe {field!r}; it observes "
+            raise ValueError(f"{cls.name} does not observe {shown(field)}; it observes "
                              f"{', '.join(cls.observation)}") from None
 
     # -- per episode (arrays of rollers; the uniforms come from the episode core) ------
@@ -280,7 +281,7 @@ class Task:
         except ValueError as error:
             return str(error)
         if self.fallback_start(scene) is None:
-            return (f"no start state of {scene!r} rolls under torques up to "
+            return (f"no start state of {shown(scene)} rolls under torques up to "
                     f"{self.max_torque} N·m (the roller slips or lifts off at every state of "
                     f"{self.start_rule}); lower max_torque or raise mu")
         return None

@@ -18,7 +18,7 @@ from typing import Any
 import numba
 import numpy as np
 from roller_gym.physics import Scene
-from roller_gym.physics.scene import finite_real, whole_number
+from roller_gym.physics.scene import finite_real, shown, whole_number
 
 __all__ = ["actions", "check_integrable", "choice", "count", "integration_magnitudes",
            "integration_rates", "real", "subset"]
@@ -41,12 +41,12 @@ def real(name: str, value: Any, *, positive: bool = False, nonnegative: bool = F
     if isinstance(value, np.ndarray) and value.ndim == 0:
         value = value[()]  # its NumPy scalar
     if not isinstance(value, _REAL) or isinstance(value, bool | np.bool_):
-        raise ValueError(f"{name}={value!r} is not allowed: it must be {allowed}"
+        raise ValueError(f"{name}={shown(value)} is not allowed: it must be {allowed}"
                          f"{f' [{unit}]' if unit else ''} (a Python or NumPy number, not "
                          f"{type(value).__name__})")
     if not finite_real(value) or (positive and float(value) <= 0) or (
             nonnegative and float(value) < 0):
-        raise ValueError(f"{name}={value!r} is out of range: it must be {allowed}"
+        raise ValueError(f"{name}={shown(value)} is out of range: it must be {allowed}"
                          f"{f' [{unit}]' if unit else ''}")
     return float(value)
 
@@ -55,7 +55,7 @@ def count(name: str, value: Any, *, low: int = 1, high: int | None = None) -> in
     """``value`` as an int in [low, high], or ValueError naming ``name``."""
     allowed = f"an integer >= {low}" + (f" and <= {high}" if high is not None else "")
     if (not whole_number(value) or value < low or (high is not None and value > high)):
-        raise ValueError(f"{name}={value!r} is not allowed: it must be {allowed} (a Python or "
+        raise ValueError(f"{name}={shown(value)} is not allowed: it must be {allowed} (a Python or "
                          "NumPy integer)")
     return int(value)
 
@@ -63,7 +63,7 @@ def count(name: str, value: Any, *, low: int = 1, high: int | None = None) -> in
 def choice(name: str, value: Any, allowed: Any) -> Any:
     """``value`` if it is one of ``allowed`` (hashable or not), else ValueError."""
     if not isinstance(value, str | type(None)) or value not in allowed:
-        raise ValueError(f"{name}={value!r} is not allowed: it must be one of "
+        raise ValueError(f"{name}={shown(value)} is not allowed: it must be one of "
                          f"{', '.join(repr(a) for a in allowed)}")
     return value
 
@@ -78,12 +78,13 @@ def subset(name: str, value: Any, allowed: tuple[str, ...]) -> tuple[str, ...]:
         value = value.tolist()  # a NumPy array of names: its names, as Python strings
     names = list(value) if isinstance(value, list | tuple | set | frozenset) else None
     if names is None or not all(isinstance(x, str) for x in names):
-        raise ValueError(f"{name}={value!r} is not allowed: it must be None (all) or a list of "
+        raise ValueError(f"{name}={shown(value)} is not allowed: it must be None (all) or a "
+                         "list of "
                          f"names among {', '.join(allowed)}")
     unknown = [x for x in names if x not in allowed]
     if unknown or len(set(names)) != len(names):
         what = f"unknown names {unknown}" if unknown else "repeated names"
-        raise ValueError(f"{name}={value!r} has {what}; allowed: {', '.join(allowed)}")
+        raise ValueError(f"{name}={shown(value)} has {what}; allowed: {', '.join(allowed)}")
     return tuple(x for x in allowed if x in names)
 
 
@@ -97,18 +98,18 @@ def actions(value: Any, shape: tuple[int, ...], scale: float = 1.0,
     ``out`` (C-contiguous float64 of as many elements) if given: compiled, one pass to check
     and one to write."""
     if isinstance(value, np.ma.MaskedArray):  # np.asarray would take the data under the mask
-        raise ValueError(f"action={value!r} is a masked array, which is not allowed: every "
+        raise ValueError(f"action={shown(value)} is a masked array, which is not allowed: every "
                          "action must be given (pass a plain NumPy array)")
     shapes = (shape, shape[:-1]) if shape and shape[-1] == 1 else (shape,)
     try:
         a = np.asarray(value)
     except ValueError:  # a ragged nest of lists
         allowed = " or ".join(str(s) for s in shapes)
-        raise ValueError(f"action={value!r} is not allowed: it must be real numbers of shape "
+        raise ValueError(f"action={shown(value)} is not allowed: it must be real numbers of shape "
                          f"{allowed}, not a ragged list") from None
     if a.dtype.kind not in "iuf" or a.shape not in shapes:
         allowed = " or ".join(str(s) for s in shapes)
-        raise ValueError(f"action={value!r} is not allowed: it must be real numbers of shape "
+        raise ValueError(f"action={shown(value)} is not allowed: it must be real numbers of shape "
                          f"{allowed} in [-1, 1] (out-of-range values are clipped), not "
                          f"{a.dtype} of shape {a.shape}")
     if a.dtype.kind == "f" and a.dtype.itemsize > 8:  # longdouble: clipped in its own type
@@ -118,7 +119,7 @@ def actions(value: Any, shape: tuple[int, ...], scale: float = 1.0,
     out = np.empty(shape) if out is None else out
     assert out.flags.c_contiguous and out.dtype == np.float64 and out.size == a.size
     if not _clipped(a.reshape(-1), scale, out.reshape(-1)):
-        raise ValueError(f"action={value!r} is not finite; actions must be finite numbers in "
+        raise ValueError(f"action={shown(value)} is not finite; actions must be finite numbers in "
                          "[-1, 1] (out-of-range values are clipped)")
     return out.reshape(shape)
 
@@ -160,14 +161,14 @@ def check_integrable(scene: Scene, dt: float, max_torque: float) -> None:
                          ("max_torque", max_torque)):
             if not (math.isfinite(x) and SMALLEST <= abs(x) <= LARGEST):
                 raise ValueError(
-                    f"{one!r} cannot be integrated in float64: {label} = {x:.3g} (SI) lies "
+                    f"{shown(one)} cannot be integrated in float64: {label} = {x:.3g} (SI) lies "
                     "outside [1e-100, 1e100]; rescale the scene's units"
                 )
         omega, spin, decay = integration_rates(m, r, kappa, e, g, c, j_min, max_torque)
         phase = (omega + spin + decay) * dt
         if not phase <= LARGEST_PHASE_PER_STEP:
             raise ValueError(
-                f"dt={dt!r} s is too long for {one!r}: its fastest time scale is "
+                f"dt={shown(dt)} s is too long for {shown(one)}: its fastest time scale is "
                 f"{1.0 / (omega + spin + decay):.3g} s (ω_max = {omega:.3g} rad/s, torque "
                 f"spin-up {spin:.3g} rad/s, damping c/J_min = {decay:.3g} 1/s), {phase:.3g} "
                 f"rad per step where at most {LARGEST_PHASE_PER_STEP:g} can be followed; use a "

@@ -37,6 +37,7 @@ from roller_gym.config import EnvConfig, Settings, resolve_scene, takes_settings
 from roller_gym.physics import Scene
 from roller_gym.physics.integrators import INTEGRATORS, BatchStepper
 from roller_gym.physics.integrators.layout import check_memory
+from roller_gym.physics.scene import shown
 from roller_gym.task import Task, get_task, psi_rate, wrap_rate
 
 __all__ = ["RollerVectorEnv"]
@@ -149,7 +150,7 @@ def _autoreset_mode(value: AutoresetMode | str) -> AutoresetMode:
                 mode.name, mode.value.upper())):
             return mode
     allowed = ", ".join(f"AutoresetMode.{m.name}" for m in AutoresetMode)
-    raise ValueError(f"autoreset_mode={value!r} is not allowed: pass one of {allowed} "
+    raise ValueError(f"autoreset_mode={shown(value)} is not allowed: pass one of {allowed} "
                      "(or its name, e.g. 'next_step')")
 
 
@@ -212,7 +213,7 @@ class RollerVectorEnv(VectorEnv):
             task_class, replace(settings, scene=None) if per_env else settings,
             render_modes=self.metadata["render_modes"], scenes=resolved or None)
         if integrator not in BATCH_INTEGRATORS:
-            raise ValueError(f"integrator={integrator!r} is a reference for the single "
+            raise ValueError(f"integrator={shown(integrator)} is a reference for the single "
                              "environment; the vector environment takes one of "
                              f"{', '.join(map(repr, BATCH_INTEGRATORS))}")
         self.autoreset_mode = _autoreset_mode(autoreset_mode)

@@ -434,6 +434,36 @@ def test_the_physics_api_refuses_bad_arguments_naming_them(call, error, message)
         call()
 
 
+#: An integer Python refuses to write in decimal (past ``sys.get_int_max_str_digits()``).
+_HUGE = 10**5000
+
+
+@pytest.mark.parametrize("call, argument", [
+    (lambda: gym.make("roller_gym/RollerStabilize-v2", dt=_HUGE), "dt"),
+    (lambda: gym.make("roller_gym/RollerStabilize-v2", randomize={"m": (1, _HUGE)}),
+     r"randomize\['m'\]\[1\]"),
+    (lambda: gym.make("roller_gym/RollerStabilize-v2", randomize={_HUGE: (1, 2)}),
+     "randomize names"),
+    (lambda: gym.make_vec("roller_gym/RollerStabilize-v2", num_envs=_HUGE), "num_envs"),
+    (lambda: gym.make("roller_gym/RollerStabilize-v2").reset(seed=_HUGE), "seed"),
+    (lambda: gym.make_vec("roller_gym/RollerStabilize-v2", num_envs=2).reset(seed=[_HUGE, 1]),
+     "seed"),
+    (lambda: gym.make("roller_gym/RollerHold-v2").reset(options={_HUGE: 1}), "reset options"),
+    (lambda: gym.make("roller_gym/RollerHold-v2").reset(options={"state": (_HUGE, 0)}),
+     r"options\['state'\]"),
+    (lambda: RollerEnv(integrator=_HUGE), "integrator"),
+    (lambda: Scene(R=_HUGE), r"Scene\.R"),
+    (lambda: _stepper(substeps=_HUGE), "substeps"),
+    (lambda: _stepper().advance(0.0, 0.0, _HUGE), "tau"),
+])
+def test_an_integer_too_long_to_write_is_refused_by_name(call, argument):
+    """Python will not write an integer past 4,300 digits: the message names the argument and
+    describes the value, instead of Python's own error about string conversion."""
+    with pytest.raises(ValueError, match=f"^{argument}.*<an? (integer of about 5001 digits|"
+                                         "(list|tuple) holding an integer too long to write)>"):
+        call()
+
+
 def test_a_start_state_is_refused_for_its_own_reason():
     """φ past the sines' domain (2⁵⁰ rad) is named as such (it was refused as too fast, at
     zero speed, with N/(m g) = nan), and a state at rest that slips asks for another φ or

@@ -30,6 +30,7 @@ from importlib.resources.abc import Traversable
 from typing import Any
 
 from roller_gym import ENV_IDS
+from roller_gym.physics.scene import shown
 
 __all__ = ["ALGOS", "CLASSICAL", "TASKS", "config_file", "hyperparams", "load_config"]
 
@@ -49,7 +50,8 @@ def config_file(algo: str) -> Traversable:
         ValueError: ``algo`` is not one of :data:`ALGOS`.
     """
     if algo.lower() not in ALGOS:
-        raise ValueError(f"algo={algo!r} has no hyperparameter file; allowed: {', '.join(ALGOS)}")
+        raise ValueError(f"algo={shown(algo)} has no hyperparameter file; allowed: "
+                         f"{', '.join(ALGOS)}")
     return resources.files(__name__) / f"{algo.lower()}.yml"
 
 
@@ -111,6 +113,6 @@ def hyperparams(algo: str, env_id: str) -> dict[str, Any]:
     """
     config = load_config(algo)
     if env_id not in config:
-        raise ValueError(f"no hyperparameters for env={env_id!r} in {algo.lower()}.yml; "
+        raise ValueError(f"no hyperparameters for env={shown(env_id)} in {algo.lower()}.yml; "
                          f"known: {', '.join(k for k in config if k in TASKS)}")
     return config[env_id]

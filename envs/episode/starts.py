@@ -19,7 +19,7 @@ from roller_gym.episode.streams import uniform
 from roller_gym.physics import Scene, trig
 from roller_gym.physics import equations as eq
 from roller_gym.physics.integrators import contact_state
-from roller_gym.physics.scene import finite_real, whole_number
+from roller_gym.physics.scene import finite_real, shown, whole_number
 
 __all__ = ["CANDIDATES", "ROUNDS", "SEED_MAX", "RestState", "Starts", "at_start", "check_seed",
            "per_scene_target", "put", "reset_mask", "reset_options", "scene_rows",
@@ -88,7 +88,7 @@ def check_seed(seed: Any) -> int | None:
         ValueError: anything else, naming the value and the range.
     """
     if not _valid_seed(seed):
-        raise ValueError(f"seed={seed!r} must be None or an integer in [0, 2**64 - 1]")
+        raise ValueError(f"seed={shown(seed)} must be None or an integer in [0, 2**64 - 1]")
     return None if seed is None else int(seed)
 
 
@@ -105,7 +105,7 @@ def vector_seeds(seed: Any, n: int) -> list[int | None] | None:
     if isinstance(seed, int | np.integer) and _valid_seed(seed):
         if int(seed) + n - 1 > SEED_MAX:
             raise ValueError(
-                f"seed={seed!r} gives sub-environment i the seed seed + i, up to seed + "
+                f"seed={shown(seed)} gives sub-environment i the seed seed + i, up to seed + "
                 f"{n - 1} for num_envs={n}, which must be at most 2**64 - 1: seed must be at "
                 f"most {SEED_MAX - n + 1}")
         return [int(seed) + i for i in range(n)]
@@ -114,7 +114,8 @@ def vector_seeds(seed: Any, n: int) -> list[int | None] | None:
             raise ValueError(f"seed has {len(seed)} entries for num_envs={n}; it needs {n}")
         return [None if s is None else int(s) for s in seed]
     raise ValueError(
-        f"seed={seed!r} must be None, an integer in [0, 2**64 - 1], or a list, tuple, range or "
+        f"seed={shown(seed)} must be None, an integer in [0, 2**64 - 1], or a list, tuple, "
+        "range or "
         f"array of {n} of them"
     )
 
@@ -128,7 +129,7 @@ def reset_options(options: Any) -> dict[str, Any]:
     if options is None:
         return {}
     if not isinstance(options, Mapping):
-        raise ValueError(f"options={options!r} must be a dict of reset options (or None), "
+        raise ValueError(f"options={shown(options)} must be a dict of reset options (or None), "
                          "e.g. {'state': (0.3, 0.0)}")
     return dict(options)
 
@@ -145,7 +146,7 @@ def reset_mask(value: Any, n: int) -> np.ndarray:
     if (np.ma.isMaskedArray(value) or mask.dtype != np.bool_ or mask.shape != (n,)
             or not mask.any()):
         raise ValueError(
-            f"options['reset_mask']={value!r} must be a boolean array of shape ({n},) with at "
+            f"options['reset_mask']={shown(value)} must be a boolean array of shape ({n},) with at "
             "least one True (not a masked array)"
         )
     return mask
@@ -187,7 +188,8 @@ def start_episodes(
     unknown = set(options) - {"state", "target", "scene"}
     if unknown:
         raise ValueError(
-            f"reset options {sorted(unknown)} are not known; allowed: 'state', 'target', 'scene'"
+            f"reset options [{', '.join(sorted(map(shown, unknown)))}] are not known; allowed: "
+            "'state', 'target', 'scene'"
         )
     task = config.task
     if options.get("scene") is not None:
@@ -252,7 +254,7 @@ def _draw_states(task: Any, scene: Scene, target: np.ndarray, seed: np.ndarray,
         return phi, phi_dot
     raise ValueError(
         f"no start state found for {todo.size} episode(s) after {ROUNDS * CANDIDATES} "
-        f"candidates in {take(scene, todo[:1], n)!r}: {task.start_rule}"
+        f"candidates in {shown(take(scene, todo[:1], n))}: {task.start_rule}"
     )
 
 
@@ -293,7 +295,7 @@ def _target_option(task: Any, value: Any, scene: Scene, i: int) -> float:
         return task.target_from_option(value, scene.item(i))
     except ValueError as error:
         which = f"sub-environment {i}" if scene.batch_size > 1 else "this episode's scene"
-        raise ValueError(f"{which} ({scene.item(i)!r}): {error}") from None
+        raise ValueError(f"{which} ({shown(scene.item(i))}): {error}") from None
 
 
 def state_option(value: Any, scene: Scene, n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -307,11 +309,11 @@ def state_option(value: Any, scene: Scene, n: int) -> tuple[np.ndarray, np.ndarr
     if (pair is None or len(pair) != 2
             or not all(finite_real(x) for x in pair)):
         raise ValueError(
-            f"options['state']={value!r} must be a pair (phi [rad], phi_dot [rad/s]) of "
+            f"options['state']={shown(value)} must be a pair (phi [rad], phi_dot [rad/s]) of "
             "finite real numbers"
         )
     if not abs(float(pair[0])) < trig.DOMAIN:
-        raise ValueError(f"options['state']={value!r}: phi must be within "
+        raise ValueError(f"options['state']={shown(value)}: phi must be within "
                          f"±{trig.DOMAIN:.4g} rad, where the sines are defined")
     phi, phi_dot = np.full(n, float(pair[0])), np.full(n, float(pair[1]))
     with np.errstate(all="ignore"):
@@ -322,10 +324,10 @@ def state_option(value: Any, scene: Scene, n: int) -> tuple[np.ndarray, np.ndarr
                   "another phi, where the roller rests without slipping, or a scene with more "
                   "friction (mu)")
         bad = int(np.flatnonzero(~rolls)[0])
-        where = (f" of sub-environment {bad} ({scene.item(bad)!r})" if scene.batch_size
+        where = (f" of sub-environment {bad} ({shown(scene.item(bad))})" if scene.batch_size
                  else "")
         raise ValueError(
-            f"options['state']={value!r}: the roller{where} does not roll there under zero "
+            f"options['state']={shown(value)}: the roller{where} does not roll there under zero "
             "torque "
             f"(N/(m g) = {float(np.min(start.liftoff_margin)):.3g}, "
             f"(μN − |F|)/(m g) = {float(np.min(start.slip_margin)):.3g}; both must be "

@@ -18,7 +18,7 @@ import numba
 import numba.extending
 import numpy as np
 from roller_gym.physics import equations as eq
-from roller_gym.physics.scene import Scene, finite_real, require_scene, whole_number
+from roller_gym.physics.scene import Scene, finite_real, require_scene, shown, whole_number
 from scipy.optimize import brentq
 
 __all__ = [
@@ -51,7 +51,7 @@ def _check_numbers(**values: Any) -> None:
         except ValueError:  # a ragged list
             kind = "O"
         if kind not in "biufc":
-            raise ValueError(f"{name}={value!r} must be numbers: a number or an array of them "
+            raise ValueError(f"{name}={shown(value)} must be numbers: a number or an array of them "
                              "(within float64's range)")
 
 
@@ -182,7 +182,7 @@ def small_oscillation_frequency(scene: Scene, phi: Array = 0.0) -> Array:
     stiffness = -A[..., 1, 0]
     if np.any(stiffness <= 0):
         raise ValueError(
-            f"phi={phi!r} is not a stable rest position of {scene!r}: d²V/dφ² <= 0 there"
+            f"phi={shown(phi)} is not a stable rest position of {shown(scene)}: d²V/dφ² <= 0 there"
         )
     out = np.sqrt(stiffness)
     return float(out) if out.ndim == 0 else out
@@ -229,9 +229,9 @@ def equilibria(scene: Scene, tau: float = 0.0, resolution: int = 4000) -> list[E
     if scene.batch_size is not None:
         raise ValueError("equilibria() takes a scalar scene; call it per element of a batch")
     if not finite_real(tau):
-        raise ValueError(f"tau={tau!r} [N·m] must be a finite real number")
+        raise ValueError(f"tau={shown(tau)} [N·m] must be a finite real number")
     if not (whole_number(resolution) and RESOLUTIONS[0] <= resolution <= RESOLUTIONS[1]):
-        raise ValueError(f"resolution={resolution!r} must be an integer in [{RESOLUTIONS[0]}, "
+        raise ValueError(f"resolution={shown(resolution)} must be an integer in [{RESOLUTIONS[0]}, "
                          f"{RESOLUTIONS[1]}] (grid points per turn of φ)")
     m, r, kappa, e, _, g, _ = scene.params
     if kappa == 0 and e == 0:

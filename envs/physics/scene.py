@@ -36,7 +36,7 @@ import numpy as np
 
 Number = float | np.ndarray
 
-__all__ = ["PRESETS", "Scene", "finite_real", "preset", "whole_number"]
+__all__ = ["PRESETS", "Scene", "finite_real", "preset", "shown", "whole_number"]
 
 
 def _real(x: Any) -> bool:
@@ -64,14 +64,23 @@ def whole_number(x: Any) -> bool:
     return isinstance(x, int | np.integer) and not isinstance(x, bool | np.bool_ | np.timedelta64)
 
 
-def _short(raw: Any) -> str:
-    """``raw``'s repr, its middle cut where it is long (an integer of 400 digits)."""
-    text = repr(raw)
-    return text if len(text) <= 60 else f"{text[:28]}...{text[-28:]}"
+def shown(value: Any, limit: int = 200) -> str:
+    """``value``'s repr for an error message: its middle cut where it is longer than ``limit``
+    characters, and described where Python refuses to write it (an integer past
+    ``sys.get_int_max_str_digits()`` digits, or a container holding one)."""
+    try:
+        text = repr(value)
+    except ValueError:
+        if isinstance(value, int):
+            digits = int(abs(value).bit_length() * math.log10(2)) + 1
+            return f"<an integer of about {digits} digits>"
+        return f"<a {type(value).__name__} holding an integer too long to write>"
+    half = max(limit // 2 - 2, 1)
+    return text if len(text) <= limit else f"{text[:half]}...{text[-half:]}"
 
 
 def _describe(value: np.ndarray) -> str:
-    return repr(value.item()) if value.ndim == 0 else f"array {value!r}"
+    return repr(value.item()) if value.ndim == 0 else f"array {shown(value)}"
 
 
 @dataclass(frozen=True, eq=False)
@@ -123,7 +132,7 @@ class Scene:
             try:
                 np.shape(raw)
             except ValueError:  # a ragged list
-                raise ValueError(f"Scene.{f.name}={raw!r} is not a number or a 1-D array of "
+                raise ValueError(f"Scene.{f.name}={shown(raw)} is not a number or a 1-D array of "
                                  "numbers") from None
         shapes = {f.name: np.shape(getattr(self, f.name)) for f in fields(self)}
         try:
@@ -141,10 +150,10 @@ class Scene:
             except (TypeError, ValueError):
                 value = np.asarray(None)
             if value.dtype.kind == "O" and value.size and all(map(_real, value.flat)):
-                raise ValueError(f"Scene.{f.name}={_short(raw)} is out of range: an integer "
+                raise ValueError(f"Scene.{f.name}={shown(raw)} is out of range: an integer "
                                  "past float64's range (about ±1.8e308); it must be finite")
             if value.dtype.kind not in "iuf":  # not text, bool, complex or objects
-                raise ValueError(f"Scene.{f.name}={_short(raw)} is not a real number (SI units); "
+                raise ValueError(f"Scene.{f.name}={shown(raw)} is not a real number (SI units); "
                                  f"it must be an int or a float, or an array of them")
             value = value.astype(float)
             if np.isnan(value).any():
@@ -207,7 +216,7 @@ class Scene:
         """The ``i``-th roller of a batch scene, as a scalar scene."""
         n = self.batch_size or 1
         if not (whole_number(i) and -n <= i < n):
-            raise ValueError(f"i={i!r} is not a roller of this scene's {n}: it must be an "
+            raise ValueError(f"i={shown(i)} is not a roller of this scene's {n}: it must be an "
                              f"integer in [{-n}, {n})")
         return Scene(
             **{
@@ -220,7 +229,7 @@ class Scene:
     def stack(scenes: list[Scene]) -> Scene:
         """One batch scene whose ``i``-th roller is ``scenes[i]``."""
         if not isinstance(scenes, list | tuple) or not scenes:
-            raise ValueError(f"scenes={scenes!r} must be a non-empty list of scalar Scenes")
+            raise ValueError(f"scenes={shown(scenes)} must be a non-empty list of scalar Scenes")
         scenes = [require_scene(s, f"scenes[{i}]") for i, s in enumerate(scenes)]
         batch = next((i for i, s in enumerate(scenes) if s.batch_size is not None), None)
         if batch is not None:
@@ -241,7 +250,7 @@ class Scene:
                                         shape).tolist() for f in fields(self)}
 
     def __repr__(self) -> str:
-        inner = ", ".join(f"{f.name}={getattr(self, f.name)!r}" for f in fields(self))
+        inner = ", ".join(f"{f.name}={shown(getattr(self, f.name))}" for f in fields(self))
         return f"Scene({inner})"
 
     def __eq__(self, other: object) -> bool:
@@ -282,9 +291,9 @@ def require_scene(scene: Any, name: str = "scene") -> Scene:
     if isinstance(scene, Scene):
         return scene
     if isinstance(scene, str):
-        raise TypeError(f"{name}={scene!r} must be a Scene; for the preset of that name use "
-                        f"preset({scene!r})")
-    raise TypeError(f"{name}={scene!r} must be a Scene, not {type(scene).__name__}")
+        raise TypeError(f"{name}={shown(scene)} must be a Scene; for the preset of that name use "
+                        f"preset({shown(scene)})")
+    raise TypeError(f"{name}={shown(scene)} must be a Scene, not {type(scene).__name__}")
 
 
 def preset(name: str) -> Scene:
@@ -293,5 +302,5 @@ def preset(name: str) -> Scene:
         return PRESETS[name]
     except (KeyError, TypeError):  # (TypeError: not hashable)
         raise ValueError(
-            f"unknown scene preset {name!r}; allowed: {', '.join(sorted(PRESETS))}"
+            f"unknown scene preset {shown(name)}; allowed: {', '.join(sorted(PRESETS))}"
         ) from None

@@ -14,7 +14,7 @@ import os
 from dataclasses import dataclass, fields
 
 import numpy as np
-from roller_gym.physics.scene import Scene
+from roller_gym.physics.scene import Scene, shown
 
 #: The per-roller scene numbers the kernels take, in the order of their rows.
 SCENE_FIELDS = ("m", "r", "kappa", "e", "k", "g", "damping", "mu")
@@ -144,7 +144,7 @@ def check_memory(argument: str, count: int, bytes_each: int) -> None:
     need = count * bytes_each
     if need > total:
         gib = min(need, 2**1000) / 2**30  # (a float: a count past float's range overflows)
-        raise ValueError(f"{argument}={count} is too many: their arrays need about "
+        raise ValueError(f"{argument}={shown(count)} is too many: their arrays need about "
                          f"{gib:.3g} GiB of memory (up to {bytes_each} bytes "
                          f"each), more than the machine's {total / 2**30:.3g} GiB; use fewer")
 

@@ -35,7 +35,7 @@ from roller_gym.physics.integrators.taylor_kernel import (
     _taylor_serial,
     _taylor_substep,
 )
-from roller_gym.physics.scene import finite_real, whole_number
+from roller_gym.physics.scene import finite_real, shown, whole_number
 
 
 @dataclass(frozen=True)
@@ -157,19 +157,20 @@ def scheme(integrator: str) -> Scheme:
     try:
         return SCHEMES[integrator]
     except (KeyError, TypeError):
-        raise ValueError(f"unknown integrator {integrator!r}; allowed: "
+        raise ValueError(f"unknown integrator {shown(integrator)}; allowed: "
                          f"{', '.join(INTEGRATORS)}") from None
 
 
 def _check_step_args(dt: float, tolerance: float, substeps: int | None) -> None:
     if not (finite_real(dt) and float(dt) > 0):
-        raise ValueError(f"dt={dt!r} [s] must be a number, finite and > 0")
+        raise ValueError(f"dt={shown(dt)} [s] must be a number, finite and > 0")
     if not (finite_real(tolerance) and float(tolerance) > 0):
-        raise ValueError(f"tolerance={tolerance!r} must be a number, finite and > 0")
+        raise ValueError(f"tolerance={shown(tolerance)} must be a number, finite and > 0")
     if substeps is not None and not (
         whole_number(substeps) and 1 <= substeps <= MAX_SUBSTEPS
     ):
         raise ValueError(
-            f"substeps={substeps!r} must be None (automatic) or an integer in [1, {MAX_SUBSTEPS}]"
+            f"substeps={shown(substeps)} must be None (automatic) or an integer in [1, "
+            f"{MAX_SUBSTEPS}]"
         )
 

@@ -47,7 +47,7 @@ from roller_gym.physics.integrators.rules import (
 )
 from roller_gym.physics.integrators.schemes import DEFAULT_INTEGRATOR, _check_step_args, scheme
 from roller_gym.physics.packed import pack
-from roller_gym.physics.scene import Scene, require_scene, whole_number
+from roller_gym.physics.scene import Scene, require_scene, shown, whole_number
 
 
 class _Base:
@@ -56,7 +56,8 @@ class _Base:
         _check_step_args(dt, tolerance, substeps)
         self.scheme = scheme(integrator)
         if substeps is not None and self.scheme.substep is None:
-            raise ValueError(f"substeps={substeps!r}: integrator={integrator!r} chooses its "
+            raise ValueError(f"substeps={shown(substeps)}: integrator={shown(integrator)} "
+                             "chooses its "
                              "own steps")
         self.integrator, self.dt, self.substeps = integrator, float(dt), substeps
         self.tolerance = float(tolerance)
@@ -114,8 +115,9 @@ class _Base:
         if not self._warned:
             self._warned = True
             warnings.warn(
-                f"tolerance={self.tolerance!r} is not verified for some step (integrator "
-                f"{self.integrator!r}, dt={self.dt!r}: out of reach of float64's rounding or "
+                f"tolerance={shown(self.tolerance)} is not verified for some step (integrator "
+                f"{shown(self.integrator)}, dt={shown(self.dt)}: out of reach of float64's "
+                "rounding or "
                 f"of the {MAX_SUBSTEPS} substeps a step may take, or its error estimate grew "
                 "past it along the step): those steps report tol_met=False; a looser "
                 "tolerance or a more accurate integrator avoids this", RuntimeWarning,
@@ -139,14 +141,14 @@ def _check_states(num: int | None = None, **values: Any) -> None:
         if array is not None and (array.dtype.kind not in "iuf" or (num != ANY_SHAPE and (
                 array.ndim > 1 or (num is None and array.ndim)))):
             shape = shapes.get(num, f"a real number or a 1-D array of {num} of them")
-            raise ValueError(f"{name}={value!r} must be {shape}, not "
+            raise ValueError(f"{name}={shown(value)} must be {shape}, not "
                              f"{type(value).__name__}")
         if array is not None and array.ndim and num not in shapes and array.shape != (num,):
             raise ValueError(f"{name} has {array.shape[0]} values for {num} rollers")
         with np.errstate(over="ignore"):  # (a longdouble past float64's range: inf there)
             finite = np.isfinite(value if array is None else array.astype(float)).all()
         if not finite:
-            raise ValueError(f"{name}={value!r} is not finite (as a float64)")
+            raise ValueError(f"{name}={shown(value)} is not finite (as a float64)")
 
 
 @numba.extending.register_jitable
@@ -311,7 +313,7 @@ class BatchStepper(_Base):
     def __init__(self, num: int, *, integrator: str = DEFAULT_INTEGRATOR, dt: float,
                  tolerance: float, substeps: int | None = None) -> None:
         if not (whole_number(num) and num >= 1):
-            raise ValueError(f"num={num!r} must be an integer >= 1")
+            raise ValueError(f"num={shown(num)} must be an integer >= 1")
         check_memory("num", int(num), BYTES_PER_ROLLER)
         super().__init__(int(num), integrator, dt, tolerance, substeps)
         self.num = int(num)
@@ -360,12 +362,12 @@ class BatchStepper(_Base):
         """The rollers ``index`` selects (an index, slice, mask or index array; all if None),
         or a ValueError naming it."""
         if isinstance(index, bool | np.bool_):  # (NumPy reads True as every roller)
-            raise ValueError(f"index={index!r} does not select rollers: give an integer, a "
+            raise ValueError(f"index={shown(index)} does not select rollers: give an integer, a "
                              "slice, a boolean mask of the rollers or an index array")
         try:
             return np.arange(self.num)[slice(None) if index is None else index]
         except IndexError as error:
-            raise ValueError(f"index={index!r} does not select rollers of the {self.num}: "
+            raise ValueError(f"index={shown(index)} does not select rollers of the {self.num}: "
                              f"{error}") from None
 
     @property
@@ -443,7 +445,7 @@ def contact_state(scene: Scene | np.ndarray, phi: np.ndarray, phi_dot: np.ndarra
             do not have one value per state.
     """
     if np.ndim(phi) != 1:
-        raise ValueError(f"phi={phi!r} must be a 1-D array of states (one φ [rad] each)")
+        raise ValueError(f"phi={shown(phi)} must be a 1-D array of states (one φ [rad] each)")
     n = len(phi)
     par = (np.ascontiguousarray(scene, dtype=float) if isinstance(scene, np.ndarray)
            else scene_arrays(scene, n))
@@ -534,7 +536,8 @@ def predicted_substeps(
     """
     sch = scheme(integrator)
     if sch.substep is None:
-        raise ValueError(f"integrator={integrator!r} chooses its own steps; no prediction is made")
+        raise ValueError(f"integrator={shown(integrator)} chooses its own steps; no prediction "
+                         "is made")
     _check_step_args(dt, tolerance, None)
     _check_states(ANY_SHAPE, phi_dot=phi_dot)
     dt, tolerance = float(dt), float(tolerance)
