@@ -63,8 +63,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="keyword arguments of gymnasium.make, e.g. max_torque=0.6 scene=floor "
                         "(values are Python literals, else strings)")
     p.add_argument("--hyperparams", nargs="+", default=[], metavar="KEY:VALUE",
-                   help="override entries of the hyperparameter file, in rl-zoo3's -params "
-                        "syntax, e.g. learning_rate:3e-4 n_envs:2")
+                   help="override entries of the hyperparameter file, e.g. learning_rate:3e-4 "
+                        "n_envs:2 learning_rate:lin_3e-4 (values are Python literals, else "
+                        "strings, as in the file)")
     p.add_argument("--log-folder", default="runs",
                    help="rl-zoo3's log folder: the run goes to <log folder>/<algo>/<env name>_<N> "
                         "(default runs)")
@@ -156,7 +157,8 @@ def zoo_arguments(args: argparse.Namespace, conf: str) -> list[str]:
     """The arguments of ``python -m rl_zoo3.train`` for ``args``, with the hyperparameter
     file ``conf``; ``--hyperparams`` and ``--env-kwargs`` checked first (SystemExit naming
     the option)."""
-    hp = {**hyperparams(args.algo, args.env), **checked_hyperparams(args.algo, args.hyperparams)}
+    given = checked_hyperparams(args.algo, args.hyperparams)
+    hp = {**hyperparams(args.algo, args.env), **given}
     steps = int(args.steps or hp["n_timesteps"])
     if args.algo in ON_POLICY:
         # rl-zoo3's linear schedules go negative past the end: never overshoot the steps.
@@ -180,8 +182,8 @@ def zoo_arguments(args: argparse.Namespace, conf: str) -> list[str]:
         out += ["--env-kwargs", *(f"{k}:{v!r}" for k, v in env_kwargs.items())]
     if "env_kwargs" in hp:  # from --hyperparams: checked as --env-kwargs are
         check_env_kwargs(args.env, {**hp["env_kwargs"], **env_kwargs}, "--hyperparams env_kwargs")
-    if args.hyperparams:
-        out += ["--hyperparams", *args.hyperparams]
+    if given:  # as --env-kwargs: the values checked, as their repr (a string stays a string)
+        out += ["--hyperparams", *(f"{k}:{v!r}" for k, v in given.items())]
     if args.progress:
         out.append("--progress")
     own = sorted({a.split("=")[0] for a in args.zoo_args} & set(OWN_OPTIONS))

@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import shlex
 import subprocess
 import sys
 from pathlib import Path
@@ -237,6 +238,26 @@ def test_train_show_command_run_as_printed_trains_on_the_native_batch(tmp_path):
     (run_dir,) = (tmp_path / "runs" / "sac").iterdir()
     assert (run_dir / "batch.monitor.csv").is_file()
     assert not list(run_dir.glob("[0-9]*.monitor.csv"))
+
+
+@NEEDS_RL_ZOO3
+def test_train_hyperparams_reach_rl_zoo3_as_checked(tmp_path):
+    """rl-zoo3 evaluates each ``-params`` value as Python: a string such as a linear schedule
+    (``lin_5e-4``, as written in the hyperparameter files) must reach it as that string, read
+    back here by rl-zoo3's own parser, not as a name it cannot evaluate."""
+    from rl_zoo3.utils import StoreDict
+
+    printed = roller_gym("train", "--algo", "td3", "--hyperparams", "learning_rate:lin_5e-4",
+                         "policy_kwargs:dict(net_arch=[8])", "batch_size:64", "--show-command",
+                         cwd=tmp_path).stdout
+    argv = shlex.split(printed)
+    start = argv.index("--hyperparams") + 1
+    end = next((i for i in range(start, len(argv)) if argv[i].startswith("--")), len(argv))
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--hyperparams", nargs="+", action=StoreDict)
+    given = parser.parse_args(["--hyperparams", *argv[start:end]]).hyperparams
+    assert given == {"learning_rate": "lin_5e-4", "policy_kwargs": "dict(net_arch=[8])",
+                     "batch_size": 64}
 
 
 @NEEDS_RL_ZOO3
