@@ -100,8 +100,14 @@ class RollerVecEnv(VecEnv):
         if isinstance(monitor, str):
             from stable_baselines3.common.monitor import ResultsWriter
 
-            self._writer = ResultsWriter(monitor, header={"t_start": self._start,
-                                                          "env_id": env_id})
+            try:
+                self._writer = ResultsWriter(monitor, header={"t_start": self._start,
+                                                              "env_id": env_id})
+            except OSError as exc:
+                self.close()
+                raise ValueError(f"monitor={shown(monitor)} cannot be written: "
+                                 f"{exc.strerror or exc} (give a path in a writable folder)"
+                                 ) from None
 
     # -- SB3's VecEnv API ----------------------------------------------------------------
     def seed(self, seed: int | None = None) -> Sequence[int | None]:
@@ -201,7 +207,8 @@ class RollerVecEnv(VecEnv):
             scenes = base.scenes
             for i in index:  # a state a reset could start from: it rolls (as reset checks)
                 try:
-                    state_option((float(phi[i]), float(phi_dot[i])), scenes[i], 1)
+                    state_option((float(phi[i]), float(phi_dot[i])), scenes[i], 1,
+                                 base.config.dt)
                 except ValueError as error:
                     raise ValueError(f"set_attr({shown(attr_name)}, value={shown(value)}): the "
                                      "state of "

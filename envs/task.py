@@ -161,6 +161,10 @@ def get_task(task: str | type[Task], current: bool = False) -> type[Task]:
     """The task class from its name (``"RollerHold"``), its ID or the class itself; with
     ``current``, an ID must be the task's current one (namespace and version)."""
     if isinstance(task, type) and issubclass(task, Task) and task is not Task:
+        if not hasattr(task, "Constants"):  # register() checks a task and gives it these
+            raise ValueError(f"task={shown(task)} is not registered: decorate the class with "
+                             "roller_gym.task.register, which checks it and compiles its "
+                             "objective")
         return task
     name = task.split("/")[-1].split("-v")[0] if isinstance(task, str) else None
     if name not in TASKS:

@@ -119,7 +119,8 @@ THREADS_MAX = 1024
 def at_least(least: int, most: int = COUNT_MAX) -> Callable[[str], int]:
     """An argparse ``type``: an integer of at least ``least`` and at most ``most``, else
     argparse's error naming the option, the value and what is allowed."""
-    allowed = f"an integer >= {least}" + (f" and <= {most}" if most < COUNT_MAX else "")
+    allowed = f"an integer >= {least} and <= {most}" + (" (2**63 - 1)" if most == COUNT_MAX
+                                                         else "")
 
     def parse(text: str) -> int:
         try:

@@ -17,7 +17,7 @@ from pathlib import Path
 
 from roller_gym.bench import maintainers, records, report
 from roller_gym.bench.verdicts import work_precision_verdicts
-from roller_gym.scripts.arguments import program_parser
+from roller_gym.scripts.arguments import output_folder, program_parser
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -50,6 +50,7 @@ def main(argv: Sequence[str] | None = None) -> None:
                              "--render") from None
         print(f"wrote {page}")
     else:
+        output_folder(path.parent, "--out")  # before measuring, not after
         from roller_gym.bench import workprecision  # MuJoCo, the environments, the kernels
 
         command = "roller-gym benchmark" + " --quick" * args.quick + (

@@ -46,7 +46,7 @@ def build_parser() -> argparse.ArgumentParser:
                                   f"{', '.join(BASELINES)}")
     p.add_argument("--env", default=None, choices=roller_gym.ENV_IDS,
                    help="the task (default: the run's; required for a baseline)")
-    p.add_argument("--seed", type=at_least(0), default=0,
+    p.add_argument("--seed", type=at_least(0, 2**64 - 1), default=0,
                    help="the episode's reset seed (default 0)")
     p.add_argument("--out", default=None, type=video_file,
                    help="output .gif or .mp4 (default <run dir>/replay.gif, or "

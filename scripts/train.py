@@ -26,6 +26,7 @@ import inspect
 import math
 import shlex
 import sys
+from collections.abc import Callable
 from importlib.resources import as_file
 from pathlib import Path
 from typing import Any
@@ -137,10 +138,51 @@ def checked_hyperparams(algo: str, items: list[str]) -> dict[str, Any]:
         if key == "learning_rate" and not _learning_rate(value):
             raise SystemExit(f"--hyperparams: learning_rate:{value!r} is not allowed: it must "
                              "be a number > 0, or lin_<number> (from it down to 0)")
+        rule = VALUE_RULES.get(key)
+        if rule is not None and not rule[0](value):
+            raise SystemExit(f"--hyperparams: {key}:{value!r} is not allowed: it must be "
+                             f"{rule[1]}")
+        if key == "policy" and value not in algorithm_class(algo).policy_aliases:
+            raise SystemExit(f"--hyperparams: policy:{value!r} is not allowed: {algo}'s "
+                             f"policies are {', '.join(algorithm_class(algo).policy_aliases)}")
         if key == "env_kwargs" and not isinstance(value, dict):
             raise SystemExit(f"--hyperparams: env_kwargs:{value!r} is not allowed: it must be a "
                              "dict of the environment's keyword arguments (or use --env-kwargs)")
     return values
+
+
+def _real(low: float, high: float, open_low: bool = False) -> Callable[[Any], bool]:
+    """Whether a value is a real number in [low, high] ((low, high] with ``open_low``)."""
+    return lambda v: (finite_real(v) and not isinstance(v, bool)
+                      and (low < v if open_low else low <= v) and v <= high)
+
+
+def _train_freq(value: Any) -> bool:
+    """Whether ``value`` is SB3's train_freq: an integer >= 1, or (integer, "step"/"episode")."""
+    if isinstance(value, tuple) and len(value) == 2 and value[1] in ("step", "episode"):
+        value = value[0]
+    return isinstance(value, int) and not isinstance(value, bool) and 1 <= value <= 10**9
+
+
+#: Values of hyperparameters checked before rl-zoo3 starts (where a wrong one fails later in
+#: rl-zoo3, stable-baselines3 or torch, or trains silently on nonsense): rule, what is allowed.
+VALUE_RULES: dict[str, tuple[Callable[[Any], bool], str]] = {
+    "gamma": (_real(0.0, 1.0, open_low=True), "a number in (0, 1]"),
+    "tau": (_real(0.0, 1.0, open_low=True), "a number in (0, 1]"),
+    "gae_lambda": (_real(0.0, 1.0), "a number in [0, 1]"),
+    "clip_range": (_real(0.0, 1e9, open_low=True), "a number > 0"),
+    "ent_coef": (lambda v: _real(0.0, 1e9)(v) or (isinstance(v, str) and v.startswith("auto")),
+                 "a number >= 0 (or 'auto' for SAC)"),
+    "vf_coef": (_real(0.0, 1e9), "a number >= 0"),
+    "max_grad_norm": (_real(0.0, 1e9, open_low=True), "a number > 0"),
+    "noise_std": (_real(0.0, 1e9, open_low=True), "a number > 0 (in action units)"),
+    "noise_type": (lambda v: v in ("normal", "ornstein-uhlenbeck"),
+                   "'normal' or 'ornstein-uhlenbeck', with noise_std"),
+    "normalize": (lambda v: isinstance(v, bool | dict) or (
+        isinstance(v, str) and v.startswith("dict(")),
+        "True, False or a dict of VecNormalize's arguments (or its text, 'dict(...)')"),
+    "train_freq": (_train_freq, "an integer >= 1, or (integer, 'step' or 'episode')"),
+}
 
 
 def _learning_rate(value: Any) -> bool:
@@ -159,6 +201,9 @@ def zoo_arguments(args: argparse.Namespace, conf: str) -> list[str]:
     the option)."""
     given = checked_hyperparams(args.algo, args.hyperparams)
     hp = {**hyperparams(args.algo, args.env), **given}
+    if "noise_type" in hp and "noise_std" not in hp:
+        raise SystemExit("--hyperparams: noise_type needs noise_std (its standard deviation in "
+                         "action units), e.g. noise_std:0.1")
     steps = int(args.steps or hp["n_timesteps"])
     if args.algo in ON_POLICY:
         # rl-zoo3's linear schedules go negative past the end: never overshoot the steps.

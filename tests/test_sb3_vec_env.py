@@ -216,7 +216,7 @@ def test_set_attr_of_the_state_refuses_what_is_not_one_finite_angle_each(value, 
     (lambda v: v.set_attr("phi", 1e300), r"sub-environment 0 would be refused by a reset: "
                                          r".*phi must be within"),
     (lambda v: v.set_attr("phi_dot", 1e300, [1]), r"sub-environment 1 would be refused by a "
-                                                   r"reset: .*does not roll"),
+                                                   r"reset: .*phi_dot must be within"),
     (lambda v: v.get_attr("phi", [5]), r"indices=\[5\] must be None \(all\), an integer or a "
                                        r"list of integers in \[0, 3\)"),
     (lambda v: v.set_attr("phi", 0.1, True), r"indices=True must be None"),
@@ -346,3 +346,14 @@ def test_from_env_fns_keeps_the_render_mode():
     vec.reset(), dummy.reset()
     for got, want in zip(vec.get_images(), dummy.get_images(), strict=True):
         np.testing.assert_array_equal(got, want)
+
+
+def test_a_state_too_fast_and_an_unwritable_monitor_are_refused_naming_them():
+    venv = RollerVecEnv("roller_gym/RollerHold-v2", n_envs=3)
+    before = venv.get_attr("phi_dot")
+    with pytest.raises(ValueError, match=r"set_attr\('phi_dot'.*sub-environment 0 would be "
+                                         r"refused by a reset: .*phi_dot must be within"):
+        venv.set_attr("phi_dot", 1e8, 0)
+    np.testing.assert_array_equal(venv.get_attr("phi_dot"), before)
+    with pytest.raises(ValueError, match=r"monitor='/proc/nonexistent/x' cannot be written"):
+        RollerVecEnv("roller_gym/RollerHold-v2", n_envs=2, monitor="/proc/nonexistent/x")

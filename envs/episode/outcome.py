@@ -127,7 +127,8 @@ def outcome_of(reward, success, k, steps, sr, context, cr, i):
             trig.select((estimate != estimate) & (not failed), np.inf, estimate),
             rate * target,  # ψ*
             error,
-            trig.select(success(s, k), 1.0, 0.0))  # is_success
+            # is_success: never on a step that ends the episode by failing
+            trig.select(lifting | slipping | failed, 0.0, trig.select(success(s, k), 1.0, 0.0)))
 
 
 def _put_rows(b, start, values):

@@ -57,7 +57,8 @@ INFO_KEYS: dict[str, tuple[type, str]] = {
     "tol_met": (bool, "the step met the integrator's tolerance (False: not verified: out "
                      "of reach of float64 or of the substeps a step may take, or its error "
                      "estimate grew past it along the step)"),
-    "is_success": (bool, "the task's success rule holds (see the task's docs)"),
+    "is_success": (bool, "the task's success rule holds (see the task's docs), on a step "
+                         "that did not end in lift-off, slip or a non-finite state"),
 }
 
 #: Per-roller numbers a step's outcome takes besides the integrator's, the environments' own

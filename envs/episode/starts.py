@@ -109,14 +109,15 @@ def vector_seeds(seed: Any, n: int) -> list[int | None] | None:
                 f"{n - 1} for num_envs={n}, which must be at most 2**64 - 1: seed must be at "
                 f"most {SEED_MAX - n + 1}")
         return [int(seed) + i for i in range(n)]
-    if isinstance(seed, list | tuple | range | np.ndarray) and all(_valid_seed(s) for s in seed):
+    sequence = isinstance(seed, list | tuple | range) or (
+        isinstance(seed, np.ndarray) and seed.ndim == 1)
+    if sequence and all(_valid_seed(s) for s in seed):
         if len(seed) != n:
             raise ValueError(f"seed has {len(seed)} entries for num_envs={n}; it needs {n}")
         return [None if s is None else int(s) for s in seed]
     raise ValueError(
         f"seed={shown(seed)} must be None, an integer in [0, 2**64 - 1], or a list, tuple, "
-        "range or "
-        f"array of {n} of them"
+        f"range or 1-D array of {n} of them"
     )
 
 
@@ -216,7 +217,7 @@ def start_episodes(
         params[:, 0] = [_target_option(task, options["target"], scene, i) for i in range(n)]
     target, target_rate = task.target_at(params, np.zeros(n))
     if options.get("state") is not None:
-        phi, phi_dot = state_option(options["state"], scene, n)
+        phi, phi_dot = state_option(options["state"], scene, n, config.dt)
     else:
         phi, phi_dot = _draw_states(task, scene, target, seed, episode)
     return Starts(scene, params, np.asarray(target, float), np.asarray(target_rate, float), phi,
@@ -298,12 +299,15 @@ def _target_option(task: Any, value: Any, scene: Scene, i: int) -> float:
         raise ValueError(f"{which} ({shown(scene.item(i))}): {error}") from None
 
 
-def state_option(value: Any, scene: Scene, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """(φ, φ') arrays of n from ``reset(options={"state": (φ [rad], φ' [rad/s])})``.
+def state_option(value: Any, scene: Scene, n: int, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """(φ, φ') arrays of n from ``reset(options={"state": (φ [rad], φ' [rad/s])})``, for
+    control steps of ``dt`` [s].
 
     Raises:
-        ValueError: not a pair of finite real numbers, or a state at which the roller does
-            not roll under zero torque (N <= 0 or |F| > μN): such an episode could not start.
+        ValueError: not a pair of finite real numbers, a speed that turns the roller more than
+            :data:`~roller_gym.validation.LARGEST_PHASE_PER_STEP` rad in a step (which no
+            integrator follows within its substeps), or a state at which the roller does not
+            roll under zero torque (N <= 0 or |F| > μN): such an episode could not start.
     """
     pair = tuple(value) if isinstance(value, tuple | list | np.ndarray) else None
     if (pair is None or len(pair) != 2
@@ -315,6 +319,11 @@ def state_option(value: Any, scene: Scene, n: int) -> tuple[np.ndarray, np.ndarr
     if not abs(float(pair[0])) < trig.DOMAIN:
         raise ValueError(f"options['state']={shown(value)}: phi must be within "
                          f"±{trig.DOMAIN:.4g} rad, where the sines are defined")
+    fastest = validation.LARGEST_PHASE_PER_STEP / dt
+    if not abs(float(pair[1])) <= fastest:
+        raise ValueError(f"options['state']={shown(value)}: phi_dot must be within ±{fastest:.4g} "
+                         f"rad/s, {validation.LARGEST_PHASE_PER_STEP:g} rad per step of "
+                         f"dt={dt:g} s at most (faster, no integrator follows it)")
     phi, phi_dot = np.full(n, float(pair[0])), np.full(n, float(pair[1]))
     with np.errstate(all="ignore"):
         start = at_start(scene, phi, phi_dot)

@@ -41,31 +41,39 @@ __all__ = [
 Array = float | np.ndarray
 
 
-def _check_numbers(**values: Any) -> None:
-    """Raise a ValueError naming the first of ``values`` (states, torques) that is not
-    numbers NumPy computes with (a number or an array of them; complex and bool included,
-    for complex-step derivatives)."""
+def _numbers(**values: Any) -> tuple[Any, ...]:
+    """``values`` (states, torques) as NumPy computes with them: numbers and arrays as they
+    are, lists and tuples as arrays; a ValueError names the first that is not numbers (a
+    number or an array of them; complex and bool included, for complex-step derivatives)."""
+    out = []
     for name, value in values.items():
+        if isinstance(value, list | tuple):
+            try:
+                value = np.asarray(value)
+            except ValueError:  # a ragged list
+                value = np.asarray(None)
         try:
             kind = np.asarray(value).dtype.kind
-        except ValueError:  # a ragged list
+        except ValueError:
             kind = "O"
         if kind not in "biufc":
-            raise ValueError(f"{name}={shown(value)} must be numbers: a number or an array of them "
-                             "(within float64's range)")
+            raise ValueError(f"{name}={shown(values[name])} must be numbers: a number or an "
+                             "array of them (within float64's range)")
+        out.append(value)
+    return tuple(out)
 
 
 def acceleration(scene: Scene, phi: Array, phi_dot: Array, tau: Array) -> Array:
     """φ'' [rad/s²] at the state (φ [rad], φ' [rad/s]) under the drive τ [N·m]."""
     scene = require_scene(scene)
-    _check_numbers(phi=phi, phi_dot=phi_dot, tau=tau)
+    phi, phi_dot, tau = _numbers(phi=phi, phi_dot=phi_dot, tau=tau)
     return eq.accel(phi, phi_dot, tau, *scene.params)
 
 
 def moment_of_inertia(scene: Scene, phi: Array) -> Array:
     """J_I [kg·m²], the moment of inertia about the instant center."""
     scene = require_scene(scene)
-    _check_numbers(phi=phi)
+    phi, = _numbers(phi=phi)
     return eq.inertia(phi, scene.m, scene.r, scene.kappa, scene.e, scene.k)
 
 
@@ -83,7 +91,7 @@ class Kinematics:
 def kinematics(scene: Scene, phi: Array) -> Kinematics:
     """ψ, θ and the positions of O1, C and I at φ [rad]."""
     scene = require_scene(scene)
-    _check_numbers(phi=phi)
+    phi, = _numbers(phi=phi)
     _, psi, theta = eq.shape_factors(phi, scene.r, scene.kappa)
     o1x, o1y, cx, cy, ix, iy = eq.positions(phi, scene.r, scene.kappa, scene.e)
     return Kinematics(psi, theta, (o1x, o1y), (cx, cy), (ix, iy))
@@ -92,7 +100,7 @@ def kinematics(scene: Scene, phi: Array) -> Kinematics:
 def energy(scene: Scene, phi: Array, phi_dot: Array) -> Array:
     """E = ½ J_I φ'² + V [J], zero at rest at φ = 0."""
     scene = require_scene(scene)
-    _check_numbers(phi=phi, phi_dot=phi_dot)
+    phi, phi_dot = _numbers(phi=phi, phi_dot=phi_dot)
     m, r, kappa, e, k, g, _ = scene.params
     return eq.energy(phi, phi_dot, m, r, kappa, e, k, g)
 
@@ -100,7 +108,7 @@ def energy(scene: Scene, phi: Array, phi_dot: Array) -> Array:
 def power(scene: Scene, phi_dot: Array, tau: Array) -> Array:
     """dE/dt = τφ' − c φ'² [W]."""
     scene = require_scene(scene)
-    _check_numbers(phi_dot=phi_dot, tau=tau)
+    phi_dot, tau = _numbers(phi_dot=phi_dot, tau=tau)
     return eq.denergy_dt(phi_dot, tau, scene.damping)
 
 
@@ -128,7 +136,7 @@ class Contact:
 def contact(scene: Scene, phi: Array, phi_dot: Array, tau: Array) -> Contact:
     """The contact forces at the state under the drive τ [N·m] (φ'' from the dynamics)."""
     scene = require_scene(scene)
-    _check_numbers(phi=phi, phi_dot=phi_dot, tau=tau)
+    phi, phi_dot, tau = _numbers(phi=phi, phi_dot=phi_dot, tau=tau)
     m, r, kappa, e, _, g, _ = scene.params
     phi_ddot = acceleration(scene, phi, phi_dot, tau)
     normal, friction = eq.contact_forces(phi, phi_dot, phi_ddot, m, r, kappa, e, g)
@@ -139,7 +147,7 @@ def contact(scene: Scene, phi: Array, phi_dot: Array, tau: Array) -> Contact:
 def holding_torque(scene: Scene, phi: Array) -> Array:
     """The torque [N·m] that holds the roller at rest at φ: dV/dφ = m g (r sin ψ + e sin φ)."""
     scene = require_scene(scene)
-    _check_numbers(phi=phi)
+    phi, = _numbers(phi=phi)
     m, r, kappa, e, _, g, _ = scene.params
     return eq.dpotential(phi, m, r, kappa, e, g)
 
@@ -153,7 +161,7 @@ def linearize(
     ∂φ''/∂τ = 1/J_I. Shapes (..., 2, 2) and (..., 2, 1).
     """
     scene = require_scene(scene)
-    _check_numbers(phi=phi, phi_dot=phi_dot, tau=tau)
+    phi, phi_dot, tau = _numbers(phi=phi, phi_dot=phi_dot, tau=tau)
     m, r, kappa, e, k, g, c = scene.params
     _, d_phi, d_w = eq.accel_jacobian(phi, phi_dot, tau, m, r, kappa, e, k, g, c)
     j = eq.inertia(phi, m, r, kappa, e, k)
@@ -177,7 +185,7 @@ def small_oscillation_frequency(scene: Scene, phi: Array = 0.0) -> Array:
         ValueError: φ is not a stable rest position (no oscillation).
     """
     scene = require_scene(scene)
-    _check_numbers(phi=phi)
+    phi, = _numbers(phi=phi)
     A, _ = linearize(scene, phi, 0.0, holding_torque(scene, phi))
     stiffness = -A[..., 1, 0]
     if np.any(stiffness <= 0):
@@ -207,6 +215,13 @@ MAX_TURNS = 64
 RESOLUTIONS = (100, 1_000_000)
 
 
+def _check_resolution(resolution: Any) -> None:
+    """ValueError unless ``resolution`` is an integer in :data:`RESOLUTIONS`."""
+    if not (whole_number(resolution) and RESOLUTIONS[0] <= resolution <= RESOLUTIONS[1]):
+        raise ValueError(f"resolution={shown(resolution)} must be an integer in "
+                         f"[{RESOLUTIONS[0]}, {RESOLUTIONS[1]}] (grid points per turn of φ)")
+
+
 def equilibria(scene: Scene, tau: float = 0.0, resolution: int = 4000) -> list[Equilibrium]:
     """The rest positions under the constant torque τ [N·m], sorted by φ.
 
@@ -230,9 +245,7 @@ def equilibria(scene: Scene, tau: float = 0.0, resolution: int = 4000) -> list[E
         raise ValueError("equilibria() takes a scalar scene; call it per element of a batch")
     if not finite_real(tau):
         raise ValueError(f"tau={shown(tau)} [N·m] must be a finite real number")
-    if not (whole_number(resolution) and RESOLUTIONS[0] <= resolution <= RESOLUTIONS[1]):
-        raise ValueError(f"resolution={shown(resolution)} must be an integer in [{RESOLUTIONS[0]}, "
-                         f"{RESOLUTIONS[1]}] (grid points per turn of φ)")
+    _check_resolution(resolution)
     m, r, kappa, e, _, g, _ = scene.params
     if kappa == 0 and e == 0:
         return []
@@ -286,6 +299,7 @@ def nearest_unstable_rests(r: np.ndarray, kappa: np.ndarray, e: np.ndarray,
     monotone, and its root there is refined likewise. The walk stops at the first unstable
     root, so the cost is that of the distance to it.
     """
+    _check_resolution(resolution)
     r, kappa, e = (np.ascontiguousarray(x, dtype=float).reshape(-1) for x in (r, kappa, e))
     rate = np.abs(r * kappa / (1.0 - r * kappa))
     with np.errstate(divide="ignore"):

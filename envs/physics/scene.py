@@ -67,14 +67,17 @@ def whole_number(x: Any) -> bool:
 def shown(value: Any, limit: int = 200) -> str:
     """``value``'s repr for an error message: its middle cut where it is longer than ``limit``
     characters, and described where Python refuses to write it (an integer past
-    ``sys.get_int_max_str_digits()`` digits, or a container holding one)."""
+    ``sys.get_int_max_str_digits()`` digits, or a container holding one) or its ``__repr__``
+    raises."""
     try:
         text = repr(value)
-    except ValueError:
+    except Exception:  # (any: a user's class may raise anything from its __repr__)
         if isinstance(value, int):
             digits = int(abs(value).bit_length() * math.log10(2)) + 1
             return f"<an integer of about {digits} digits>"
-        return f"<a {type(value).__name__} holding an integer too long to write>"
+        if isinstance(value, list | tuple | dict | set | frozenset):
+            return f"<a {type(value).__name__} holding a value Python cannot write>"
+        return f"<a {type(value).__name__} object>"
     half = max(limit // 2 - 2, 1)
     return text if len(text) <= limit else f"{text[:half]}...{text[-half:]}"
 
