@@ -79,10 +79,13 @@ def run_case(name: str, cache_dir: str) -> dict[str, Any]:
 
 
 def machine() -> dict[str, Any]:
-    """The cores (all, and those this process may use), the load averages and the versions."""
+    """The CPU, the cores (all, and those this process may use), the load averages and the
+    versions."""
     import numba
+    from roller_gym.bench import records
 
-    return {"cpu_count": os.cpu_count(), "usable_cores": len(os.sched_getaffinity(0)),
+    return {"cpu": records.machine()["cpu"], "cpu_count": os.cpu_count(),
+            "usable_cores": len(os.sched_getaffinity(0)),
             "load_average": list(os.getloadavg()), "platform": platform.platform(),
             "python": platform.python_version(), "numba": numba.__version__}
 

@@ -34,12 +34,14 @@ def _first_use(first: Results) -> list[str]:
     from roller_gym.bench.firstuse import CASES
 
     load = first["machine_before"]["load_average"][0]
+    cpu = f" of {first['machine_before']['cpu']}" if "cpu" in first["machine_before"] else ""
     lines = ["## The first step", "",
              "Seconds from a fresh process's start to the end of its first step (the import, "
              "the make, `reset` and one `step`): with an empty numba cache (cold: the kernels "
              "are compiled, and cached on disk) and then on the cache that run filled (warm), "
              f"measured {first['date'][:10]} on {first['machine_before']['usable_cores']} "
-             f"cores at a load average of {load:.1f} before the run, by "
+             f"cores{cpu} at a load average of {load:.1f} before the run (compile times differ "
+             "from one CPU to another several-fold), by "
              "`python -m roller_gym.bench.firstuse` (which writes "
              f"`{FIRST_USE_FILE.as_posix()}`; compile times grow several-fold on a busy "
              "machine).", "",
