@@ -50,6 +50,19 @@ _SINGLE = {"observation_space": "single_observation_space",
            "action_space": "single_action_space"}
 
 
+def _attribute(base: Any, name: Any, call: str) -> Any:
+    """``base``'s attribute ``name`` for ``call`` (get_attr, env_method): an AttributeError
+    (what SB3's ``has_attr`` catches) or a TypeError that names the call and the name."""
+    if not isinstance(name, str):
+        raise TypeError(f"{call}({shown(name)}): the attribute's name must be a str, not "
+                        f"{type(name).__name__}")
+    try:
+        return getattr(base, name)
+    except AttributeError:
+        raise AttributeError(f"{call}({name!r}): the native batch ({type(base).__name__}) has "
+                             f"no attribute {name!r}") from None
+
+
 class RollerVecEnv(VecEnv):
     """N sub-environments of a roller-gym task as one SB3 ``VecEnv``.
 
@@ -186,7 +199,7 @@ class RollerVecEnv(VecEnv):
         with one entry per sub-environment (``phi``, ``target``, …) gives each its own; the
         spaces are a sub-environment's; anything else is the batch's one value."""
         index = list(self._get_indices(indices))
-        value = getattr(self.venv.unwrapped, _SINGLE.get(attr_name, attr_name))
+        value = _attribute(self.venv.unwrapped, _SINGLE.get(attr_name, attr_name), "get_attr")
         if self._per_env(value):
             return [value[i].item() if value.ndim == 1 else value[i] for i in index]
         return [value] * len(index)
@@ -199,6 +212,9 @@ class RollerVecEnv(VecEnv):
         where the batch is made or through ``set_options`` and ``reset``."""
         index = list(self._get_indices(indices))
         base = self.venv.unwrapped
+        if not isinstance(attr_name, str):
+            raise TypeError(f"set_attr({shown(attr_name)}, ...): the attribute's name must be a "
+                            f"str, not {type(attr_name).__name__}")
         if attr_name in _STATE:
             current = getattr(base, attr_name)
             new = current.copy()
@@ -268,8 +284,8 @@ class RollerVecEnv(VecEnv):
                 f"methods act on all {self.num_envs} sub-environments at once, so indices "
                 f"may only be None (all of them); DummyVecEnv over single environments calls "
                 f"each on its own")
-        result = getattr(self.venv.unwrapped, method_name)(*method_args, **method_kwargs)
-        return [result] * len(index)
+        method = _attribute(self.venv.unwrapped, method_name, "env_method")
+        return [method(*method_args, **method_kwargs)] * len(index)
 
     @staticmethod
     def _entries(attr_name: str, value: Any, current: np.ndarray, count: int) -> np.ndarray:

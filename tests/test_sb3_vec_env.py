@@ -357,3 +357,18 @@ def test_a_state_too_fast_and_an_unwritable_monitor_are_refused_naming_them():
     np.testing.assert_array_equal(venv.get_attr("phi_dot"), before)
     with pytest.raises(ValueError, match=r"monitor='/proc/nonexistent/x' cannot be written"):
         RollerVecEnv("roller_gym/RollerHold-v2", n_envs=2, monitor="/proc/nonexistent/x")
+
+
+def test_unknown_attributes_are_named_and_stay_attribute_errors():
+    """SB3's has_attr catches AttributeError: a name the batch has not stays one, but says
+    which call and which name; a name that is not a str is a TypeError saying so."""
+    venv = RollerVecEnv("roller_gym/RollerHold-v2", n_envs=3)
+    assert venv.has_attr("phi") and not venv.has_attr("nope")
+    for call in (lambda: venv.get_attr("nope"), lambda: venv.env_method("nope")):
+        with pytest.raises(AttributeError, match=r"\('nope'\): the native batch "
+                                                 r"\(RollerVectorEnv\) has no attribute 'nope'"):
+            call()
+    for call in (lambda: venv.get_attr(5), lambda: venv.set_attr(5, 1),
+                 lambda: venv.env_method(5)):
+        with pytest.raises(TypeError, match=r"\(5.*the attribute's name must be a str, not int"):
+            call()
