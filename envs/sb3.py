@@ -59,8 +59,8 @@ def _attribute(base: Any, name: Any, call: str) -> Any:
     try:
         return getattr(base, name)
     except AttributeError:
-        raise AttributeError(f"{call}({name!r}): the native batch ({type(base).__name__}) has "
-                             f"no attribute {name!r}") from None
+        raise AttributeError(f"{call}({shown(name)}): the native batch ({type(base).__name__}) "
+                             f"has no attribute {shown(name)}") from None
 
 
 class RollerVecEnv(VecEnv):
@@ -285,6 +285,9 @@ class RollerVecEnv(VecEnv):
                 f"may only be None (all of them); DummyVecEnv over single environments calls "
                 f"each on its own")
         method = _attribute(self.venv.unwrapped, method_name, "env_method")
+        if not callable(method):
+            raise TypeError(f"env_method({shown(method_name)}): the native batch's "
+                            f"{shown(method_name)} is not a method (get_attr reads it)")
         return [method(*method_args, **method_kwargs)] * len(index)
 
     @staticmethod

@@ -22,6 +22,7 @@ TensorBoard logs go to ``<log folder>/tensorboard``.
 from __future__ import annotations
 
 import argparse
+import ast
 import inspect
 import math
 import shlex
@@ -142,9 +143,15 @@ def checked_hyperparams(algo: str, items: list[str]) -> dict[str, Any]:
         if rule is not None and not rule[0](value):
             raise SystemExit(f"--hyperparams: {key}:{value!r} is not allowed: it must be "
                              f"{rule[1]}")
-        if key == "policy" and value not in algorithm_class(algo).policy_aliases:
-            raise SystemExit(f"--hyperparams: policy:{value!r} is not allowed: {algo}'s "
-                             f"policies are {', '.join(algorithm_class(algo).policy_aliases)}")
+        if key == "policy" and value not in POLICIES:
+            raise SystemExit(f"--hyperparams: policy:{value!r} is not allowed: the tasks' "
+                             f"observations are vectors, for {', '.join(POLICIES)}")
+        if key == "ent_coef" and isinstance(value, str) and algo != "sac":
+            raise SystemExit(f"--hyperparams: ent_coef:{value!r} is not allowed: 'auto' is "
+                             f"SAC's; {algo}'s ent_coef is a number >= 0")
+        if key in ("noise_type", "noise_std") and algo == "ppo":
+            raise SystemExit(f"--hyperparams: {key} is not allowed: PPO takes no action noise "
+                             "(it explores through its policy's own distribution)")
         if key == "env_kwargs" and not isinstance(value, dict):
             raise SystemExit(f"--hyperparams: env_kwargs:{value!r} is not allowed: it must be a "
                              "dict of the environment's keyword arguments (or use --env-kwargs)")
@@ -158,10 +165,58 @@ def _real(low: float, high: float, open_low: bool = False) -> Callable[[Any], bo
 
 
 def _train_freq(value: Any) -> bool:
-    """Whether ``value`` is SB3's train_freq: an integer >= 1, or (integer, "step"/"episode")."""
-    if isinstance(value, tuple) and len(value) == 2 and value[1] in ("step", "episode"):
+    """Whether ``value`` is SB3's train_freq: an integer >= 1, or (integer, "step"/"episode")
+    as a tuple or a list (rl-zoo3's files write both)."""
+    if isinstance(value, tuple | list) and len(value) == 2 and value[1] in ("step", "episode"):
         value = value[0]
     return isinstance(value, int) and not isinstance(value, bool) and 1 <= value <= 10**9
+
+
+def _schedule(low: float) -> Callable[[Any], bool]:
+    """Whether a value is a number > ``low``, or rl-zoo3's linear schedule "lin_<number>"."""
+    def check(value: Any) -> bool:
+        if isinstance(value, str) and value.startswith("lin_"):
+            try:
+                value = float(value[4:])
+            except ValueError:
+                return False
+        return finite_real(value) and not isinstance(value, bool) and low < value <= 1e9
+    return check
+
+
+def _normalize(value: Any) -> bool:
+    """Whether ``value`` is rl-zoo3's normalize: a bool, or VecNormalize's keyword arguments as
+    a dict or its text ("dict(norm_obs=True)", "{'norm_obs': True}"), which rl-zoo3 evaluates."""
+    if isinstance(value, bool):
+        return True
+    if isinstance(value, str):
+        try:
+            tree = ast.parse(value.strip(), mode="eval").body
+            if (isinstance(tree, ast.Call) and isinstance(tree.func, ast.Name)
+                    and tree.func.id == "dict" and not tree.args):
+                value = {kw.arg: ast.literal_eval(kw.value) for kw in tree.keywords}
+            else:
+                value = ast.literal_eval(tree)
+        except (ValueError, SyntaxError, TypeError):
+            return False
+    if not isinstance(value, dict):
+        return False
+    from stable_baselines3.common.vec_env import VecNormalize
+    known = set(inspect.signature(VecNormalize).parameters) - {"venv"}
+    return set(value) <= known
+
+
+def _ent_coef(value: Any) -> bool:
+    """Whether ``value`` is an entropy coefficient: a number >= 0, or SAC's "auto" or
+    "auto_<initial value > 0>"."""
+    if isinstance(value, str) and value.startswith("auto"):
+        if value == "auto":
+            return True
+        try:
+            return value[4] == "_" and float(value[5:]) > 0 and finite_real(float(value[5:]))
+        except (ValueError, IndexError):
+            return False
+    return finite_real(value) and not isinstance(value, bool) and 0 <= value <= 1e9
 
 
 #: Values of hyperparameters checked before rl-zoo3 starts (where a wrong one fails later in
@@ -170,19 +225,19 @@ VALUE_RULES: dict[str, tuple[Callable[[Any], bool], str]] = {
     "gamma": (_real(0.0, 1.0, open_low=True), "a number in (0, 1]"),
     "tau": (_real(0.0, 1.0, open_low=True), "a number in (0, 1]"),
     "gae_lambda": (_real(0.0, 1.0), "a number in [0, 1]"),
-    "clip_range": (_real(0.0, 1e9, open_low=True), "a number > 0"),
-    "ent_coef": (lambda v: _real(0.0, 1e9)(v) or (isinstance(v, str) and v.startswith("auto")),
-                 "a number >= 0 (or 'auto' for SAC)"),
+    "clip_range": (_schedule(0.0), "a number > 0, or lin_<number> (from it down to 0)"),
+    "ent_coef": (_ent_coef, "a number >= 0, or for SAC 'auto' or 'auto_<initial value > 0>'"),
     "vf_coef": (_real(0.0, 1e9), "a number >= 0"),
     "max_grad_norm": (_real(0.0, 1e9, open_low=True), "a number > 0"),
     "noise_std": (_real(0.0, 1e9, open_low=True), "a number > 0 (in action units)"),
     "noise_type": (lambda v: v in ("normal", "ornstein-uhlenbeck"),
                    "'normal' or 'ornstein-uhlenbeck', with noise_std"),
-    "normalize": (lambda v: isinstance(v, bool | dict) or (
-        isinstance(v, str) and v.startswith("dict(")),
-        "True, False or a dict of VecNormalize's arguments (or its text, 'dict(...)')"),
+    "normalize": (_normalize, "True, False or VecNormalize's keyword arguments (a dict, or its "
+                  "text: 'dict(norm_obs=True)')"),
     "train_freq": (_train_freq, "an integer >= 1, or (integer, 'step' or 'episode')"),
 }
+#: The policies for the tasks' observations (a vector: a Box), by rl-zoo3's alias.
+POLICIES = ("MlpPolicy",)
 
 
 def _learning_rate(value: Any) -> bool:

@@ -432,12 +432,20 @@ def test_train_rllib_refuses_env_kwargs_the_env_refuses_before_ray_starts(item, 
                          r"\(0, 1\]"),
     ("sac", "gamma:5.0", "--hyperparams: gamma:5.0 is not allowed"),
     ("td3", "tau:-1", "--hyperparams: tau:-1 is not allowed"),
-    ("ppo", "policy:Nope", "--hyperparams: policy:'Nope' is not allowed: ppo's policies are "
-                           "MlpPolicy"),
+    ("ppo", "policy:Nope", "--hyperparams: policy:'Nope' is not allowed: the tasks' "
+                           "observations are vectors, for MlpPolicy"),
     ("sac", "train_freq:-3", "--hyperparams: train_freq:-3 is not allowed"),
     ("td3", "noise_type:weird", "--hyperparams: noise_type:'weird' is not allowed"),
     ("sac", "noise_type:normal", "--hyperparams: noise_type needs noise_std"),
     ("ppo", "normalize:maybe", "--hyperparams: normalize:'maybe' is not allowed"),
+    ("sac", "ent_coef:auto_abc", "--hyperparams: ent_coef:'auto_abc' is not allowed"),
+    ("sac", "ent_coef:auto_0", "--hyperparams: ent_coef:'auto_0' is not allowed"),
+    ("ppo", "ent_coef:auto", "--hyperparams: ent_coef:'auto' is not allowed: 'auto' is SAC's"),
+    ("ppo", "noise_std:0.1", "--hyperparams: noise_std is not allowed: PPO takes no action"),
+    ("sac", "normalize:dict(bogus=1)", "--hyperparams: normalize:'dict\\(bogus=1\\)' is not"),
+    ("sac", "normalize:dict(", "--hyperparams: normalize:'dict\\(' is not allowed"),
+    ("sac", "policy:MultiInputPolicy", "--hyperparams: policy:'MultiInputPolicy' is not allowed: "
+                                       "the tasks' observations are vectors"),
 ])
 def test_train_refuses_hyperparams_before_rl_zoo3_starts(algo, item, message, tmp_path,
                                                           monkeypatch):
@@ -449,6 +457,19 @@ def test_train_refuses_hyperparams_before_rl_zoo3_starts(algo, item, message, tm
     monkeypatch.setattr(rl_zoo3.train, "train", lambda: pytest.fail("rl-zoo3 started"))
     with pytest.raises(SystemExit, match=message):
         train.main(["--algo", algo, "--hyperparams", item, "--log-folder", str(tmp_path)])
+
+
+@NEEDS_RL_ZOO3
+@pytest.mark.parametrize(("algo", "item"), [
+    # forms rl-baselines3-zoo's own hyperparameter files use
+    ("ppo", "clip_range:lin_0.2"), ("sac", "train_freq:[1, 'episode']"),
+    ("sac", "normalize:\"{'norm_obs': True, 'norm_reward': False}\""),
+    ("ppo", "normalize:dict(norm_obs=True)"), ("sac", "ent_coef:auto_0.1"),
+])
+def test_train_takes_the_forms_of_rl_zoo3s_own_files(algo, item):
+    from roller_gym.scripts import train
+
+    assert train.checked_hyperparams(algo, [item])
 
 
 @NEEDS_RL_ZOO3

@@ -658,6 +658,10 @@ def test_the_fourth_pass_inputs_get_messages_naming_them():
         (lambda: vector.reset(seed=np.array(3)), r"seed=array\(3\) must be None"),
         (lambda: analysis.nearest_unstable_rests([0.1], [1.0], [0.08], -1),
          r"resolution=-1 must be an integer in \[100, 1000000\]"),
+        (lambda: analysis.nearest_unstable_rests([math.nan], [1.0], [0.08]),  # (it hung)
+         r"r=array\(\[nan\]\) must be finite real numbers"),
+        (lambda: analysis.nearest_unstable_rests([0.1, 0.2], [1.0], [0.08, 0.08]),
+         r"kappa=array\(\[1\.\]\) must be finite real numbers, as many as r's 2"),
         (lambda: RollerEnv(Unregistered), r"task=.*Unregistered.* is not registered"),
     ]
     for call, message in cases:

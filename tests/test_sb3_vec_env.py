@@ -368,6 +368,9 @@ def test_unknown_attributes_are_named_and_stay_attribute_errors():
         with pytest.raises(AttributeError, match=r"\('nope'\): the native batch "
                                                  r"\(RollerVectorEnv\) has no attribute 'nope'"):
             call()
+    with pytest.raises(TypeError, match=r"env_method\('phi_dot'\): the native batch's "
+                                        r"'phi_dot' is not a method"):
+        venv.env_method("phi_dot")
     for call in (lambda: venv.get_attr(5), lambda: venv.set_attr(5, 1),
                  lambda: venv.env_method(5)):
         with pytest.raises(TypeError, match=r"\(5.*the attribute's name must be a str, not int"):

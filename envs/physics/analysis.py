@@ -300,7 +300,13 @@ def nearest_unstable_rests(r: np.ndarray, kappa: np.ndarray, e: np.ndarray,
     root, so the cost is that of the distance to it.
     """
     _check_resolution(resolution)
-    r, kappa, e = (np.ascontiguousarray(x, dtype=float).reshape(-1) for x in (r, kappa, e))
+    arrays = _numbers(r=r, kappa=kappa, e=e)
+    for name, x in zip(("r", "kappa", "e"), arrays, strict=True):
+        x = np.asarray(x)
+        if x.dtype.kind not in "iuf" or not np.isfinite(x).all() or x.size != np.size(arrays[0]):
+            raise ValueError(f"{name}={shown(x)} must be finite real numbers, as many as r's "
+                             f"{np.size(arrays[0])}")
+    r, kappa, e = (np.ascontiguousarray(x, dtype=float).reshape(-1) for x in arrays)
     rate = np.abs(r * kappa / (1.0 - r * kappa))
     with np.errstate(divide="ignore"):
         half = np.where(kappa == 0.0, math.pi, math.pi * np.minimum(1.0 / rate, MAX_TURNS))
