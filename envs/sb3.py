@@ -50,12 +50,18 @@ _SINGLE = {"observation_space": "single_observation_space",
            "action_space": "single_action_space"}
 
 
+def _attribute_name(name: Any, call: str) -> None:
+    """A TypeError naming ``call`` (get_attr, set_attr, env_method) unless ``name`` is a
+    str."""
+    if not isinstance(name, str):
+        raise TypeError(f"{call}({shown(name)}, ...): the attribute's name must be a str, not "
+                        f"{type(name).__name__}")
+
+
 def _attribute(base: Any, name: Any, call: str) -> Any:
     """``base``'s attribute ``name`` for ``call`` (get_attr, env_method): an AttributeError
     (what SB3's ``has_attr`` catches) or a TypeError that names the call and the name."""
-    if not isinstance(name, str):
-        raise TypeError(f"{call}({shown(name)}): the attribute's name must be a str, not "
-                        f"{type(name).__name__}")
+    _attribute_name(name, call)
     try:
         return getattr(base, name)
     except AttributeError:
@@ -212,9 +218,7 @@ class RollerVecEnv(VecEnv):
         where the batch is made or through ``set_options`` and ``reset``."""
         index = list(self._get_indices(indices))
         base = self.venv.unwrapped
-        if not isinstance(attr_name, str):
-            raise TypeError(f"set_attr({shown(attr_name)}, ...): the attribute's name must be a "
-                            f"str, not {type(attr_name).__name__}")
+        _attribute_name(attr_name, "set_attr")
         if attr_name in _STATE:
             current = getattr(base, attr_name)
             new = current.copy()

@@ -136,9 +136,6 @@ def checked_hyperparams(algo: str, items: list[str]) -> dict[str, Any]:
                 and least <= value <= HYPERPARAM_COUNT_MAX):
             raise SystemExit(f"--hyperparams: {key}:{value!r} is not allowed: it must be an "
                              f"integer >= {least} and <= {HYPERPARAM_COUNT_MAX:.0e}")
-        if key == "learning_rate" and not _learning_rate(value):
-            raise SystemExit(f"--hyperparams: learning_rate:{value!r} is not allowed: it must "
-                             "be a number > 0, or lin_<number> (from it down to 0)")
         rule = VALUE_RULES.get(key)
         if rule is not None and not rule[0](value):
             raise SystemExit(f"--hyperparams: {key}:{value!r} is not allowed: it must be "
@@ -172,15 +169,18 @@ def _train_freq(value: Any) -> bool:
     return isinstance(value, int) and not isinstance(value, bool) and 1 <= value <= 10**9
 
 
-def _schedule(low: float) -> Callable[[Any], bool]:
-    """Whether a value is a number > ``low``, or rl-zoo3's linear schedule "lin_<number>"."""
+def _schedule(low: float, high: float = math.inf) -> Callable[[Any], bool]:
+    """Whether a value is a number in (low, high], or rl-zoo3's linear schedule
+    "lin_<number>" from such a number down to 0."""
+    number = _real(low, high, open_low=True)
+
     def check(value: Any) -> bool:
         if isinstance(value, str) and value.startswith("lin_"):
             try:
                 value = float(value[4:])
             except ValueError:
                 return False
-        return finite_real(value) and not isinstance(value, bool) and low < value <= 1e9
+        return number(value)
     return check
 
 
@@ -213,10 +213,10 @@ def _ent_coef(value: Any) -> bool:
         if value == "auto":
             return True
         try:
-            return value[4] == "_" and float(value[5:]) > 0 and finite_real(float(value[5:]))
+            return value[4] == "_" and _real(0.0, math.inf, open_low=True)(float(value[5:]))
         except (ValueError, IndexError):
             return False
-    return finite_real(value) and not isinstance(value, bool) and 0 <= value <= 1e9
+    return _real(0.0, 1e9)(value)
 
 
 #: Values of hyperparameters checked before rl-zoo3 starts (where a wrong one fails later in
@@ -225,7 +225,8 @@ VALUE_RULES: dict[str, tuple[Callable[[Any], bool], str]] = {
     "gamma": (_real(0.0, 1.0, open_low=True), "a number in (0, 1]"),
     "tau": (_real(0.0, 1.0, open_low=True), "a number in (0, 1]"),
     "gae_lambda": (_real(0.0, 1.0), "a number in [0, 1]"),
-    "clip_range": (_schedule(0.0), "a number > 0, or lin_<number> (from it down to 0)"),
+    "learning_rate": (_schedule(0.0), "a number > 0, or lin_<number> (from it down to 0)"),
+    "clip_range": (_schedule(0.0, 1e9), "a number > 0, or lin_<number> (from it down to 0)"),
     "ent_coef": (_ent_coef, "a number >= 0, or for SAC 'auto' or 'auto_<initial value > 0>'"),
     "vf_coef": (_real(0.0, 1e9), "a number >= 0"),
     "max_grad_norm": (_real(0.0, 1e9, open_low=True), "a number > 0"),
@@ -238,16 +239,6 @@ VALUE_RULES: dict[str, tuple[Callable[[Any], bool], str]] = {
 }
 #: The policies for the tasks' observations (a vector: a Box), by rl-zoo3's alias.
 POLICIES = ("MlpPolicy",)
-
-
-def _learning_rate(value: Any) -> bool:
-    """Whether ``value`` is a learning rate rl-zoo3 takes: a number > 0 or "lin_<number>"."""
-    if isinstance(value, str) and value.startswith("lin_"):
-        try:
-            value = float(value[4:])
-        except ValueError:
-            return False
-    return finite_real(value) and value > 0
 
 
 def zoo_arguments(args: argparse.Namespace, conf: str) -> list[str]:
