@@ -60,7 +60,11 @@ hits = {{}}
 for env in envs:  # the task's kernels (made per task, not module attributes)
     k = env.unwrapped._outcome.kernels
     for value in (k.loop, k.parallel, *k.fused.values(), *k.one.values()):
-        if sum(value.stats.cache_hits.values()):
+        if hasattr(value, "c_functions"):  # the parallel fused kernel's C functions
+            for c in value.c_functions():
+                if c.cache_hits:
+                    hits["c." + c.__qualname__] = False
+        elif sum(value.stats.cache_hits.values()):
             hits["task." + value.py_func.__qualname__] = bool(value.targetoptions.get("parallel"))
 for name, module in list(sys.modules.items()):
     if name.startswith("roller_gym"):
@@ -116,6 +120,7 @@ def test_a_read_only_package_caches_user_wide() -> None:
         assert second["compiled"] == []  # every kernel loaded from the first one's cache
         assert second["hits"], "nothing loaded from the cache"
         assert any(second["hits"].values()), "no parallel kernel loaded from the cache"
+        assert any(name.startswith("c.") for name in second["hits"]), "no C function loaded"
     finally:
         for path in root.rglob("*"):
             if path.is_dir():

@@ -392,7 +392,8 @@ def test_a_pickled_environment_runs_the_kernels_it_was_compiled_for():
     assert compiles.names == []
     kernels = envs[0].unwrapped._outcome.kernels
     for kernel in (kernels.loop, *kernels.fused.values(), *kernels.one.values()):
-        assert len(kernel.signatures) <= 1, (kernel.py_func.__qualname__, kernel.signatures)
+        if hasattr(kernel, "signatures"):  # (not the parallel one: C functions, one signature)
+            assert len(kernel.signatures) <= 1, (kernel.py_func.__qualname__, kernel.signatures)
 
 
 @pytest.mark.parametrize("env_id", IDS)

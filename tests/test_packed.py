@@ -5,7 +5,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 import pytest
-from roller_gym.physics.packed import pack, unpack
+from roller_gym.physics.packed import PACKED_CALL, call_packed, pack, pack_row, table_at, unpack
 
 
 @numba.njit
@@ -63,3 +63,40 @@ def test_arrays_that_do_not_pack_are_refused(array):
     another, have a table row."""
     with pytest.raises(ValueError, match="do not pack"):
         pack(np.zeros(3), array)
+
+
+@numba.njit
+def _packed_in_compiled_code(a, b, c, d, address):
+    """The table of (a, b, c, d) written in compiled code, and the C function at ``address``
+    called on it for rows 1..2."""
+    table = np.empty((4, 4), dtype=np.int64)
+    ok = (pack_row(table, 0, a), pack_row(table, 1, b), pack_row(table, 2, c),
+          pack_row(table, 3, d))
+    call_packed(address, table, 1, 3)
+    return table, ok
+
+
+def _scale_rows(pointer, lo, hi):
+    """Rows lo..hi−1 of the packed table's first array, times the third array's first value."""
+    table = table_at(pointer, 4)
+    a, factor = unpack(table, 0, numba.float64), unpack(table, 2, numba.int64)[0, 0]
+    for i in range(lo, hi):
+        for j in range(a.shape[1]):
+            a[i, j] *= factor
+
+
+def test_a_table_written_in_compiled_code_is_pythons_and_its_c_function_runs_on_it():
+    """pack_row in compiled code writes the table pack writes in Python (address, rows,
+    columns, row stride); call_packed runs a C function on exactly the rows it is given."""
+    rng = np.random.default_rng(1)
+    wide = rng.normal(size=(4, 9))
+    a, b = wide[:, :5], rng.normal(size=(2, 3)).astype(np.float32)
+    c, d = np.array([3, 4], dtype=np.int64), np.zeros((3, 70), dtype=bool)[:, :64]
+    before, padding = a.copy(), wide[:, 5:].copy()
+    c_function = numba.cfunc(PACKED_CALL)(_scale_rows)
+    table, ok = _packed_in_compiled_code(a, b, c, d, c_function.address)
+    assert all(ok)
+    np.testing.assert_array_equal(table, pack(a, b, c, d))
+    np.testing.assert_array_equal(a[[0, 3]], before[[0, 3]])
+    np.testing.assert_array_equal(a[1:3], 3 * before[1:3])
+    np.testing.assert_array_equal(wide[:, 5:], padding)  # the columns past a: untouched

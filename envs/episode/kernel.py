@@ -42,7 +42,7 @@ from roller_gym.episode.record import (
     O,
 )
 from roller_gym.episode.starts import at_start
-from roller_gym.physics.compiling import inlined, named
+from roller_gym.physics.compiling import c_function, inlined, named
 from roller_gym.physics.integrators import (
     CHUNK,
     PARALLEL_THRESHOLD,
@@ -56,7 +56,7 @@ from roller_gym.physics.integrators import (
     put_inputs,
     row_table,
 )
-from roller_gym.physics.packed import unpack
+from roller_gym.physics.packed import PACKED_CALL, call_packed, pack_row, table_at, unpack
 from roller_gym.task import OBSERVATION_FIELDS
 
 __all__ = ["Outcome", "OutcomeKernel", "TaskKernels", "flag_table", "info_rows", "outcome",
@@ -124,6 +124,81 @@ _TAYLOR, _RK = SCHEMES["taylor"], SCHEMES["rk8"]
 _TAYLOR_CHUNK, _RK_CHUNK = _TAYLOR.chunk, _RK.chunk
 _TAYLOR_SERIAL, _RK_SERIAL = _TAYLOR.kernels()[0], _RK.kernels()[0]
 _TAYLOR_ONE, _RK_ONE = _TAYLOR.one, _RK.one  # a roller alone: no chunk's lanes compiled
+
+
+#: The arrays of a packed table (:data:`_ONE_ARRAYS`: the single environment's, and the
+#: parallel fused kernel's).
+_PACKED = len(_ONE_ARRAYS)
+
+
+def _lazy_c_function(function: Callable) -> Callable[[], Any]:
+    """A function giving ``function`` compiled as a C function of
+    :data:`~roller_gym.physics.packed.PACKED_CALL` (compiled, or loaded from the cache, on
+    the first call)."""
+
+    @functools.cache
+    def compiled() -> Any:
+        return c_function(function, PACKED_CALL, nogil=True, error_model="numpy")
+
+    return compiled
+
+
+def _taylor_chunk_packed(pointer, lo, hi):
+    """The ``"taylor"`` scheme's physics of rollers lo..hi−1, from a packed table."""
+    io, tab, cfg = _unpack_one(table_at(pointer, _PACKED))[:3]
+    _TAYLOR_CHUNK(io, lo, hi, tab, cfg)
+
+
+def _rk_chunk_packed(pointer, lo, hi):
+    """The ``"rk8"`` scheme's physics of rollers lo..hi−1, from a packed table."""
+    io, tab, cfg = _unpack_one(table_at(pointer, _PACKED))[:3]
+    _RK_CHUNK(io, lo, hi, tab, cfg)
+
+
+_TAYLOR_CHUNK_C = _lazy_c_function(_taylor_chunk_packed)
+_RK_CHUNK_C = _lazy_c_function(_rk_chunk_packed)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", parallel=True)
+def _chunks_on_all_cores(addresses, io, tab, cfg, context, constants, observed, out, flags, obs,
+                         scratch):
+    """One pass over chunks of CHUNK rollers on all cores: each chunk's physics, then its
+    outcome, while the chunk's results are in cache; both C functions (``addresses``) of the
+    packed table of the arrays. One kernel for every task and scheme: the physics and the
+    outcome are compiled on their own, not inlined and optimised again into the parallel
+    loop (which made the first vector step of 4,096 rollers cost several seconds more)."""
+    table = np.empty((_PACKED, 4), dtype=np.int64)
+    pack_row(table, 0, io)
+    pack_row(table, 1, tab)
+    pack_row(table, 2, cfg)
+    pack_row(table, 3, context)
+    pack_row(table, 4, constants)
+    pack_row(table, 5, observed)
+    pack_row(table, 6, out)
+    pack_row(table, 7, flags)
+    pack_row(table, 8, obs)
+    pack_row(table, 9, scratch)
+    rollers = io.shape[1]
+    for c in numba.prange((rollers + CHUNK - 1) // CHUNK):
+        lo, hi = c * CHUNK, min(rollers, (c + 1) * CHUNK)
+        call_packed(addresses[0], table, lo, hi)
+        call_packed(addresses[1], table, lo, hi)
+
+
+def _parallel_fused(physics: Callable[[], Any], outcome: Callable[[], Any]) -> Callable:
+    """The parallel fused kernel of one scheme's physics and one task's outcome (C functions
+    made by :func:`_lazy_c_function`), called as a stepper's fused kernel; its attribute
+    ``c_functions()`` gives the two once it has run (none before)."""
+    addresses = []
+
+    def fused(io, tab, cfg, result, context, constants, observed, out, flags, obs, scratch):
+        if not addresses:
+            addresses.append(np.array([physics().address, outcome().address], dtype=np.int64))
+        _chunks_on_all_cores(addresses[0], io, tab, cfg, context, constants, observed, out,
+                             flags, obs, scratch)
+
+    fused.c_functions = lambda: (physics(), outcome()) if addresses else ()
+    return fused
 
 
 @dataclass(frozen=True)
@@ -195,25 +270,15 @@ def task_kernels(task: type) -> TaskKernels:
                           min(rollers, (c + 1) * CHUNK), result, context, observed, out, flags,
                           obs, np.empty(SCRATCH_SIZE))
 
-    @jit(parallel=True)
-    def taylor_and_outcome(io, tab, cfg, result, context, constants, observed, out, flags,
-                           obs, scratch):
-        rollers = io.shape[1]
-        for c in numba.prange((rollers + CHUNK - 1) // CHUNK):
-            lo, hi = c * CHUNK, min(rollers, (c + 1) * CHUNK)
-            _TAYLOR_CHUNK(io, lo, hi, tab, cfg)
-            outcome_range(reward, success, K(*_numbers(constants, n)), lo, hi, result, context,
-                          observed, out, flags, obs, np.empty(SCRATCH_SIZE))
+    # The outcome of rollers lo..hi−1 as a C function of a packed table, called through its
+    # address by the parallel fused kernel (compiled when that kernel is first needed).
+    def outcome_packed(pointer, lo, hi):
+        io, _, _, context, constants, observed, out, flags, obs = _unpack_one(
+            table_at(pointer, _PACKED))
+        outcome_range(reward, success, K(*_numbers(constants, n)), lo, hi, io[_STEP_ROWS:],
+                      context, observed, out, flags, obs, np.empty(SCRATCH_SIZE))
 
-    @jit(parallel=True)
-    def rk_and_outcome(io, tab, cfg, result, context, constants, observed, out, flags, obs,
-                       scratch):
-        rollers = io.shape[1]
-        for c in numba.prange((rollers + CHUNK - 1) // CHUNK):
-            lo, hi = c * CHUNK, min(rollers, (c + 1) * CHUNK)
-            _RK_CHUNK(io, lo, hi, tab, cfg)
-            outcome_range(reward, success, K(*_numbers(constants, n)), lo, hi, result, context,
-                          observed, out, flags, obs, np.empty(SCRATCH_SIZE))
+    outcome_c = _lazy_c_function(outcome_packed)
 
     @jit
     def taylor_then_outcome(io, tab, cfg, result, context, constants, observed, out, flags,
@@ -251,7 +316,8 @@ def task_kernels(task: type) -> TaskKernels:
 
     # the parallel fused kernels leave ``scratch`` unused (a chunk's is its own), as
     # ``parallel`` does
-    fused = {_TAYLOR.kernels()[1]: taylor_and_outcome, _RK.kernels()[1]: rk_and_outcome,
+    fused = {_TAYLOR.kernels()[1]: _parallel_fused(_TAYLOR_CHUNK_C, outcome_c),
+             _RK.kernels()[1]: _parallel_fused(_RK_CHUNK_C, outcome_c),
              _TAYLOR_SERIAL: taylor_then_outcome, _RK_SERIAL: rk_then_outcome}
     return TaskKernels(loop, parallel, fused,
                        {_TAYLOR_SERIAL: taylor_one, _RK_SERIAL: rk_one})
@@ -295,7 +361,8 @@ class OutcomeKernel:
     """
 
     def __init__(self, task: Any, num: int, fresh: bool = False, serial: bool = False) -> None:
-        self.kernels = task_kernels(type(task))
+        self._task_class = type(task)
+        self.kernels = task_kernels(self._task_class)
         self.constants = np.array(task.constants, dtype=float)
         self.observed = np.array([_FIELD_NUMBER[f] for f in task.observation],
                                  dtype=np.int64)
@@ -304,11 +371,19 @@ class OutcomeKernel:
         self.flags = flag_table(num)
         self.observation = np.empty((num, self.observed.size), dtype=np.float32)
         self.fresh = fresh
-        parallel = num >= PARALLEL_THRESHOLD and not serial
-        self._kernel = self.kernels.parallel if parallel else self.kernels.loop
-        if num == 1 and numba.config.DISABLE_JIT:  # loop's streaming stores run compiled only
-            self._kernel = functools.partial(_outcome_interpreted, kernel_owner(type(task)))
-        self._scratch = np.empty(0 if parallel else SCRATCH_SIZE)
+        self._parallel = num >= PARALLEL_THRESHOLD and not serial
+        self._link()
+        self._scratch = np.empty(0 if self._parallel else SCRATCH_SIZE)
+
+    def _link(self) -> None:
+        """The kernels, looked up by the task's class (again after unpickling: they are this
+        process's)."""
+        self.kernels = task_kernels(self._task_class)
+        self._kernel = self.kernels.parallel if self._parallel else self.kernels.loop
+        if self.table.shape[1] == 1 and numba.config.DISABLE_JIT:  # (loop's streaming stores
+            # run compiled only)
+            self._kernel = functools.partial(_outcome_interpreted,
+                                             kernel_owner(self._task_class))
 
     def run(self, result: np.ndarray) -> np.ndarray:
         """The outcome of the rollers' ``result`` (STEP_FIELDS rows × rollers, float64, laid
@@ -377,6 +452,12 @@ class OutcomeKernel:
         return (self.context, self.constants, self.observed, self.table, self.flags,
                 self.observation, self._scratch)
 
+    def __getstate__(self) -> dict[str, Any]:
+        state = dict(self.__dict__)
+        for name in ("kernels", "_kernel"):  # this process's, found again by the task's class
+            del state[name]
+        return state
+
     def __setstate__(self, state: dict[str, Any]) -> None:
         # Pickling copies a padded table into a compact one: pad it again, so that the kernels
         # run the layout they were compiled (and cached) for, not a second one.
@@ -386,6 +467,7 @@ class OutcomeKernel:
         state["flags"] = flag_table(flags.shape[1])
         state["flags"][...] = flags
         self.__dict__.update(state)
+        self._link()
 
     def _renew(self) -> None:
         if self.fresh:

@@ -16,8 +16,10 @@ from __future__ import annotations
 import sys
 import threading
 from collections.abc import Callable
+from types import SimpleNamespace
 
-from numba.core import event
+from numba.core import event, sigutils
+from numba.core.ccallback import CFunc
 from numba.extending import register_jitable
 
 #: Seconds a compile runs before its notice is printed.
@@ -110,3 +112,32 @@ def named(module: str, name: str, function: Callable) -> Callable:
     function.__module__ = module
     setattr(sys.modules[module], name, function)
     return inlined(function)
+
+
+class _CFunction(CFunc):
+    """A ``numba.cfunc`` whose compile (not its load from the cache) is announced as a
+    kernel's is: it reads as a dispatcher to :class:`_Notice`."""
+
+    @property
+    def py_func(self) -> Callable:
+        return self._pyfunc
+
+    @property
+    def stats(self) -> SimpleNamespace:
+        return SimpleNamespace(cache_path=getattr(self._cache, "_cache_path", None))
+
+    def _compile_uncached(self):
+        data = {"dispatcher": self, "args": self._sig.args, "return_type": self._sig.return_type}
+        with event.trigger_event("numba:compile", data=data):
+            return super()._compile_uncached()
+
+
+def c_function(function: Callable, signature: object, **options: object) -> CFunc:
+    """``function`` compiled as a C function of ``signature`` (``numba.cfunc``, with
+    ``options``), cached on disk and loaded from there by the next process; a compile that
+    takes a while is announced on stderr as a kernel's is."""
+    compiled = _CFunction(function, sigutils.normalize_signature(signature), locals={},
+                          options=options)
+    compiled.enable_caching()
+    compiled.compile()
+    return compiled
