@@ -508,3 +508,62 @@ def test_no_step_takes_more_substeps_than_the_documented_budget(method, case):
     out = step(scene, 0.4, 1.0, 0.2, DT, integrator=method, tolerance=tol)
     assert out.substeps <= integrators.MAX_SUBSTEPS
     assert out.finite
+
+
+@pytest.mark.parametrize("method", ["rk4", "rk8"])
+def test_loose_tolerances_on_a_tight_fit_claim_no_step_they_miss(method):
+    """tight_fit sweeps θ = φ/s about 100× faster than φ: at loose tolerances the controller
+    grew its substeps past the scheme's stable step, where the embedded estimate missed the
+    error up to 16-fold and tol_met still claimed the step (rk4, tol 1e-2: error 0.16 at the
+    first state below). Every substep is now at most stable_step / λ: on 300 random rolling
+    states at tol 1e-1 to 1e-3, no step that reports tol_met is off by more than tol, against
+    DOP853 at rtol = atol = 1e-12 on the independent right-hand side."""
+    scene = PRESETS["tight_fit"]
+    rng = np.random.default_rng(20261127)
+    n = 300
+    phi = np.concatenate(([-2.0526113769241086], rng.uniform(-np.pi, np.pi, n - 1)))
+    w = np.concatenate(([5.443725526868146], rng.uniform(-10, 10, n - 1)))
+    tau = np.concatenate(([-0.10538505069704085], rng.uniform(-0.5, 0.5, n - 1)))
+    f = _independent_rhs(*(np.full(n, v) for v in (scene.m, scene.r, scene.R, scene.e,
+                                                   scene.k, scene.g, scene.damping)), tau)
+    sol = solve_ivp(f, (0, DT), np.concatenate((phi, w)), method="DOP853", rtol=1e-12,
+                    atol=1e-12)
+    ref = sol.y[:, -1].reshape(2, n)
+    for tol in (1e-1, 1e-2, 1e-3):
+        out = step(scene, phi, w, tau, DT, integrator=method, tolerance=tol)
+        err = np.maximum(np.abs(out.phi - ref[0]), np.abs(out.phi_dot - ref[1]))
+        claimed = out.tol_met & out.finite
+        assert claimed.sum() >= 50, claimed.sum()  # (the rest lift off or slip)
+        assert (err[claimed] <= tol).all(), (tol, np.flatnonzero(claimed & (err > tol)))
+
+
+@pytest.mark.parametrize("method", ["rk4", "rk8"])
+def test_fixed_substeps_claim_tol_only_within_the_stable_step(method):
+    """With fixed substeps the estimate (classical RK4 against its embedded 3rd order; DOP853's
+    blend) was reported as verified even on substeps far past the scheme's stable step, where
+    it missed the error up to 650-fold (paper, rk4, one substep: error 2.0e-3 at tol 1e-3,
+    estimate 3.1e-6). Such a step now reports tol_met False: on 200 random states of each of
+    three scenes at 1, 2 and 5 substeps, no step that claims tol is off by more than tol,
+    against DOP853 at rtol = atol = 1e-12 on the independent right-hand side."""
+    rng = np.random.default_rng(6)
+    n, claimed_total = 200, 0
+    for name in ("paper", "rim_mass", "tight_fit"):
+        scene = PRESETS[name]
+        phi, w = rng.uniform(-np.pi, np.pi, n), rng.uniform(-8, 8, n)
+        tau = rng.uniform(-1, 1, n) * scene.m * scene.g * scene.r / 2
+        if name == "paper":
+            phi[0], w[0], tau[0] = 0.3663767818801187, 7.44045441077882, -0.9487961352590799
+        f = _independent_rhs(*(np.full(n, v) for v in (scene.m, scene.r, scene.R, scene.e,
+                                                       scene.k, scene.g, scene.damping)), tau)
+        sol = solve_ivp(f, (0, DT), np.concatenate((phi, w)), method="DOP853", rtol=1e-12,
+                        atol=1e-12)
+        ref = sol.y[:, -1].reshape(2, n)
+        for substeps, tol in itertools.product((1, 2, 5), (1e-3, 1e-5)):
+            out = step(scene, phi, w, tau, DT, integrator=method, tolerance=tol,
+                       substeps=substeps)
+            err = np.maximum(np.abs(out.phi - ref[0]), np.abs(out.phi_dot - ref[1]))
+            claimed = out.tol_met & out.finite
+            claimed_total += int(claimed.sum())
+            assert (err[claimed] <= tol).all(), (name, substeps, tol,
+                                                 np.flatnonzero(claimed & (err > tol)))
+    assert claimed_total >= 500  # (claims remain where the substeps are short enough)

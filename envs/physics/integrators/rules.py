@@ -58,14 +58,35 @@ ROUNDOFF_FACTOR = 8.0
 _EPS = float(np.finfo(float).eps)
 
 
-@_jit
-def _substeps(speed, m, r, kappa, e, k, g, c, dt, tol, order, constant, stable, sweep_exponent):
-    """The predicted substeps (see :func:`predicted_substeps`)."""
+@numba.extending.register_jitable
+def _rate(speed, m, r, kappa, e, k, g, c, sweep_exponent):
+    """λ [1/s], the fastest rate of a roller's motion at |φ'| = ``speed`` [rad/s]: the small
+    oscillation's frequency, the sweep of θ = φ/s (weighted by the scene's eccentricity) and
+    the damping's rate: the prediction's (:func:`_substeps`)."""
     s = 1.0 - r * kappa
     j_min = m * (k * k + (r - e) * (r - e))
     omega = math.sqrt(m * g * (r * r * abs(kappa) / s + e) / j_min)
     sweep = speed / s * (1.0 + (r * e / (k * k + (r - e) * (r - e))) ** sweep_exponent)
-    lam = (omega + sweep + c / j_min) * dt
+    return omega + sweep + c / j_min
+
+
+@numba.extending.register_jitable
+def _largest_size(speed, r, kappa, jp0, jq0, jp1, jq1, stable):
+    """The largest substep [s] an error-controlled Runge–Kutta scheme takes: ``stable`` /
+    λ, λ the motion's local rate at the substep's two ends, from the derivatives of φ''
+    (∂φ''/∂φ = jp, ∂φ''/∂φ' = jq: the linearized motion's rate, at most √|jp| + |jq|) and
+    the turn rate of the fastest angle, |φ'| = ``speed`` [rad/s] or θ' = φ'/(1 − rκ); inf at
+    rest."""
+    lam = (math.sqrt(max(abs(jp0), abs(jp1))) + max(abs(jq0), abs(jq1))
+           + speed * max(1.0, 1.0 / abs(1.0 - r * kappa)))
+    ok = (lam > 0.0) & _finite(lam)
+    return trig.select(ok, stable / trig.select(ok, lam, 1.0), math.inf)
+
+
+@_jit
+def _substeps(speed, m, r, kappa, e, k, g, c, dt, tol, order, constant, stable, sweep_exponent):
+    """The predicted substeps (see :func:`predicted_substeps`)."""
+    lam = _rate(speed, m, r, kappa, e, k, g, c, sweep_exponent) * dt
     n = (constant * lam ** (order + 1) / tol) ** (1.0 / order)
     n = max(n, lam / stable)
     if not n < MAX_SUBSTEPS:  # also inf or nan at an absurd speed: the most, not int overflow
