@@ -28,7 +28,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from gymnasium.vector import AutoresetMode
-from roller_gym.episode import INFO_KEYS, state_option, vector_seeds
+from roller_gym.episode import INFO_KEYS, check_option_names, state_option, vector_seeds
 from roller_gym.physics.integrators import DEFAULT_INTEGRATOR
 from roller_gym.physics.scene import shown, whole_number
 from roller_gym.vector_env import BATCH_INTEGRATORS
@@ -235,7 +235,9 @@ class RollerVecEnv(VecEnv):
                                      f"sub-environment {i} would be refused by a reset: "
                                      f"{error}") from None
             current[index] = new[index]
-        elif hasattr(base, attr_name) and attr_name not in self._own:
+        elif (hasattr(base, attr_name) or hasattr(base.config, attr_name)
+              or hasattr(base.task, attr_name)) and attr_name not in self._own:
+            # (also the settings of its config and task, max_torque or dt: fixed, as the rest)
             raise ValueError(
                 f"set_attr({shown(attr_name)}, indices={shown(indices)}): {shown(attr_name)} is "
                 "the native "
@@ -265,6 +267,8 @@ class RollerVecEnv(VecEnv):
         if any(o and "reset_mask" in o for o in each):
             raise ValueError(f"options={shown(options)}: SB3's reset() starts every "
                              "sub-environment; a reset_mask does not apply here")
+        for o in each:  # (here, not at every later reset)
+            check_option_names(o or {})
         super().set_options(options)
 
     def _get_indices(self, indices: VecEnvIndices) -> list[int]:

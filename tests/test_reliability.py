@@ -6,6 +6,7 @@ computations)."""
 from __future__ import annotations
 
 import math
+import re
 import time
 from pathlib import Path
 
@@ -633,13 +634,24 @@ def test_a_step_that_ends_in_slip_or_lift_off_is_never_a_success():
 
 def test_a_start_too_fast_to_integrate_is_refused_at_reset():
     """φ' = 1e8 rad/s was accepted, and every first step then failed (taylor, rk8) or took a
-    minute (dop853)."""
+    minute (dop853). The limit is 1e4 rad per step for the fastest angle: in a tight fit
+    θ = φ/(1 − rκ), 101× φ on tight_fit, where 1.9e5 rad/s passed a limit on φ alone and
+    the first step ended non-finite; 0.99× the limit steps there, as on the paper scene."""
     env = gym.make("roller_gym/RollerStabilize-v2").unwrapped  # (Gymnasium's checker breaks
+    paper = roller_gym.physics.PRESETS["paper"]  # after a refusal)
+    limit = 1e4 * (1 - paper.r / paper.R) / 0.05
     with pytest.raises(ValueError, match=r"options\['state'\]=\(0\.0, 100000000\.0\): phi_dot "
-                                         r"must be within ±2e\+05 rad/s"):  # after a refusal)
+                                         + re.escape(f"must be within ±{limit:.4g} rad/s")):
         env.reset(options={"state": (0.0, 1e8)})
-    env.reset(options={"state": (0.0, 1e4)})  # within the limit: it steps
-    assert not env.step(np.zeros(1, np.float32))[4]["nonfinite"]
+    tight = gym.make("roller_gym/RollerStabilize-v2", scene="tight_fit").unwrapped
+    fit = roller_gym.physics.PRESETS["tight_fit"]
+    tight_limit = 1e4 * (1 - fit.r / fit.R) / 0.05
+    with pytest.raises(ValueError, match=re.escape(f"must be within ±{tight_limit:.4g} rad/s")):
+        tight.reset(options={"state": (0.0, 1.9e5)})
+    for e, fastest in ((env, limit), (tight, tight_limit)):
+        e.reset(options={"state": (0.0, 0.99 * fastest)})  # within the limit: it steps
+        with pytest.warns(RuntimeWarning, match="not verified"):
+            assert not e.step(np.zeros(1, np.float32))[4]["nonfinite"]
 
 
 def test_the_fourth_pass_inputs_get_messages_naming_them():
@@ -659,7 +671,7 @@ def test_the_fourth_pass_inputs_get_messages_naming_them():
         (lambda: analysis.nearest_unstable_rests([0.1], [1.0], [0.08], -1),
          r"resolution=-1 must be an integer in \[100, 1000000\]"),
         (lambda: analysis.nearest_unstable_rests([math.nan], [1.0], [0.08]),  # (it hung)
-         r"r=array\(\[nan\]\) must be finite real numbers"),
+         r"r=\[nan\] must be finite numbers"),
         (lambda: analysis.nearest_unstable_rests([0.1, 0.2], [1.0], [0.08, 0.08]),
          r"kappa=array\(\[1\.\]\) must be finite real numbers, as many as r's 2"),
         (lambda: RollerEnv(Unregistered), r"task=.*Unregistered.* is not registered"),
@@ -675,3 +687,24 @@ def test_the_analysis_takes_lists_as_arrays():
                     (analysis.moment_of_inertia, ([1.0, 2.0],)),
                     (analysis.holding_torque, ([0.1, 0.2],))):
         np.testing.assert_array_equal(f(scene, *args), f(scene, *map(np.array, args)))
+
+
+def test_the_analysis_refuses_what_is_not_finite_and_never_shows_rolling_it_did_not_compute():
+    """The physics' analysis functions passed NaN and inf through (holding_torque, energy,
+    acceleration, linearize, contact), and contact reported a roller rolling (lifting and
+    slipping False) where its forces overflowed to NaN (φ' = 1e200 rad/s)."""
+    paper = roller_gym.physics.PRESETS["paper"]
+    physics = roller_gym.physics
+    cases = [(physics.holding_torque, (math.nan,), "phi=nan"),
+             (physics.energy, (0.0, math.inf), "phi_dot=inf"),
+             (physics.acceleration, (0.0, 0.0, np.array([0.1, math.nan])), r"tau=array"),
+             (physics.linearize, (math.nan,), "phi=nan"),
+             (physics.contact, (0.0, -math.inf, 0.0), "phi_dot=-inf")]
+    for function, args, name in cases:
+        with pytest.raises(ValueError, match=name + r".* must be finite numbers"):
+            function(paper, *args)
+    with np.errstate(all="ignore"):
+        far = physics.contact(paper, 0.0, 1e200, 0.0)
+    assert not np.isfinite(far.normal) and far.lifting and far.slipping
+    near = physics.contact(paper, 0.0, 1.0, 0.0)  # at rest speeds, as before: it rolls
+    assert near.liftoff_margin > 0 and not near.lifting and not near.slipping

@@ -213,6 +213,12 @@ def test_set_attr_of_the_state_refuses_what_is_not_one_finite_angle_each(value, 
     (lambda v: v.set_attr("autoreset_mode", "next_step"), r"'autoreset_mode' is the native"),
     (lambda v: v.set_attr("max_episode_steps", "abc"), r"'max_episode_steps' is the native"),
     (lambda v: v.set_attr("num_envs", 7), r"'num_envs' is the native batch's own"),
+    # (the settings of its config and task were taken as attributes of the user's own, and
+    # get_attr then gave values not in force)
+    (lambda v: v.set_attr("max_torque", 100.0), r"'max_torque' is the native batch's own"),
+    (lambda v: v.set_attr("dt", 0.5), r"'dt' is the native batch's own"),
+    # (accepted, then every later reset failed)
+    (lambda v: v.set_options({"targt": 0.1}), r"reset options \['targt'\] are not known"),
     (lambda v: v.set_attr("phi", 1e300), r"sub-environment 0 would be refused by a reset: "
                                          r".*phi must be within"),
     (lambda v: v.set_attr("phi_dot", 1e300, [1]), r"sub-environment 1 would be refused by a "

@@ -41,6 +41,7 @@ from roller_gym.episode.starts import (
     RestState,
     Starts,
     at_start,
+    check_option_names,
     check_seed,
     per_scene_target,
     put,
@@ -57,7 +58,8 @@ from roller_gym.episode.streams import random_seed, uniform
 
 __all__ = ["CANDIDATES", "COMPUTED", "CONTEXT_FIELDS", "FLAG_ROWS", "INFO_KEYS", "INFO_ROW",
            "OUTCOME_ROWS", "QUANTITIES", "ROUNDS", "SEED_MAX", "Outcome", "OutcomeKernel",
-           "RestState", "Starts", "Step", "TaskKernels", "at_start", "check_seed", "flag_table",
+           "RestState", "Starts", "Step", "TaskKernels", "at_start", "check_option_names",
+           "check_seed", "flag_table",
            "info_rows", "outcome", "per_scene_target", "put", "random_seed", "reset_mask",
            "reset_options", "result_table", "scene_rows", "start_episodes", "state_option",
            "step_record", "take", "target_terms", "task_kernels", "uniform", "vector_seeds"]

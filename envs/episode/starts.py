@@ -21,9 +21,10 @@ from roller_gym.physics import equations as eq
 from roller_gym.physics.integrators import contact_state
 from roller_gym.physics.scene import finite_real, shown, whole_number
 
-__all__ = ["CANDIDATES", "ROUNDS", "SEED_MAX", "RestState", "Starts", "at_start", "check_seed",
-           "per_scene_target", "put", "reset_mask", "reset_options", "scene_rows",
-           "start_episodes", "state_option", "take", "target_terms", "vector_seeds"]
+__all__ = ["CANDIDATES", "OPTION_NAMES", "ROUNDS", "SEED_MAX", "RestState", "Starts", "at_start",
+           "check_option_names", "check_seed", "per_scene_target", "put", "reset_mask",
+           "reset_options", "scene_rows", "start_episodes", "state_option", "take",
+           "target_terms", "vector_seeds"]
 
 #: Draw indices: the randomized scene fields, the target, then the start-state candidates.
 _SCENE_DRAW, _TARGET_DRAW, _STATE_DRAW = 0, 16, 32
@@ -165,6 +166,20 @@ class Starts:
     phi_dot: np.ndarray
 
 
+#: The options an episode's start takes (``reset(options=...)``).
+OPTION_NAMES = ("state", "target", "scene")
+
+
+def check_option_names(options: Mapping[str, Any]) -> None:
+    """Raise ValueError naming the options of ``options`` that are not :data:`OPTION_NAMES`."""
+    unknown = set(options) - set(OPTION_NAMES)
+    if unknown:
+        raise ValueError(
+            f"reset options [{', '.join(sorted(map(shown, unknown)))}] are not known; allowed: "
+            f"{', '.join(map(repr, OPTION_NAMES))}"
+        )
+
+
 def start_episodes(
     config: Any,
     base: Scene,
@@ -186,12 +201,7 @@ def start_episodes(
     """
     n = len(seed)
     options = reset_options(options)
-    unknown = set(options) - {"state", "target", "scene"}
-    if unknown:
-        raise ValueError(
-            f"reset options [{', '.join(sorted(map(shown, unknown)))}] are not known; allowed: "
-            "'state', 'target', 'scene'"
-        )
+    check_option_names(options)
     task = config.task
     if options.get("scene") is not None:
         scene = config.resolve_option_scene(options["scene"])
@@ -304,7 +314,8 @@ def state_option(value: Any, scene: Scene, n: int, dt: float) -> tuple[np.ndarra
     control steps of ``dt`` [s].
 
     Raises:
-        ValueError: not a pair of finite real numbers, a speed that turns the roller more than
+        ValueError: not a pair of finite real numbers, a speed that turns φ or θ = φ/(1 − rκ)
+            (the faster in a tight fit) more than
             :data:`~roller_gym.validation.LARGEST_PHASE_PER_STEP` rad in a step (which no
             integrator follows within its substeps), or a state at which the roller does not
             roll under zero torque (N <= 0 or |F| > μN): such an episode could not start.
@@ -319,11 +330,15 @@ def state_option(value: Any, scene: Scene, n: int, dt: float) -> tuple[np.ndarra
     if not abs(float(pair[0])) < trig.DOMAIN:
         raise ValueError(f"options['state']={shown(value)}: phi must be within "
                          f"±{trig.DOMAIN:.4g} rad, where the sines are defined")
-    fastest = validation.LARGEST_PHASE_PER_STEP / dt
+    # the fastest of the angles φ, θ = φ/s and ψ = rκφ/s turns at most so far in a step
+    with np.errstate(divide="ignore"):
+        s = np.abs(1.0 - np.asarray(scene.r) * np.asarray(scene.kappa, dtype=float))
+    fastest = validation.LARGEST_PHASE_PER_STEP * float(np.min(np.minimum(s, 1.0))) / dt
     if not abs(float(pair[1])) <= fastest:
         raise ValueError(f"options['state']={shown(value)}: phi_dot must be within ±{fastest:.4g} "
-                         f"rad/s, {validation.LARGEST_PHASE_PER_STEP:g} rad per step of "
-                         f"dt={dt:g} s at most (faster, no integrator follows it)")
+                         f"rad/s: at most {validation.LARGEST_PHASE_PER_STEP:g} rad per step of "
+                         f"dt={dt:g} s for the fastest of φ, θ = φ/(1 − rκ) and ψ (faster, no "
+                         "integrator follows it)")
     phi, phi_dot = np.full(n, float(pair[0])), np.full(n, float(pair[1]))
     with np.errstate(all="ignore"):
         start = at_start(scene, phi, phi_dot)

@@ -43,8 +43,9 @@ Array = float | np.ndarray
 
 def _numbers(**values: Any) -> tuple[Any, ...]:
     """``values`` (states, torques) as NumPy computes with them: numbers and arrays as they
-    are, lists and tuples as arrays; a ValueError names the first that is not numbers (a
-    number or an array of them; complex and bool included, for complex-step derivatives)."""
+    are, lists and tuples as arrays; a ValueError names the first that is not finite numbers
+    (a number or an array of them; complex and bool included, for complex-step
+    derivatives)."""
     out = []
     for name, value in values.items():
         if isinstance(value, list | tuple):
@@ -59,6 +60,11 @@ def _numbers(**values: Any) -> tuple[Any, ...]:
         if kind not in "biufc":
             raise ValueError(f"{name}={shown(values[name])} must be numbers: a number or an "
                              "array of them (within float64's range)")
+        with np.errstate(over="ignore"):  # (a longdouble past float64's range: inf there)
+            finite = np.isfinite(np.asarray(value).astype(complex if kind == "c" else float))
+        if not finite.all():
+            raise ValueError(f"{name}={shown(values[name])} must be finite numbers (it holds "
+                             "NaN or inf, as a float64)")
         out.append(value)
     return tuple(out)
 
@@ -121,8 +127,9 @@ class Contact:
         friction: F [N], along the direction O1 moves for increasing φ.
         liftoff_margin: N/(m g) [-]; <= 0 means the roller leaves the surface.
         slip_margin: (μN − |F|)/(m g) [-]; < 0 means the friction needed exceeds μN.
-        lifting: liftoff_margin <= 0.
-        slipping: slip_margin < 0.
+        lifting: not liftoff_margin > 0 (also where a force overflows float64 at a speed
+            past its range: rolling is not shown there).
+        slipping: not slip_margin >= 0 (likewise).
     """
 
     normal: Array
@@ -141,7 +148,7 @@ def contact(scene: Scene, phi: Array, phi_dot: Array, tau: Array) -> Contact:
     phi_ddot = acceleration(scene, phi, phi_dot, tau)
     normal, friction = eq.contact_forces(phi, phi_dot, phi_ddot, m, r, kappa, e, g)
     liftoff, slip = eq.margins(normal, friction, m, g, scene.mu)
-    return Contact(normal, friction, liftoff, slip, liftoff <= 0, slip < 0)
+    return Contact(normal, friction, liftoff, slip, ~(liftoff > 0), ~(slip >= 0))
 
 
 def holding_torque(scene: Scene, phi: Array) -> Array:
