@@ -12,15 +12,21 @@ from __future__ import annotations
 import importlib.metadata
 import re
 
-__all__ = ["install_line", "missing", "packages"]
+__all__ = ["TORCH_CPU_INDEX", "install_line", "missing", "packages"]
 
 _REQUIREMENT = re.compile(r"^\s*([A-Za-z0-9][A-Za-z0-9._-]*)(?:\[([^\]]*)\])?")
 _EXTRA_MARKER = re.compile(r"""extra\s*==\s*["']([^"']+)["']""")
 
 
+#: Where pip finds torch's CPU build (PyPI's torch is the CUDA build on Linux).
+TORCH_CPU_INDEX = "https://download.pytorch.org/whl/cpu"
+
+
 def install_line(extra: str) -> str:
     """The pip command that installs the extras ``extra`` (``"zoo,plots"``), run in a clone
-    of the repository."""
+    of the repository; for an extra that installs torch, with the index of its CPU build."""
+    if "torch" in packages(extra):
+        return f'pip install ".[{extra}]" --extra-index-url {TORCH_CPU_INDEX}'
     return f'pip install ".[{extra}]"'
 
 

@@ -29,11 +29,16 @@ import gymnasium as gym
 import numpy as np
 from gymnasium.vector import AutoresetMode
 from roller_gym.episode import INFO_KEYS, check_option_names, state_option, vector_seeds
+from roller_gym.extras import missing
 from roller_gym.physics.integrators import DEFAULT_INTEGRATOR
 from roller_gym.physics.scene import shown, whole_number
 from roller_gym.vector_env import BATCH_INTEGRATORS
-from stable_baselines3.common.vec_env import DummyVecEnv
-from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices
+
+try:
+    from stable_baselines3.common.vec_env import DummyVecEnv
+    from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices
+except ModuleNotFoundError as error:  # (the base install has no stable-baselines3)
+    raise missing("stable_baselines3", "train", "roller_gym.sb3") from error
 
 __all__ = ["RollerVecEnv", "from_env_fns"]
 

@@ -7,13 +7,32 @@ import ast
 import inspect
 import math
 import os
+import re
 import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 __all__ = ["COUNT_MAX", "THREADS_MAX", "at_least", "check_env_kwargs", "checked_env_kwargs",
-           "key_values", "output_folder", "program_parser", "real_in", "stage"]
+           "key_values", "output_folder", "plain", "program_parser", "real_in", "stage"]
+
+
+_ROLE = re.compile(r":\w+:`~?([^`<]*?)(?:\s*<[^>]*>)?`")
+
+
+def plain(text: str) -> str:
+    """``text`` with its reST markup as a terminal shows it: ````code```` as ``code``, a
+    role ``:mod:`~a.b``` as its name (the last part where ``~``)."""
+    text = _ROLE.sub(lambda m: m.group(0).split("`")[1].lstrip("~").rsplit(".", 1)[-1]
+                     if "~" in m.group(0) else m.group(1), text)
+    return re.sub(r"``(.+?)``", r"\1", text, flags=re.S)
+
+
+class _PlainParser(argparse.ArgumentParser):
+    """An ArgumentParser whose help is :func:`plain` text."""
+
+    def format_help(self) -> str:
+        return plain(super().format_help())
 
 
 def program_parser(command: str, doc: str, **kwargs: Any) -> argparse.ArgumentParser:
@@ -24,9 +43,8 @@ def program_parser(command: str, doc: str, **kwargs: Any) -> argparse.ArgumentPa
 
     description, _, rest = doc.strip().partition("\n\n")
     epilog = "\n\n".join(part for part in (rest.rstrip(), extra_note(command)) if part)
-    return argparse.ArgumentParser(description=description, epilog=epilog,
-                                   **{"formatter_class": argparse.RawDescriptionHelpFormatter,
-                                      **kwargs})
+    return _PlainParser(description=description, epilog=epilog,
+                        **{"formatter_class": argparse.RawDescriptionHelpFormatter, **kwargs})
 
 
 def stage(command: str, message: str) -> None:

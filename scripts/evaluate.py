@@ -219,6 +219,8 @@ def plot_trajectories(env_id: str, rows: list[dict[str, Any]], path: Path) -> No
 def main(argv: list[str] | None = None) -> None:
     parser = build_parser()
     args = parser.parse_args(argv)
+    import matplotlib  # the plots extra: missing, say so first
+
     if args.notes is not None and not Path(args.notes).is_file():
         parser.error(f"--notes {args.notes!r}: no such file; it must be an existing Markdown "
                      "file (or leave --notes out for a report without notes)")
@@ -227,8 +229,6 @@ def main(argv: list[str] | None = None) -> None:
     if args.runs is not None and not Path(args.runs).is_dir():
         parser.error(f"--runs {args.runs!r}: no such folder; it must be the log folder of "
                      "roller-gym train (or leave --runs out to evaluate the baselines only)")
-    import matplotlib  # the plots extra: missing, say so before evaluating
-
     matplotlib.use("Agg")  # files only, no window
     out = output_folder(args.out, "--out")
     if args.report is not None:

@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import re
 import shlex
 import subprocess
 import sys
@@ -17,6 +18,9 @@ from base_install import extra_only_modules, pyproject_extra, pyproject_version,
 from packaging.version import Version
 from roller_gym.scripts.cli import COMMANDS
 from zoo import NEEDS_RL_ZOO3
+
+#: Where pip finds torch's CPU build, as the README gives it.
+CPU_INDEX = "--extra-index-url https://download.pytorch.org/whl/cpu"
 
 #: The console script pip installs next to the interpreter (pip install -e . / a wheel).
 ENTRY_POINT = Path(sys.executable).with_name("roller-gym")
@@ -184,6 +188,8 @@ def test_every_help_works_with_the_base_install_and_names_its_extra(command):
     assert f'pip install ".[{extra}]"' in out
     for package in pyproject_extra(extra):
         assert package in out, f"{command} --help does not name {package}"
+    # plain text in a terminal, not the docstrings' reST (``code``, :mod:`name`)
+    assert "``" not in out and not re.search(r":\w+:`", out), out
 
 
 @pytest.mark.parametrize(("argv", "missing"), [
@@ -205,6 +211,23 @@ def test_every_command_without_its_extra_says_in_one_line_what_to_install(argv, 
     assert f'pip install ".[{extra}]"' in line
     if missing is not None:  # named, as a module or a distribution
         assert missing.replace("_", "-") in line.replace("_", "-")
+    # an extra with torch: the index of its CPU build (else pip takes the CUDA one)
+    assert (CPU_INDEX in line) == ("torch" in pyproject_extra(extra)), line
+
+
+def test_importing_the_sb3_bridge_without_its_extra_says_what_to_install():
+    """roller_gym.sb3 with the base install ended in stable-baselines3's ModuleNotFoundError;
+    it now names itself, the module and the pip line (with torch's CPU index)."""
+    code = ("import sys\nfor name in ('stable_baselines3', 'torch'):\n"
+            "    sys.modules[name] = None\n"
+            "try:\n    import roller_gym.sb3\n"
+            "except ImportError as e:\n    print(e.name, '|', e)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, timeout=300).stdout.strip()
+    name, message = out.split(" | ")
+    assert name == "stable_baselines3"
+    assert message.startswith("roller_gym.sb3 needs stable_baselines3, which is not installed")
+    assert f'pip install ".[train]" {CPU_INDEX}' in message
 
 
 def test_replay_without_pygame_says_in_one_line_what_to_install(tmp_path):
