@@ -17,14 +17,14 @@ __all__ = ["COUNT_MAX", "THREADS_MAX", "at_least", "check_env_kwargs", "checked_
            "key_values", "output_folder", "plain", "program_parser", "real_in", "stage"]
 
 
-_ROLE = re.compile(r":\w+:`~?([^`<]*?)(?:\s*<[^>]*>)?`")
+_ROLE = re.compile(r":\w+:`(~?)([^`]*)`")
 
 
 def plain(text: str) -> str:
     """``text`` with its reST markup as a terminal shows it: ````code```` as ``code``, a
     role ``:mod:`~a.b``` as its name (the last part where ``~``)."""
-    text = _ROLE.sub(lambda m: m.group(0).split("`")[1].lstrip("~").rsplit(".", 1)[-1]
-                     if "~" in m.group(0) else m.group(1), text)
+    text = _ROLE.sub(lambda m: m.group(2).rsplit(".", 1)[-1] if m.group(1) else m.group(2),
+                     text)
     return re.sub(r"``(.+?)``", r"\1", text, flags=re.S)
 
 

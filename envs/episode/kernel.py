@@ -362,7 +362,6 @@ class OutcomeKernel:
 
     def __init__(self, task: Any, num: int, fresh: bool = False, serial: bool = False) -> None:
         self._task_class = type(task)
-        self.kernels = task_kernels(self._task_class)
         self.constants = np.array(task.constants, dtype=float)
         self.observed = np.array([_FIELD_NUMBER[f] for f in task.observation],
                                  dtype=np.int64)

@@ -330,10 +330,9 @@ def state_option(value: Any, scene: Scene, n: int, dt: float) -> tuple[np.ndarra
     if not abs(float(pair[0])) < trig.DOMAIN:
         raise ValueError(f"options['state']={shown(value)}: phi must be within "
                          f"±{trig.DOMAIN:.4g} rad, where the sines are defined")
-    # the fastest of the angles φ, θ = φ/s and ψ = rκφ/s turns at most so far in a step
-    with np.errstate(divide="ignore"):
-        s = np.abs(1.0 - np.asarray(scene.r) * np.asarray(scene.kappa, dtype=float))
-    fastest = validation.LARGEST_PHASE_PER_STEP * float(np.min(np.minimum(s, 1.0))) / dt
+    # the fastest of the angles φ, θ and ψ turns at most so far in a step
+    turn = float(np.max(eq.fastest_turn(np.asarray(scene.r), np.asarray(scene.kappa, float))))
+    fastest = validation.LARGEST_PHASE_PER_STEP / turn / dt
     if not abs(float(pair[1])) <= fastest:
         raise ValueError(f"options['state']={shown(value)}: phi_dot must be within ±{fastest:.4g} "
                          f"rad/s: at most {validation.LARGEST_PHASE_PER_STEP:g} rad per step of "

@@ -41,6 +41,7 @@ __all__ = [
     "dpotential",
     "energy",
     "energy_at",
+    "fastest_turn",
     "forces",
     "half_theta_sin",
     "ic_squared",
@@ -74,6 +75,14 @@ def shape_factors(phi, r, kappa):
     """(s, ψ, θ): s = 1 − rκ, ψ = rκφ/s [rad], θ = φ/s [rad]."""
     s = 1.0 - r * kappa
     return s, r * kappa * phi / s, phi / s
+
+
+@inlined
+def fastest_turn(r, kappa):
+    """The fastest angle's turn per radian of φ [-]: max(1, 1/|1 − rκ|), θ = φ/s in a tight fit
+    (s = 1 − rκ < 1), φ itself on a floor or a drum (ψ = rκφ/s never turns faster than θ)."""
+    per = 1.0 / abs(1.0 - r * kappa)
+    return trig.select(per > 1.0, per, 1.0)
 
 
 @inlined

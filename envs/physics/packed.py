@@ -29,7 +29,7 @@ _ADDRESS, _ROWS, _COLUMNS, _STRIDE = range(4)  # the columns of a table: one row
 
 def _layout_1(a):
     """(rows, columns, row stride [elements], packs) of a 1-D array: its one row."""
-    return 1, a.shape[0], a.shape[0], a.strides[0] == a.itemsize or a.shape[0] <= 1
+    return 1, a.shape[0], a.shape[0], a.strides[0] == a.itemsize
 
 
 def _layout_2(a):
@@ -37,7 +37,7 @@ def _layout_2(a):
     its rows one after another (not reversed, repeated or overlapping)."""
     rows, columns = a.shape[0], a.shape[1]
     stride, rest = a.strides[0] // a.itemsize, a.strides[0] % a.itemsize
-    packs = a.strides[1] == a.itemsize or columns <= 1
+    packs = a.strides[1] == a.itemsize
     if rows > 1:
         packs = packs and rest == 0 and stride >= columns
     else:

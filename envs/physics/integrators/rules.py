@@ -75,10 +75,10 @@ def _largest_size(speed, r, kappa, jp0, jq0, jp1, jq1, stable):
     """The largest substep [s] an error-controlled Runge–Kutta scheme takes: ``stable`` /
     λ, λ the motion's local rate at the substep's two ends, from the derivatives of φ''
     (∂φ''/∂φ = jp, ∂φ''/∂φ' = jq: the linearized motion's rate, at most √|jp| + |jq|) and
-    the turn rate of the fastest angle, |φ'| = ``speed`` [rad/s] or θ' = φ'/(1 − rκ); inf at
-    rest."""
+    the turn rate of the fastest angle at |φ'| = ``speed`` [rad/s]
+    (:func:`~roller_gym.physics.equations.fastest_turn`); inf at rest."""
     lam = (math.sqrt(max(abs(jp0), abs(jp1))) + max(abs(jq0), abs(jq1))
-           + speed * max(1.0, 1.0 / abs(1.0 - r * kappa)))
+           + speed * eq.fastest_turn(r, kappa))
     ok = (lam > 0.0) & _finite(lam)
     return trig.select(ok, stable / trig.select(ok, lam, 1.0), math.inf)
 
