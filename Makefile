@@ -59,13 +59,17 @@ TRAIN_SEED = for algo in $(ALGOS); do dir=runs/results/$${1\#*/}/seed$$0; rm -rf
 # A round in pieces, each well inside two hours on two cores: `make results-train TASKS=<task>
 # ALGOS=sac SEEDS="0 1 2"`, … (each piece adds its wall time to runs/results/<task>/wall_s),
 # then `make results-evaluate TASKS=<task>` over every run there. `make results` does both, afresh.
+# One algorithm retrained on its own: `make results-train results-evaluate TASKS=<task> ALGOS=td3
+# RESULTS_ARGS=--keep-stored` keeps the other algorithms' runs from the task's stored file.
+RESULTS_ARGS ?=
 results-train: $(STAMP)  ## train ALGOS x SEEDS on each of TASKS (two processes), keeping other runs
 	for env in $(TASKS); do runs=runs/results/$${env#*/}; mkdir -p $$runs; start=$$(date +%s); \
 	printf '%s\n' $(SEEDS) | xargs -P 2 -I SEED sh -c '$(TRAIN_SEED)' SEED $$env || exit 1; \
 	echo $$(( $$(date +%s) - start )) >> $$runs/wall_s; done
 results-evaluate: $(STAMP)  ## evaluate every run of each of TASKS, write its task file and the page
 	for env in $(TASKS); do runs=runs/results/$${env#*/}; \
-	$(RG) results --runs $$runs --env $$env --out $(RESULTS_OUT) --report $(RESULTS_PAGE) \
+	$(RG) results --runs $$runs --env $$env --algos $(ALGOS) --out $(RESULTS_OUT) \
+	--report $(RESULTS_PAGE) $(RESULTS_ARGS) \
 	--train-wall-s $$(awk '{s += $$1} END {print s + 0}' $$runs/wall_s) || exit 1; done
 results: $(STAMP)  ## train SAC, TD3 and PPO with 5 seeds on each of TASKS afresh, evaluate, write docs/RESULTS.md
 	for env in $(TASKS); do rm -rf runs/results/$${env#*/}; \

@@ -20,7 +20,9 @@ one task is one piece of the suite, rerun on its own. Read top to bottom:
    are kept for the learning curves, the sustained crossing and the last evaluations'
    success.
 4. **Save** the task's record to ``<--out>/tasks/<task>.json`` (with the machine, versions,
-   command, seeds), replacing that task's earlier one.
+   command, seeds), replacing that task's earlier one; with ``--keep-stored``, the earlier
+   one's runs of the algorithms not in ``--algos`` stay, marked with the date they were
+   measured (a round retrained one algorithm at a time).
 5. **Render** the page from every task file under ``--out``
    (:mod:`roller_gym.scripts.results_page`): ``<--out>/summary.json``, the figures, and
    ``--report``.
@@ -82,6 +84,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--train-wall-s", type=real_in(0.0, 1e9), default=None,
                    help="the wall time [s] the task's trainings took, for the page (make "
                         "results passes it)")
+    p.add_argument("--keep-stored", action="store_true",
+                   help="keep the runs of the algorithms not in --algos from the task's stored "
+                        "file under --out, evaluating only --algos' runs anew (a round retrained "
+                        "one algorithm at a time); refused unless the stored file has the same "
+                        "reward threshold, baselines, episodes and package versions")
     p.add_argument("--render-only", "--render", action="store_true", dest="render_only",
                    help="only render the page from the task files under --out (no evaluation)")
     p.add_argument("--calibrate", action="store_true",
@@ -203,6 +210,35 @@ def measure(args: argparse.Namespace, env_id: str) -> dict[str, Any]:
     }
 
 
+def keep_stored(record: dict[str, Any], stored: dict[str, Any], algos: list[str],
+                where: Path) -> dict[str, Any]:
+    """``record`` with the runs of the algorithms not in ``algos`` taken from ``stored``, the
+    task's earlier file (at ``where``), each with the date it was measured (``record["kept"]``:
+    algorithm -> date). Refused unless both measure the same thing: the same episodes, reward
+    threshold, baselines' scores and package versions."""
+    def baselines(r: dict[str, Any]) -> dict[str, tuple[float, float]]:
+        return {e["name"]: (e["return_mean"], e["success_rate"])
+                for e in r["evaluations"] if "seed" not in e}
+
+    for what, get in (("format", lambda r: r["format"]),
+                      ("episodes", lambda r: (r["episodes"], r["evaluation_seeds"])),
+                      ("reward threshold", lambda r: r["reward_threshold"]),
+                      ("baselines' returns and successes", baselines),
+                      ("package versions", lambda r: r["versions"])):
+        if get(stored) != get(record):
+            raise SystemExit(f"--keep-stored: {where} has other {what} than this evaluation "
+                             f"({get(stored)!r} against {get(record)!r}), so its runs are not "
+                             "comparable; evaluate every algorithm's runs anew (without "
+                             "--keep-stored)")
+    kept = [e for e in stored["evaluations"] if "seed" in e and e["name"] not in algos]
+    if not kept:
+        raise SystemExit(f"--keep-stored: {where} has no runs of an algorithm other than "
+                         f"{' '.join(algos)} to keep")
+    earlier = stored.get("kept", {})
+    return {**record, "evaluations": record["evaluations"] + kept,
+            "kept": {e["name"]: earlier.get(e["name"], stored["date"]) for e in kept}}
+
+
 def main(argv: list[str] | None = None) -> None:
     args = build_parser().parse_args(argv)
     import matplotlib  # the extra's packages: missing, say so before evaluating
@@ -220,8 +256,13 @@ def main(argv: list[str] | None = None) -> None:
     output_folder(Path(args.report).parent, "--report")
     if not args.render_only:
         for env_id in args.env:
-            record = measure(args, env_id)
             path = results_page.task_files(out) / f"{file_name(env_id)}.json"
+            if args.keep_stored and not path.is_file():
+                raise SystemExit(f"--keep-stored: no stored file {path} of {env_id} to keep "
+                                 "runs from")
+            record = measure(args, env_id)
+            if args.keep_stored:
+                record = keep_stored(record, json.loads(path.read_text()), args.algos, path)
             path.parent.mkdir(parents=True, exist_ok=True)
             path.write_text(json.dumps(record, indent=1) + "\n")
             print(f"wrote {path}")

@@ -106,6 +106,7 @@ def _task_summary(record: dict[str, Any], targets: dict[str, float]) -> dict[str
         "episodes": record["episodes"], "evaluation_seeds": record["evaluation_seeds"],
         "threshold": record["reward_threshold"], "classical": record["classical"],
         "success_band": record["success_band"], "runs": len(runs),
+        "kept": {a: d[:10] for a, d in record.get("kept", {}).items()},
         "train_process_h": sum(e.get("wall_time_s") or 0.0 for e in runs) / 3600,
         "train_wall_h": (record["train_wall_s"] / 3600 if record.get("train_wall_s")
                          else None),
@@ -271,6 +272,14 @@ def _task_section(task: str, row: dict[str, Any], summary: dict[str, Any]) -> li
            "the task's registered `reward_threshold`; this round did not calibrate it on seeds "
            "apart from the evaluation's")
     wall = (f", {row['train_wall_h']:.1f} h of wall time" if row["train_wall_h"] else "")
+    if row["kept"]:  # a round retrained one algorithm at a time
+        new = [a.upper() for a in row["algos"] if a not in row["kept"]]
+        wall += f" for {' and '.join(new)}'s runs" if wall else ""
+        dates: dict[str, list[str]] = {}
+        for a, d in row["kept"].items():
+            dates.setdefault(d, []).append(f"{a.upper()}'s")
+        wall += "".join(f"; {' and '.join(a)} runs kept from the measurement of {d}"
+                        for d, a in dates.items())
     lines = [
         f"## {task}", "",
         f"Measured {row['date']} on {row['machine']}: {row['runs']} training runs "

@@ -249,3 +249,52 @@ def test_a_task_of_an_unknown_tier_is_refused_at_registration():
 
     with pytest.raises(ValueError, match=r"RollerOddTier.tier is 'medium'; it must be one of"):
         register(Odd)
+
+
+def _retrained_td3():
+    """A stored round of SAC, TD3 and PPO, and an evaluation of TD3's runs retrained since."""
+    stored = _record([_run(a, s, 195.0 + s, 1.0) for a in ("sac", "td3", "ppo")
+                      for s in range(5)])
+    fresh = _record([_run("td3", s, 180.0 + s, 0.5) for s in range(5)])
+    fresh["date"], fresh["train_wall_s"] = "2026-02-02T00:00:00+00:00", 1800.0
+    return stored, fresh
+
+
+def test_keep_stored_replaces_the_retrained_algorithm_and_keeps_the_others_dated(tmp_path):
+    from roller_gym.scripts.results import keep_stored
+
+    stored, fresh = _retrained_td3()
+    merged = keep_stored(fresh, stored, ["td3"], tmp_path / "x.json")
+    runs = {(e["name"], e["seed"]): e["return_mean"] for e in merged["evaluations"]
+            if "seed" in e}
+    assert runs == {**{("td3", s): 180.0 + s for s in range(5)},
+                    **{(a, s): 195.0 + s for a in ("sac", "ppo") for s in range(5)}}
+    assert merged["kept"] == {"sac": stored["date"], "ppo": stored["date"]}
+    # kept again later: each algorithm keeps the date it was measured, not the file's
+    merged["date"] = "2026-03-03T00:00:00+00:00"
+    again = keep_stored(fresh, merged, ["ppo"], tmp_path / "x.json")
+    assert again["kept"] == {"td3": merged["date"], "sac": stored["date"]}
+    # the page says which runs are new and from when the others are
+    (tmp_path / "tasks").mkdir()
+    (tmp_path / "tasks" / "RollerHold-v2.json").write_text(json.dumps(merged))
+    results_page.render(tmp_path, tmp_path / "RESULTS.md")
+    text = (tmp_path / "RESULTS.md").read_text()
+    assert ("0.5 h of wall time for TD3's runs; SAC's and PPO's runs kept from the measurement "
+            "of 2026-01-01)") in text
+
+
+@pytest.mark.parametrize(("what", "change"), [
+    ("reward threshold", lambda r: r["reward_threshold"].update(value=189.0)),
+    ("baselines", lambda r: r["evaluations"][0].update(return_mean=201.0)),
+    ("package versions", lambda r: r["versions"].update(numpy="2.5.0")),
+    ("episodes", lambda r: r.update(episodes=50, evaluation_seeds=[0, 49])),
+])
+def test_keep_stored_refuses_a_stored_file_that_measured_something_else(tmp_path, what, change):
+    from roller_gym.scripts.results import keep_stored
+
+    stored, fresh = _retrained_td3()
+    change(stored)
+    with pytest.raises(SystemExit, match=rf"x\.json has other {what}.*not comparable"):
+        keep_stored(fresh, stored, ["td3"], tmp_path / "x.json")
+    with pytest.raises(SystemExit, match="no runs of an algorithm other than sac td3 ppo"):
+        keep_stored(fresh, _retrained_td3()[0], ["sac", "td3", "ppo"], tmp_path / "x.json")
