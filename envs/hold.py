@@ -73,7 +73,7 @@ import numpy as np
 from roller_gym import validation
 from roller_gym.physics import Scene
 from roller_gym.physics.scene import shown
-from roller_gym.task import Task, hold_range, hold_ranges, register, wrap_rate
+from roller_gym.task import Task, angle_rate, hold_range, hold_ranges, register
 
 __all__ = ["HoldTask"]
 
@@ -93,7 +93,7 @@ class HoldTask(Task):
 
     def target_from_option(self, value: Any, scene: Scene) -> float:
         target = validation.real("options['target']", value, unit="rad")
-        q = wrap_rate(scene)  # on the floor the target is φ* itself (q = 1)
+        q = angle_rate(scene)  # on the floor the target is φ* itself (q = 1)
         phi = target / q
         low, high = hold_range(scene, self.max_torque)
         if not (math.isfinite(phi) and low <= phi <= high):

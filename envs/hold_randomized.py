@@ -1,4 +1,4 @@
-"""roller_gym/RollerHoldRandomized-v0: hold at a target in a scene drawn per episode, unseen.
+"""roller_gym/RollerHoldRandomized-v1: hold at a target in a scene drawn per episode, unseen.
 
 The hard variant of RollerHold: each episode draws the roller and the cylinder anew, mass
 m, eccentricity e, radius of gyration k and the cylinder's radius R, and the agent does not
@@ -12,7 +12,7 @@ RecurrentPPO).
 Why it is hard, measured on seeds 0–99 with the LQR of ``agents/hyperparams`` (weights
 0.1 rad, 1 rad/s, 0.1 N·m): designed on the nominal scene (the preset ``"paper"``) it
 succeeds in 31 % of the episodes (return 124.1), designed on each episode's true scene
-in 97 % (return 182.6): ``roller-gym evaluate --env roller_gym/RollerHoldRandomized-v0``
+in 97 % (return 182.6): ``roller-gym evaluate --env roller_gym/RollerHoldRandomized-v1``
 prints both, the latter as the baseline ``informed``. The ranges keep nearly every episode
 solvable: the informed controller fails only where the roller slips on its way from a far
 start.
@@ -67,13 +67,17 @@ rolls.
 
 ## Arguments
 
-``gymnasium.make("roller_gym/RollerHoldRandomized-v0", scene=..., dt=..., max_torque=...,
+``gymnasium.make("roller_gym/RollerHoldRandomized-v1", scene=..., dt=..., max_torque=...,
 tolerance=..., integrator=..., substeps=..., randomize=..., render_mode=...)``: see
 :class:`roller_gym.roller_env.RollerEnv`; ``randomize`` replaces the ranges above
 (``{}`` fixes the scene: RollerHold).
 
 ## Version History
 
+* v1: the position error is wrapped by the period of the roller's pose, not by a turn of
+  the contact point alone: in a scene where the roller does not turn a whole number of
+  times while its contact goes once around (most drawn R), a roller a turn of ψ away from
+  the target no longer counts as on it (``roller_gym.task.wrap_rate``).
 * v0: the first version.
 """
 
@@ -91,7 +95,7 @@ __all__ = ["HoldRandomizedTask"]
 class HoldRandomizedTask(HoldTask):
     name = "RollerHoldRandomized"
     tier = "hard"
-    version = 0
+    version = 1
     # LQR on the nominal scene: its mean return on seeds 10000–10099 (118.8) − 5 %, the floor
     reward_threshold = 112.9
     scene_ranges: ClassVar[dict[str, tuple[float, float]]] = {

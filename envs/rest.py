@@ -1,6 +1,6 @@
-"""The scene's rates (ψ = qφ, :func:`psi_rate`, :func:`wrap_rate`) and the rest positions a
-task may target: the holdable range around the bottom (:func:`hold_ranges`, one compiled
-call for a batch of scenes) and the unstable rest positions
+"""The scene's rates (ψ = qφ, :func:`psi_rate`, :func:`angle_rate`, :func:`wrap_rate`) and
+the rest positions a task may target: the holdable range around the bottom
+(:func:`hold_ranges`, one compiled call for a batch of scenes) and the unstable rest positions
 (:func:`unstable_rest_positions`); :func:`per_scene` evaluates a function of a scalar scene
 once per distinct scene of a batch.
 """
@@ -18,8 +18,15 @@ from roller_gym.physics.compiling import inlined
 from roller_gym.physics.integrators import SCENE_FIELDS, scene_arrays
 from roller_gym.physics.scene import shown
 
-__all__ = ["hold_range", "hold_ranges", "per_scene", "psi_rate", "unstable_rest_positions",
-           "wrap_rate"]
+__all__ = [
+    "angle_rate",
+    "hold_range",
+    "hold_ranges",
+    "per_scene",
+    "psi_rate",
+    "unstable_rest_positions",
+    "wrap_rate",
+]
 
 
 def psi_rate(scene: Scene) -> float | np.ndarray:
@@ -30,13 +37,35 @@ def psi_rate(scene: Scene) -> float | np.ndarray:
     return float(rate) if np.ndim(rate) == 0 else rate
 
 
-def wrap_rate(scene: Scene) -> float | np.ndarray:
-    """The rate q by which errors are wrapped (see the module docs): :func:`psi_rate`, except
-    on the floor, where ψ stays 0 and φ itself is wrapped (q = 1)."""
+def angle_rate(scene: Scene) -> float | np.ndarray:
+    """The rate [-] of the angle a task's ranges and targets are stated in, per rad of φ:
+    :func:`psi_rate` (ψ = qφ), except on the floor, where ψ stays 0 and φ itself is used
+    (1)."""
     rate = psi_rate(scene)
     if np.ndim(rate) == 0:
         return rate if rate != 0.0 else 1.0
     return np.where(rate == 0.0, 1.0, rate)
+
+
+#: How close to a whole number 1/|q| or |q| must be to count as one (relative).
+WHOLE_TOLERANCE = 1e-9
+
+
+def wrap_rate(scene: Scene) -> float | np.ndarray:
+    """The rate q [-] by which position errors are wrapped: 2π/|q| [rad of φ] is the period
+    of the roller's pose (the contact point and the eccentric mass both where they were),
+    the least turn of φ that turns both φ and ψ = :func:`psi_rate` · φ by whole turns.
+    That is :func:`psi_rate` where 1/|psi_rate| is a whole number (the roller turns that
+    many times while the contact goes once around); 1 where |psi_rate| is whole, the floor
+    (0) included (one turn of φ: on the floor, the same pose a circumference along); else 0,
+    no period the error is wrapped by (:func:`roller_gym.task.position_error`)."""
+    q = np.asarray(psi_rate(scene), dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        turns = np.abs(1.0 / q)  # inf on the floor
+        whole_turns = np.abs(turns - np.round(turns)) <= WHOLE_TOLERANCE * turns
+    whole_rate = np.abs(np.abs(q) - np.round(np.abs(q))) <= WHOLE_TOLERANCE * np.abs(q)
+    rate = np.where(whole_turns & np.isfinite(turns), q, np.where(whole_rate, 1.0, 0.0))
+    return float(rate) if rate.ndim == 0 else rate
 
 
 def per_scene(function, scene: Scene) -> np.ndarray:
@@ -75,7 +104,7 @@ def hold_ranges(scene: Scene, max_torque: float, torque_share: float = 0.8,
     one per roller of the batch ``scene`` (arrays of the batch's size; of 1 for a scalar
     scene), in one compiled call whatever the batch's size.
 
-    Contiguous around φ = 0, within ψ = ±π (|φ| <= π/|q|, q from :func:`wrap_rate`), where
+    Contiguous around φ = 0, within ψ = ±π (|φ| <= π/|q|, q from :func:`angle_rate`), where
     the holding torque is at most ``torque_share``·max_torque [N·m] and the contact holds
     with margin: N > 0 and |F| <= ``friction_share``·μN (at rest N = m g cos ψ,
     F = m g sin ψ). Each side is a grid of ``points`` values of φ from 0 to ±π/|q| (those of
@@ -92,7 +121,7 @@ def hold_ranges(scene: Scene, max_torque: float, torque_share: float = 0.8,
     rows = dict(zip(SCENE_FIELDS, scene_arrays(scene), strict=True))  # each of n rollers
     numbers = [rows[name] for name in ("m", "r", "kappa", "e", "k", "g", "damping", "mu")]
     half = np.empty_like(numbers[0])
-    half[...] = np.reshape(math.pi / np.abs(wrap_rate(scene)), -1)  # q < 0 on a drum
+    half[...] = np.reshape(math.pi / np.abs(angle_rate(scene)), -1)  # q < 0 on a drum
     low, high = np.empty_like(half), np.empty_like(half)
     _hold_bounds(*numbers, half, float(torque_share * max_torque), float(friction_share),
                  int(points), low, high)

@@ -14,10 +14,12 @@ its own, listed in ``roller_gym.TASK_MODULES``, with its hyperparameters (README
 task").
 
 **The position error.** The target is a rest position φ* [rad]. The error is measured
-along the configuration, one turn of ψ either way: with the wrap rate q = rκ/(1 − rκ)
-(ψ = qφ; q = 1 on the floor, where ψ stays 0 and φ itself is wrapped),
+along the configuration, within half a period of the roller's pose either way: with the
+wrap rate q (:func:`wrap_rate`: 2π/|q| is the least turn of φ after which the contact
+point and the eccentric mass are both where they were; q = rκ/(1 − rκ) = dψ/dφ where
+1/|q| is a whole number, as in every default scene; 1 on the floor),
 
-    error = wrap(q (φ − φ*)) / q   [rad of φ],
+    error = wrap(q (φ − φ*)) / q   [rad of φ],   or φ − φ* where q = 0 (no such period),
 
 so the contact point is r·|error| metres of rolling away from its target.
 
@@ -68,6 +70,7 @@ from roller_gym.physics.compiling import inlined
 from roller_gym.physics.integrators import contact_state, scene_arrays
 from roller_gym.physics.scene import shown
 from roller_gym.rest import (  # the scene's rates and rest positions, importable from here too
+    angle_rate,
     hold_range,
     hold_ranges,
     per_scene,
@@ -77,10 +80,10 @@ from roller_gym.rest import (  # the scene's rates and rest positions, importabl
 )
 
 __all__ = ["NAMESPACE", "OBSERVATION_FIELDS", "SPEED_SCALE", "TASKS", "TASK_CONSTANTS", "TIERS",
-           "Task", "get_task", "hold_range", "hold_ranges", "objective", "observation_values",
-           "per_scene", "position_error", "psi_rate", "register", "state_observation",
-           "step_reward", "step_success", "target_observation", "unstable_rest_positions",
-           "wrap_rate"]
+           "Task", "angle_rate", "get_task", "hold_range", "hold_ranges", "objective",
+           "observation_values", "per_scene", "position_error", "psi_rate", "register",
+           "state_observation", "step_reward", "step_success", "target_observation",
+           "unstable_rest_positions", "wrap_rate", "wrapped"]
 
 #: The Gymnasium namespace of every task: ``roller_gym/<Task>-v<version>``.
 NAMESPACE = "roller_gym"
@@ -334,7 +337,7 @@ class Task:
         shape (``scene`` a batch of n): around the bottom, up to ψ = ±60°, and a speed up
         to ±1 rad/s; φ within ±START_TURNS turns (on a nearly flat surface, R of thousands
         of r, ψ = ±60° lies further: float64's rounding of such a φ passes the tolerance)."""
-        q = np.abs(wrap_rate(scene))  # q < 0 on a drum; q = 1 on the floor
+        q = np.abs(angle_rate(scene))  # q < 0 on a drum; q = 1 on the floor
         limit = np.minimum(math.radians(60.0) / np.asarray(q, float),
                            2.0 * math.pi * START_TURNS).reshape(-1, 1)
         return limit * (2.0 * u_phi - 1.0), 2.0 * u_dot - 1.0
@@ -420,8 +423,8 @@ class Task:
     @staticmethod
     def error_to(phi, target, q):
         """The error [rad of φ] to one rest position (see the module docs): wrap(q (φ − φ*))/q,
-        q from :func:`wrap_rate`."""
-        return rewards.wrap_angle(q * (phi - target)) / q
+        q from :func:`wrap_rate` (φ − φ* where q = 0)."""
+        return wrapped(phi - target, q)
 
     def observation_terms(self, phi, phi_dot, target, rate, target_rate=0.0):
         """The observation's entries, in the order of ``observation`` (floats or arrays);
@@ -455,12 +458,21 @@ TASK_CONSTANTS = Task.parameters
 
 
 @inlined
+def wrapped(x, q):
+    """x [rad of φ] wrapped into half a period 2π/|q| either way, wrap(q x)/q; x itself where
+    q = 0 (no period, see :func:`wrap_rate`)."""
+    periodic = q != 0.0
+    rate = trig.select(periodic, q, 1.0)
+    return trig.select(periodic, rewards.wrap_angle(rate * x) / rate, x)
+
+
+@inlined
 def position_error(phi, target, q, symmetric):
     """The position error [rad of φ], wrap(q (φ − φ*))/q (see the module docs); with
     ``symmetric`` (1.0) the error to the nearer of ±φ*."""
-    error = rewards.wrap_angle(q * (phi - target)) / q
+    error = wrapped(phi - target, q)
     if symmetric != 0.0:
-        mirror = rewards.wrap_angle(q * (phi + target)) / q
+        mirror = wrapped(phi + target, q)
         error = trig.select(np.abs(mirror) < np.abs(error), mirror, error)
     return error
 

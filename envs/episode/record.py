@@ -69,7 +69,7 @@ CONTEXT_FIELDS: dict[str, str] = {
     "target_phi_dot": "how fast the target moves, φ*' [rad/s]",
     "target_torque": "τ* [N·m], the torque that holds the roller at rest at φ*",
     "target_energy": "E* [J], the energy of resting at φ* (V = 0 at φ = 0)",
-    "wrap_rate": "the rate q errors are wrapped by [-] (roller_gym.task.wrap_rate)",
+    "wrap_rate": "the rate q errors are wrapped by [-] (0: none; roller_gym.task.wrap_rate)",
     "psi_rate": "dψ/dφ [-] (roller_gym.task.psi_rate)",
 }
 
