@@ -111,6 +111,7 @@ class BalanceTask(Task):
         return feasibility.unstable_rest_proven(params, estimates)
 
     start_rule = "near rest at the bottom, |φ| <= 0.1 rad and |φ'| <= 0.1 rad/s"
+    start_speed = 0.1
 
     def sample_targets(self, u: np.ndarray, scene: Scene) -> np.ndarray:
         """φ_b of each roller: :func:`unstable_rest_targets`. (The scenes of a range were

@@ -208,7 +208,7 @@ class EnvConfig:
         ranges: dict[str, tuple[float, float]] = {}
         for i, one in distinct.values():
             try:
-                validation.check_integrable(one, dt, task.max_torque)
+                validation.check_integrable(one, dt, task.max_torque, task.start_speed)
                 reason = task.infeasible(one)
                 if reason is not None:
                     raise ValueError(reason)

@@ -90,7 +90,7 @@ def problem(task: Task, scene: Scene, dt: float) -> str | None:
     """Why ``task`` cannot be posed in the scalar ``scene`` with steps of ``dt`` [s], or None:
     :func:`validation.check_integrable`, then :meth:`Task.infeasible` (floats, one scene)."""
     try:
-        validation.check_integrable(scene, dt, task.max_torque)
+        validation.check_integrable(scene, dt, task.max_torque, task.start_speed)
     except ValueError as error:
         return str(error)
     return task.infeasible(scene)
@@ -109,9 +109,9 @@ def _posable(task: Task, scene: Scene, dt: float,
                                for x in batch.params)
     with np.errstate(all="ignore"):
         weight_arm, j_min = validation.integration_magnitudes(m, r, e, k, g)
-        omega, spin, decay = validation.integration_rates(m, r, kappa, e, g, c, j_min,
-                                                          task.max_torque)
-        ok = (omega + spin + decay) * dt <= validation.LARGEST_PHASE_PER_STEP
+        rates = validation.integration_rates(m, r, kappa, e, g, c, j_min, task.max_torque,
+                                             task.start_speed)
+        ok = sum(rates) * dt <= validation.LARGEST_PHASE_PER_STEP
         for x in (weight_arm, j_min):
             ok &= (np.abs(x) >= validation.SMALLEST) & (np.abs(x) <= validation.LARGEST)
     ok &= (task.max_torque >= validation.SMALLEST) & (task.max_torque <= validation.LARGEST)
@@ -136,7 +136,8 @@ def _boxes_params(scene: Scene, boxes: Sequence[Box]) -> Params:
                   field("damping"), field("mu"))
 
 
-def _integrable_proven(p: Params, dt: float, max_torque: float) -> np.ndarray:
+def _integrable_proven(p: Params, dt: float, max_torque: float,
+                       start_speed: float) -> np.ndarray:
     weight_arm, j_min = validation.integration_magnitudes(p.m, p.r, p.e, p.k, p.g)
     ok = np.ones(np.shape(p.m.lo), bool)
     for x in (weight_arm, j_min):
@@ -146,10 +147,11 @@ def _integrable_proven(p: Params, dt: float, max_torque: float) -> np.ndarray:
     # are ∝ 1/m: largest at the least m), so that m's range is not counted twice.
     least = Interval(p.m.lo)
     _, j_unit = validation.integration_magnitudes(1.0, p.r, p.e, p.k, p.g)
-    omega, spin, decay = validation.integration_rates(1.0, p.r, p.kappa, p.e, p.g,
-                                                      p.c / least, j_unit,
-                                                      max_torque / least)
-    return ok & (((omega + spin + decay) * dt).hi <= validation.LARGEST_PHASE_PER_STEP)
+    omega, spin, decay, start = validation.integration_rates(1.0, p.r, p.kappa, p.e, p.g,
+                                                             p.c / least, j_unit,
+                                                             max_torque / least, start_speed)
+    return ok & (((omega + spin + decay + start) * dt).hi
+                 <= validation.LARGEST_PHASE_PER_STEP)
 
 
 def _corners(scene: Scene, boxes: Sequence[Box]) -> Scene:
@@ -187,7 +189,8 @@ def _boxes_proven(task: Task, scene: Scene, dt: float, boxes: Sequence[Box],
     then the task's own (:meth:`Task.scene_proven`) box by box where it has one."""
     with np.errstate(all="ignore"):  # infinities and NaN prove nothing (see intervals)
         p = _boxes_params(scene, boxes)
-        ok = _integrable_proven(p, dt, task.max_torque) & _starts_proven(task, scene, boxes, p)
+        ok = (_integrable_proven(p, dt, task.max_torque, task.start_speed)
+              & _starts_proven(task, scene, boxes, p))
         if type(task).scene_proven is not Task.scene_proven:
             for i in np.flatnonzero(ok):
                 estimates = (scene.replace(**_middle(boxes[i])),  # the nearer first

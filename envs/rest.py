@@ -19,7 +19,9 @@ from roller_gym.physics.integrators import SCENE_FIELDS, scene_arrays
 from roller_gym.physics.scene import shown
 
 __all__ = [
+    "START_TURNS",
     "angle_rate",
+    "half_range",
     "hold_range",
     "hold_ranges",
     "per_scene",
@@ -46,6 +48,10 @@ def angle_rate(scene: Scene) -> float | np.ndarray:
         return rate if rate != 0.0 else 1.0
     return np.where(rate == 0.0, 1.0, rate)
 
+
+#: The most turns of φ a start state or a held target lies from the bottom: on a nearly flat
+#: surface (R of hundreds of r and more), ψ = ±π lies further (see :func:`hold_ranges`).
+START_TURNS = 64
 
 #: How close to a whole number 1/|q| or |q| must be to count as one (relative).
 WHOLE_TOLERANCE = 1e-9
@@ -104,13 +110,14 @@ def hold_ranges(scene: Scene, max_torque: float, torque_share: float = 0.8,
     one per roller of the batch ``scene`` (arrays of the batch's size; of 1 for a scalar
     scene), in one compiled call whatever the batch's size.
 
-    Contiguous around φ = 0, within ψ = ±π (|φ| <= π/|q|, q from :func:`angle_rate`), where
+    Contiguous around φ = 0, within ψ = ±π (|φ| <= π/|q|, q from :func:`angle_rate`) and
+    :data:`START_TURNS` turns of φ (so that the grid below resolves sin φ), where
     the holding torque is at most ``torque_share``·max_torque [N·m] and the contact holds
     with margin: N > 0 and |F| <= ``friction_share``·μN (at rest N = m g cos ψ,
-    F = m g sin ψ). Each side is a grid of ``points`` values of φ from 0 to ±π/|q| (those of
-    ``np.linspace``, bit for bit), walked outward from φ = 0: the bound is the last grid
-    point before the first one that fails (φ = 0 if that one fails, ±π/|q| if none does), so
-    the cost is proportional to the range's width, not to ``points``.
+    F = m g sin ψ). Each side is a grid of ``points`` values of φ from 0 to ±:func:`half_range`
+    (those of ``np.linspace``, bit for bit), walked outward from φ = 0: the bound is the last
+    grid point before the first one that fails (φ = 0 if that one fails, the end if none
+    does), so the cost is proportional to the range's width, not to ``points``.
     """
     if points < 1:
         raise ValueError(f"points={shown(points)} must be >= 1")
@@ -121,11 +128,19 @@ def hold_ranges(scene: Scene, max_torque: float, torque_share: float = 0.8,
     rows = dict(zip(SCENE_FIELDS, scene_arrays(scene), strict=True))  # each of n rollers
     numbers = [rows[name] for name in ("m", "r", "kappa", "e", "k", "g", "damping", "mu")]
     half = np.empty_like(numbers[0])
-    half[...] = np.reshape(math.pi / np.abs(angle_rate(scene)), -1)  # q < 0 on a drum
+    half[...] = np.reshape(half_range(scene), -1)
     low, high = np.empty_like(half), np.empty_like(half)
     _hold_bounds(*numbers, half, float(torque_share * max_torque), float(friction_share),
                  int(points), low, high)
     return low, high
+
+
+def half_range(scene: Scene) -> float | np.ndarray:
+    """How far [rad of φ] a held target may lie from φ = 0 (:func:`hold_ranges`): ψ = ±π,
+    π/|q| with q from :func:`angle_rate` (q < 0 on a drum), at most :data:`START_TURNS`
+    turns."""
+    with np.errstate(over="ignore"):  # π/|q| overflows to inf for |R| near float64's top
+        return np.minimum(math.pi / np.abs(angle_rate(scene)), 2.0 * math.pi * START_TURNS)
 
 
 @_cached_per_scene
@@ -173,7 +188,7 @@ _HOLD_BLOCK = 16
 def _hold_bounds(m, r, kappa, e, k, g, c, mu, half, torque_limit, friction_share, points,
                  low, high):
     """low[j], high[j] of :func:`hold_ranges` for roller j (scene numbers as rows, ``half``
-    π/|q| [rad]): each side's grid walked outward from φ = 0, a block of
+    :func:`half_range` [rad]): each side's grid walked outward from φ = 0, a block of
     :data:`_HOLD_BLOCK` points at a time, up to the first point that fails :func:`_holds`."""
     div = points - 1
     phi = np.empty(_HOLD_BLOCK)

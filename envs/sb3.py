@@ -274,6 +274,9 @@ class RollerVecEnv(VecEnv):
                              "sub-environment; a reset_mask does not apply here")
         for o in each:  # (here, not at every later reset)
             check_option_names(o or {})
+        for group, mask in _option_groups(each, self.num_envs):  # their values too
+            if group:
+                self.venv.check_options(group, mask)
         super().set_options(options)
 
     def _get_indices(self, indices: VecEnvIndices) -> list[int]:

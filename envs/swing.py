@@ -70,10 +70,13 @@ tolerance=..., integrator=..., substeps=..., randomize=..., render_mode=...)``: 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 from roller_gym import rewards
-from roller_gym.physics import Scene
+from roller_gym.physics import Scene, energy
+from roller_gym.physics.scene import shown
 from roller_gym.task import START_TURNS, Task, angle_rate, hold_ranges, objective, register
 
 __all__ = ["SwingTask"]
@@ -97,6 +100,7 @@ class SwingTask(Task):
     #: The amplitude's range, as shares of the range friction holds on its side.
     amplitude_shares = (0.45, 0.85)
     start_rule = "at rest, ψ within ±5° (|φ| <= 64 turns)"
+    start_speed = 0.0
     parameters = ("energy_band", "energy_margin", "control_weight", "max_torque",
                   "symmetric_target", "observes_target")
 
@@ -113,6 +117,35 @@ class SwingTask(Task):
     def success(s, k):
         """The energy within energy_band of the target swing's, relative to it."""
         return np.abs(s.energy / s.target_energy - 1.0) <= k.energy_band
+
+    def check_scene(self, scene: Scene) -> None:
+        """Every target swing has an energy: E* != 0 [J] (finite) over the amplitudes drawn
+        on both sides (a grid of them), so that E/E* − 1 is defined. Not where the potential
+        is flat (a concentric roller on the floor) or the range friction holds is empty."""
+        low, high = hold_ranges(scene, math.inf)
+        shares = np.linspace(*self.amplitude_shares, 65)
+        amplitudes = np.concatenate([shares * low[0], shares * high[0]])
+        target_energy = np.asarray(energy(scene, amplitudes, 0.0))
+        if not np.all(np.isfinite(target_energy) & (target_energy != 0.0)):
+            worst = int(np.argmin(np.where(np.isnan(target_energy), 0.0,
+                                           np.abs(target_energy))))
+            raise ValueError(
+                f"{shown(scene)} gives a target swing no energy: E* = "
+                f"{float(target_energy[worst]):.3g} J at the amplitude phi* = "
+                f"{float(amplitudes[worst]):.4g} rad (the friction-held range is "
+                f"[{float(low[0]):.4g}, {float(high[0]):.4g}] rad), and the reward E/E* − 1 "
+                "needs E* != 0: use an eccentric mass (e > 0) on the floor, or friction (mu > 0) "
+                "inside a cylinder"
+            )
+
+    def scene_proven(self, params: Any, estimates: Sequence[Scene]) -> bool:
+        """Proven for a box inside a cylinder (κ > 0) with μ >= 0.01 (the first point of the
+        friction-held range's grid, |ψ| <= π/2000, holds), where the potential rises with
+        |ψ| on both sides, or on the floor (κ = 0) with e > 0; not elsewhere."""
+        kappa, e, mu = params.kappa, params.e, params.mu
+        return bool((np.all(kappa.lo > 0.0) and np.all(mu.lo >= 0.01))
+                    or (np.all(kappa.lo == 0.0) and np.all(kappa.hi == 0.0)
+                    and np.all(e.lo > 0.0)))
 
     def sample_targets(self, u: np.ndarray, scene: Scene) -> np.ndarray:
         low, high = hold_ranges(scene, math.inf)

@@ -70,6 +70,7 @@ from roller_gym.physics.compiling import inlined
 from roller_gym.physics.integrators import contact_state, scene_arrays
 from roller_gym.physics.scene import shown
 from roller_gym.rest import (  # the scene's rates and rest positions, importable from here too
+    START_TURNS,
     angle_rate,
     hold_range,
     hold_ranges,
@@ -180,8 +181,6 @@ def get_task(task: str | type[Task], current: bool = False) -> type[Task]:
     return found
 
 
-#: The most turns of φ a start state lies from the bottom (see :meth:`Task.start_candidates`).
-START_TURNS = 64
 
 
 class Task:
@@ -266,6 +265,9 @@ class Task:
     # -- per episode (arrays of rollers; the uniforms come from the episode core) ------
     #: The start-state rule, as the error message states it when no start state is found.
     start_rule: ClassVar[str] = "ψ within ±60° (|φ| <= 64 turns) and |φ'| <= 1 rad/s"
+    #: The largest |φ'| [rad/s] of a drawn start state: the construction refuses a dt too
+    #: long to integrate a step from it (:func:`roller_gym.validation.check_integrable`).
+    start_speed: ClassVar[float] = 1.0
 
     def check_scene(self, scene: Scene) -> None:
         """Raise ValueError if the task cannot be posed in ``scene`` (default: any scene)."""
@@ -335,12 +337,13 @@ class Task:
     ) -> tuple[np.ndarray, np.ndarray]:
         """Candidate start states (φ [rad], φ' [rad/s]) of shape (n, K) from uniforms of that
         shape (``scene`` a batch of n): around the bottom, up to ψ = ±60°, and a speed up
-        to ±1 rad/s; φ within ±START_TURNS turns (on a nearly flat surface, R of thousands
-        of r, ψ = ±60° lies further: float64's rounding of such a φ passes the tolerance)."""
+        to ±:attr:`start_speed`; φ within ±START_TURNS turns (on a nearly flat surface, R of
+        thousands of r, ψ = ±60° lies further: float64's rounding of such a φ passes the
+        tolerance)."""
         q = np.abs(angle_rate(scene))  # q < 0 on a drum; q = 1 on the floor
         limit = np.minimum(math.radians(60.0) / np.asarray(q, float),
                            2.0 * math.pi * START_TURNS).reshape(-1, 1)
-        return limit * (2.0 * u_phi - 1.0), 2.0 * u_dot - 1.0
+        return limit * (2.0 * u_phi - 1.0), self.start_speed * (2.0 * u_dot - 1.0)
 
     @property
     def start_torques(self) -> tuple[float, float, float]:

@@ -141,17 +141,20 @@ def _clipped(a: np.ndarray, scale: float, out: np.ndarray) -> bool:
     return finite
 
 
-def check_integrable(scene: Scene, dt: float, max_torque: float) -> None:
+def check_integrable(scene: Scene, dt: float, max_torque: float,
+                     start_speed: float = 0.0) -> None:
     """Raise ValueError if the integrators cannot follow ``scene`` over steps of ``dt`` [s]
-    under torques up to ``max_torque`` [N·m] in float64.
+    under torques up to ``max_torque`` [N·m] in float64, from start states as fast as
+    ``start_speed`` [rad/s] (a task's :attr:`~roller_gym.task.Task.start_speed`).
 
     With J_min = m (k² + (r − e)²) [kg·m²] the smallest moment of inertia about the contact,
     the limits are: m g r, J_min and max_torque representable with room for their squares
     (between 1e-100 and 1e100 in SI units), and the fastest phase per control step,
-    (ω_max + sqrt(max_torque / J_min) + c / J_min) · dt with
+    (ω_max + sqrt(max_torque / J_min) + c / J_min + start_speed (1 + 1/|1 − rκ|)) · dt with
     ω_max² = m g (r²|κ|/(1 − rκ) + e)/J_min and c the damping, at most 1e4: beyond it a
-    control step spans more oscillations, or more e-foldings of the damping's decay, than
-    the integrators' substep budget can follow.
+    control step spans more oscillations, or more e-foldings of the damping's decay, or
+    turns of the fastest angle from a start, than the integrators' substep budget can
+    follow.
     """
     for i in range(scene.batch_size or 1):
         one = scene.item(i) if scene.batch_size else scene
@@ -164,15 +167,17 @@ def check_integrable(scene: Scene, dt: float, max_torque: float) -> None:
                     f"{shown(one)} cannot be integrated in float64: {label} = {x:.3g} (SI) lies "
                     "outside [1e-100, 1e100]; rescale the scene's units"
                 )
-        omega, spin, decay = integration_rates(m, r, kappa, e, g, c, j_min, max_torque)
-        phase = (omega + spin + decay) * dt
+        omega, spin, decay, start = integration_rates(m, r, kappa, e, g, c, j_min, max_torque,
+                                                      start_speed)
+        phase = (omega + spin + decay + start) * dt
         if not phase <= LARGEST_PHASE_PER_STEP:
             raise ValueError(
                 f"dt={shown(dt)} s is too long for {shown(one)}: its fastest time scale is "
-                f"{1.0 / (omega + spin + decay):.3g} s (ω_max = {omega:.3g} rad/s, torque "
-                f"spin-up {spin:.3g} rad/s, damping c/J_min = {decay:.3g} 1/s), {phase:.3g} "
-                f"rad per step where at most {LARGEST_PHASE_PER_STEP:g} can be followed; use a "
-                "shorter dt, a larger k, a smaller e or less damping"
+                f"{1.0 / (omega + spin + decay + start):.3g} s (ω_max = {omega:.3g} rad/s, "
+                f"torque spin-up {spin:.3g} rad/s, damping c/J_min = {decay:.3g} 1/s, starts "
+                f"up to {start_speed:g} rad/s: {start:.3g} rad/s), {phase:.3g} rad per step "
+                f"where at most {LARGEST_PHASE_PER_STEP:g} can be followed; use a shorter dt, "
+                "a larger k, a smaller e or less damping"
             )
 
 
@@ -183,10 +188,13 @@ def integration_magnitudes(m: Any, r: Any, e: Any, k: Any, g: Any) -> tuple[Any,
 
 
 def integration_rates(m: Any, r: Any, kappa: Any, e: Any, g: Any, c: Any, j_min: Any,
-                      max_torque: Any) -> tuple[Any, Any, Any]:
-    """(ω_max, spin, decay) [rad/s, rad/s, 1/s] of :func:`check_integrable`:
-    ω_max² = m g (r²|κ|/(1 − rκ) + e) / J_min, spin² = max_torque / J_min and
-    decay = c / J_min, the damping's fastest rate (floats, or intervals)."""
+                      max_torque: Any, start_speed: float = 0.0) -> tuple[Any, Any, Any, Any]:
+    """(ω_max, spin, decay, start) [rad/s, rad/s, 1/s, rad/s] of :func:`check_integrable`:
+    ω_max² = m g (r²|κ|/(1 − rκ) + e) / J_min, spin² = max_torque / J_min,
+    decay = c / J_min, the damping's fastest rate, and start = start_speed (1 + 1/|1 − rκ|),
+    at least the fastest angle's rate at a start (start_speed times
+    :func:`~roller_gym.physics.equations.fastest_turn`) (floats, or intervals)."""
     s = 1.0 - r * kappa
     omega = np.sqrt(m * g * (r * r * abs(kappa) / s + e) / j_min)
-    return omega, np.sqrt(max_torque / j_min), c / j_min
+    return (omega, np.sqrt(max_torque / j_min), c / j_min,
+            start_speed * (1.0 + 1.0 / abs(s)))

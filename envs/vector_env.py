@@ -380,6 +380,14 @@ class RollerVectorEnv(VectorEnv):
             self._ready = bool(self._started.all())
         return self._observation(), self._masked_info(starts, idx)
 
+    def check_options(self, options: dict[str, Any] | None,
+                      mask: np.ndarray | None = None) -> None:
+        """Raise ValueError where a reset of the sub-environments of ``mask`` (a boolean
+        array of ``num_envs``; all if None) would refuse ``options``, as :meth:`reset` would
+        (its starts drawn from their streams as they stand); nothing changes."""
+        idx = np.flatnonzero(episode.reset_mask(mask, self.num_envs))
+        self._draw(idx, self._episodes[idx], episode.reset_options(options))
+
     # -- a step --------------------------------------------------------------------------
     def step(
         self, actions: np.ndarray

@@ -171,6 +171,23 @@ def real_in(low: float, high: float, *, open_low: bool = False) -> Callable[[str
     return parse
 
 
+def output_file(path: str | Path, option: str) -> Path:
+    """The file ``path``, checked now to be writable (its folder created, as
+    :func:`output_folder`; the file opened for writing and, if it did not exist, removed
+    again), so that a program ends at its start, naming ``option``, not after its work."""
+    file = Path(path)
+    output_folder(file.parent, option)
+    existed = file.exists()
+    try:
+        with open(file, "ab"):
+            pass
+    except OSError as exc:
+        raise SystemExit(f"{option}: cannot write {str(file)!r}: {exc.strerror or exc}") from None
+    if not existed:
+        file.unlink()
+    return file
+
+
 def output_folder(path: str | Path, option: str) -> Path:
     """The folder ``path``, created now with its parents and checked to be writable, so that
     a program that writes there ends at its start, naming ``option``, rather than after its

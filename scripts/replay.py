@@ -26,7 +26,7 @@ from roller_gym.agents.policies import (
     read_config,
     rollout,
 )
-from roller_gym.scripts.arguments import at_least, output_folder, program_parser
+from roller_gym.scripts.arguments import at_least, output_file, program_parser
 
 #: The files replay writes.
 VIDEO_SUFFIXES = (".gif", ".mp4")
@@ -79,7 +79,7 @@ def main(argv: list[str] | None = None) -> None:
         policy = load_policy(args.policy, best=args.best)
         out = Path(args.out or Path(args.policy) / "replay.gif")
 
-    output_folder(out.parent, "--out")
+    output_file(out, "--out")
     episode = rollout(env, policy, seed=args.seed, render=True)
     env.close()
     if out.suffix == ".gif":

@@ -255,6 +255,9 @@ def zoo_arguments(args: argparse.Namespace, conf: str) -> list[str]:
         # rl-zoo3's linear schedules go negative past the end: never overshoot the steps.
         rollout = int(hp["n_envs"]) * int(hp["n_steps"])
         steps = rollout * math.ceil(steps / rollout)
+    if args.checkpoints > steps:  # a checkpoint every steps // checkpoints = 0 steps: none
+        raise SystemExit(f"--checkpoints {args.checkpoints}: more checkpoints than the run's "
+                         f"{steps} steps; give at most {steps} (0: none)")
     out = [
         "--algo", args.algo, "--env", args.env, "--gym-packages", "roller_gym",
         "-conf", conf, "--seed", str(args.seed), "--device", "cpu",

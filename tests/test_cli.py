@@ -230,6 +230,20 @@ def test_importing_the_sb3_bridge_without_its_extra_says_what_to_install():
     assert f'pip install ".[train]" {CPU_INDEX}' in message
 
 
+def test_replay_refuses_an_output_it_cannot_write_before_rendering(tmp_path):
+    """An --out in a folder that exists but cannot hold files ended in a traceback after the
+    whole episode was rendered; now one line names --out first, and leaves nothing behind."""
+    blocked = tmp_path / "file"
+    blocked.write_text("")
+    (tmp_path / "folder.gif").mkdir()
+    for out in (blocked / "x.gif", tmp_path / "folder.gif"):  # under a file; a folder
+        result = roller_gym("replay", "zero", "--env", "roller_gym/RollerStabilize-v2",
+                            "--out", str(out), check=False)
+        assert result.returncode == 1 and "Traceback" not in result.stderr, result.stderr
+        assert result.stderr.strip().startswith("--out: cannot"), result.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file", "folder.gif"]
+
+
 def test_replay_without_pygame_says_in_one_line_what_to_install(tmp_path):
     """pygame is imported only to draw: its absence is reported as one line too."""
     result = run_cli(["replay", "zero", "--env", "roller_gym/RollerStabilize-v2", "--out",
@@ -250,6 +264,19 @@ def test_train_show_command_is_rl_zoo3_with_the_shipped_file():
     assert words[words.index("--gym-packages") + 1] == "roller_gym"
     # PPO's 3,000 steps become whole rollouts of 8 x 256: 4,096.
     assert words[words.index("--n-timesteps") + 1] == "4096"
+
+
+@NEEDS_RL_ZOO3
+def test_train_refuses_more_checkpoints_than_steps():
+    """A checkpoint every 1000 // 5000 = 0 steps meant rl-zoo3 saved none, silently."""
+    result = roller_gym("train", "--algo", "sac", "--steps", "1000", "--checkpoints", "5000",
+                        "--show-command", check=False)
+    assert result.returncode == 1 and "Traceback" not in result.stderr
+    assert ("--checkpoints 5000: more checkpoints than the run's 1000 steps; give at most 1000"
+            in result.stderr)
+    words = roller_gym("train", "--algo", "sac", "--steps", "1000", "--checkpoints", "1000",
+                       "--show-command").stdout.split()
+    assert words[words.index("--save-freq") + 1] == "1"
 
 
 @NEEDS_RL_ZOO3

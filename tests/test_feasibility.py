@@ -95,7 +95,7 @@ def margins(x):
 def rates(x):
     _, j_min = validation.integration_magnitudes(x["m"], x["r"], x["e"], x["k"], x["g"])
     return validation.integration_rates(x["m"], x["r"], x["kappa"], x["e"], x["g"], x["c"],
-                                        j_min, x["tau"] * x["tau"] + 0.1)
+                                        j_min, x["tau"] * x["tau"] + 0.1, 1.0)
 
 
 @pytest.mark.parametrize("name", list(EQUATIONS))

@@ -708,3 +708,109 @@ def test_the_analysis_refuses_what_is_not_finite_and_never_shows_rolling_it_did_
     assert not np.isfinite(far.normal) and far.lifting and far.slipping
     near = physics.contact(paper, 0.0, 1.0, 0.0)  # at rest speeds, as before: it rolls
     assert near.liftoff_margin > 0 and not near.lifting and not near.slipping
+
+
+@pytest.mark.parametrize("env_id", ["roller_gym/RollerHold-v2", "roller_gym/RollerTrack-v1",
+                                    "roller_gym/RollerSwing-v0"])
+def test_a_nearly_flat_cylinder_or_drum_gives_finite_targets(env_id):
+    """|R| near float64's top made π/|q| overflow, and reset handed back a NaN target and
+    observation. The held range is within START_TURNS turns of φ, so it stays finite."""
+    for scene in (Scene(R=1e307), Scene(R=-1e307)):
+        env = gym.make(env_id, scene=scene).unwrapped
+        for seed in range(3):
+            obs, info = env.reset(seed=seed)
+            assert np.isfinite(obs).all() and np.isfinite(info["target_phi"]), (scene, seed)
+    vec = gym.make_vec(env_id, num_envs=4, randomize={"R": (0.3, 1e307)})
+    obs, info = vec.reset(seed=0)
+    assert np.isfinite(obs).all() and np.isfinite(info["target_phi"]).all()
+
+
+@pytest.mark.parametrize("R", [2.0, 1000.0, 1e5, 1e15])
+def test_every_held_target_needs_at_most_the_share_of_the_torque_it_promises(R):
+    """On a large cylinder the grid of the held range was spaced wider than a turn of φ and
+    missed the e sin φ of the holding torque: targets needed up to 1.2× max_torque. Every
+    drawn target's holding torque (the physics' own, independent of the range's walk) is
+    now within max_torque, with the 0.8 share up to what the grid between points can miss."""
+    scene = Scene(R=R, e=0.08)
+    env = gym.make("roller_gym/RollerHold-v2", scene=scene).unwrapped
+    torques = []
+    for seed in range(100):
+        _, info = env.reset(seed=seed)
+        torques.append(abs(float(roller_gym.physics.holding_torque(scene,
+                                                                   info["target_phi"]))))
+    assert max(torques) <= 0.85 * env.task.max_torque, max(torques)
+
+
+def test_swing_refuses_a_scene_whose_target_swing_has_no_energy():
+    """A concentric roller on the floor has a flat potential: E* = 0 and the reward
+    E/E* − 1 was NaN on every step; without friction in a cylinder, nothing beyond the
+    bottom is held. Refused by name at construction, on ranges too; a floor with an
+    eccentric mass and a cylinder with friction stay allowed."""
+    for scene in (Scene(R=math.inf, e=0.0), Scene(mu=0.0)):
+        with pytest.raises(ValueError, match=r"gives a target swing no energy: E\* = 0 J"):
+            gym.make("roller_gym/RollerSwing-v0", scene=scene)
+    with pytest.raises(ValueError, match=r"randomize\['e'\]=\(0\.0, 0\.05\) cannot be used"):
+        gym.make("roller_gym/RollerSwing-v0", scene="floor", randomize={"e": (0.0, 0.05)})
+    for kwargs in ({"scene": "floor"}, {"randomize": {"e": (0.02, 0.09), "R": (0.3, 1.5)}},
+                   {"scene": "drum"}):
+        env = gym.make("roller_gym/RollerSwing-v0", **kwargs)
+        env.reset(seed=0)
+        rewards = [env.step(np.zeros(1, np.float32))[1] for _ in range(3)]
+        assert np.isfinite(rewards).all(), kwargs
+
+
+def test_a_dt_too_long_for_the_tasks_own_start_speeds_is_refused_at_construction():
+    """A slow, large scene passed the check of its own rates, but the drawn start speeds
+    (up to 1 rad/s) turned 1e6 rad in a step: every episode failed its first step. The
+    construction counts the task's start speed; a task starting at rest is not limited by
+    it; and what is accepted steps finitely from its drawn starts."""
+    big = Scene(r=1e7, R=5e7, e=4e6, k=1e7)
+    with pytest.raises(ValueError, match=r"dt=4000000\.0 s is too long .* starts up to 1 rad/s"):
+        gym.make("roller_gym/RollerStabilize-v2", scene=big, dt=4e6)
+    gym.make("roller_gym/RollerSwing-v0", scene=big, dt=4e6)  # starts at rest
+    for env_id in roller_gym.ENV_IDS:
+        task = gym.make(env_id).unwrapped.task
+        grid = np.linspace(0.0, 1.0, 11)[None]
+        _, speeds = task.start_candidates(grid, grid, roller_gym.preset(task.default_scene))
+        assert np.abs(speeds).max() <= task.start_speed, env_id
+    env = gym.make("roller_gym/RollerStabilize-v2", scene=big, dt=4e3)
+    for seed in range(5):
+        env.reset(seed=seed)
+        assert not env.step(np.zeros(1, np.float32))[4]["nonfinite"]
+
+
+def test_a_scene_past_float64s_range_is_refused_not_rounded_to_inf_or_zero():
+    """A longdouble R of 1e400 became a floor (inf) and an e of 1e-400 became 0, silently;
+    an |R| so small that 1/R overflows gave NaN everywhere and an error blaming dt."""
+    for kwargs, message in (
+            ({"R": np.longdouble("1e400")}, r"Scene\.R=.* past float64's range"),
+            ({"e": np.longdouble("1e-400")}, r"Scene\.e=.* past float64's range"),
+            ({"R": -5e-324}, r"Scene\.R=-5e-324 is out of range: its curvature 1/R"),
+            ({"r": 5e-324, "R": 1e-323}, r"Scene\.R=1e-323 is out of range: its curvature")):
+        with pytest.raises(ValueError, match=message):
+            Scene(**kwargs)
+    assert Scene(R=np.longdouble("0.5")) == Scene(R=0.5)
+
+
+def test_the_analysis_refuses_an_angle_beyond_where_the_sines_are_defined():
+    """φ = 1e300 gave NaN from the analysis, and an error naming tau, an argument the user
+    never passed; the environments' own limit (trig.DOMAIN) now holds there too."""
+    paper = preset("paper")
+    for call in (lambda: roller_gym.physics.acceleration(paper, 1e300, 0.0, 0.0),
+                 lambda: roller_gym.physics.small_oscillation_frequency(paper, 1e300),
+                 lambda: roller_gym.physics.energy(paper, [0.0, 2.0**51], 0.0)):
+        with pytest.raises(ValueError, match=r"^phi=.* must be within ±1\.126e\+15 rad"):
+            call()
+    assert np.isfinite(roller_gym.physics.acceleration(paper, 2.0**49, 0.0, 0.0))
+
+
+
+def test_tracks_target_stays_within_the_sines_domain_wherever_a_dt_is_accepted():
+    """The moving target's sines turned NaN once ω t passed 2⁵⁰ rad (dt = 1e16 s on a huge
+    scene): observation and reward NaN, unflagged. Such a dt is refused by the start speeds'
+    rate; the longest dt any accepted scene allows, 1e4 rad per step at 1 rad/s, keeps the
+    target's phase (0.8 rad/s, 400 steps) far inside the domain."""
+    big = Scene(r=1e29, R=5e29, e=4e28, k=1e29)
+    with pytest.raises(ValueError, match=r"dt=1e\+16 s is too long .* starts up to 1 rad/s"):
+        gym.make("roller_gym/RollerTrack-v1", scene=big, dt=1e16)
+    assert 0.8 * 400 * 1e4 / 1.0 + 2 * math.pi < 2.0**50

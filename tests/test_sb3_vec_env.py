@@ -21,6 +21,7 @@ from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.vec_env import (
     DummyVecEnv,
     VecCheckNan,
+    VecEnv,
     VecMonitor,
     VecNormalize,
 )
@@ -313,6 +314,20 @@ def test_from_env_fns_batches_only_environments_made_alike():
         from_env_fns([lambda: gymnasium.make(IDS[0])], foo=1)
 
 
+def test_set_options_refuses_values_a_reset_would_refuse_and_keeps_the_last_ones():
+    """A value was accepted by set_options and refused by every later reset; now it is
+    refused at once, by the reset's own checks, and the options set before stay in force."""
+    env, twin = (RollerVecEnv(IDS[1], n_envs=2, seed=0) for _ in range(2))
+    env.set_options({"target": 0.1}), twin.set_options({"target": 0.1})
+    for bad, message in (({"state": "abc"}, r"options\['state'\]='abc' must be a pair"),
+                         ([None, {"target": 99.0}],
+                          r"options\['target'\]=99.0 rad cannot be held")):
+        with pytest.raises(ValueError, match=message):
+            env.set_options(bad)
+    np.testing.assert_array_equal(env.reset(), twin.reset())
+    assert env.get_attr("target") == twin.get_attr("target")
+
+
 def test_a_refused_reset_of_per_sub_environment_options_resets_none():
     """Options set per sub-environment reset in groups: where a later group's are refused,
     the earlier groups' sub-environments are as they were (they had already started anew),
@@ -320,7 +335,9 @@ def test_a_refused_reset_of_per_sub_environment_options_resets_none():
     env, twin = (RollerVecEnv(IDS[0], n_envs=2, seed=0) for _ in range(2))
     env.reset(), twin.reset()
     before = env.get_attr("phi")
-    env.set_options([{"state": (0.1, 0.0)}, {"state": (1e6, 0.0)}])
+    # set_options checks the values on the streams as they stand, so only a scene drawn
+    # anew could refuse them later: stood in for by setting them past that check
+    VecEnv.set_options(env, [{"state": (0.1, 0.0)}, {"state": (1e6, 0.0)}])
     with pytest.raises(ValueError, match=r"options\['state'\]=\(1000000.0, 0.0\)"):
         env.reset()
     assert env.get_attr("phi") == before

@@ -20,6 +20,7 @@ from roller_gym.physics import Scene, contact, holding_torque
 from roller_gym.task import (
     OBSERVATION_FIELDS,
     PRECISION_MARGIN,
+    START_TURNS,
     TASKS,
     Task,
     angle_rate,
@@ -239,7 +240,7 @@ def test_the_start_state_is_the_first_accepted_candidate_in_draw_order(name):
 def grid_scan_hold_range(scene, max_torque, torque_share=0.8, friction_share=0.9, points=2001):
     """The reference: hold_range as it was written before its compiled walk, a NumPy scan of
     the whole grid of each side (one scalar scene)."""
-    half = math.pi / abs(angle_rate(scene))
+    half = min(math.pi / abs(angle_rate(scene)), 2 * math.pi * START_TURNS)
     bounds = []
     for sign in (1.0, -1.0):
         phi = sign * np.linspace(0.0, half, points)
@@ -286,7 +287,7 @@ def test_hold_ranges_is_the_grid_scan_bit_for_bit():
         low, high = hold_ranges(batch, max_torque)
         want = np.array([grid_scan_hold_range(s, max_torque) for s in scenes])
         assert same_bits(low, want[:, 0]) and same_bits(high, want[:, 1]), max_torque
-        half = math.pi / np.abs(angle_rate(batch))
+        half = np.minimum(math.pi / np.abs(angle_rate(batch)), 2 * math.pi * START_TURNS)
         whole += int(np.sum(high == half) + np.sum(low == -half))
         nothing += int(np.sum(high == 0.0) + np.sum(low == 0.0))
         between += int(np.sum((high > 0.0) & (high < half)))

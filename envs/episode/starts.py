@@ -208,7 +208,7 @@ def start_episodes(
         reason = task.infeasible(scene)
         if reason is not None:
             raise ValueError(f"options['scene']: {reason}")
-        validation.check_integrable(scene, config.dt, task.max_torque)
+        validation.check_integrable(scene, config.dt, task.max_torque, task.start_speed)
     elif config.randomize:
         fields_ = scene_rows(base, n)
         drawn = {

@@ -18,6 +18,7 @@ import numba
 import numba.extending
 import numpy as np
 from roller_gym.physics import equations as eq
+from roller_gym.physics import trig
 from roller_gym.physics.scene import Scene, finite_real, require_scene, shown, whole_number
 from scipy.optimize import brentq
 
@@ -65,6 +66,9 @@ def _numbers(**values: Any) -> tuple[Any, ...]:
         if not finite.all():
             raise ValueError(f"{name}={shown(values[name])} must be finite numbers (it holds "
                              "NaN or inf, as a float64)")
+        if name == "phi" and not np.all(np.abs(np.real(value)) < trig.DOMAIN):
+            raise ValueError(f"phi={shown(values[name])} must be within ±{trig.DOMAIN:.4g} rad, "
+                             "where the sines are defined")
         out.append(value)
     return tuple(out)
 

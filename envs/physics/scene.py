@@ -158,7 +158,13 @@ class Scene:
             if value.dtype.kind not in "iuf":  # not text, bool, complex or objects
                 raise ValueError(f"Scene.{f.name}={shown(raw)} is not a real number (SI units); "
                                  f"it must be an int or a float, or an array of them")
-            value = value.astype(float)
+            with np.errstate(over="ignore", under="ignore"):
+                wide, value = value, value.astype(float)
+            if wide.dtype.itemsize > 8 and wide.dtype.kind == "f" and np.any(
+                    (np.isfinite(wide) & ~np.isfinite(value)) | ((wide != 0) & (value == 0))):
+                raise ValueError(f"Scene.{f.name}={shown(raw)} is out of range: past float64's "
+                                 "range (about 4.9e-324 to 1.8e308 in size), where it would "
+                                 "become inf or 0; it must be a float64 number")
             if np.isnan(value).any():
                 raise ValueError(f"Scene.{f.name}={_describe(value)} is NaN; it must be a number")
             if f.name == "R":
@@ -169,6 +175,13 @@ class Scene:
                         f"Scene.R={_describe(value)} is not allowed with r={_describe(r)}: R must "
                         "be > r (inside a cylinder), math.inf (a flat floor) or a finite negative "
                         "number (on top of a drum of radius -R)"
+                    )
+                with np.errstate(divide="ignore", over="ignore"):
+                    curvature = 1.0 / value
+                if not np.isfinite(curvature).all():
+                    raise ValueError(
+                        f"Scene.R={_describe(value)} is out of range: its curvature 1/R is past "
+                        "float64's range; |R| must be at least about 5.6e-309 m"
                     )
                 object.__setattr__(self, f.name, value if value.ndim > 0 else float(value))
                 continue
