@@ -27,7 +27,7 @@ DOCUMENTED = {
     "roller_gym/RollerTrack-v1": {"steps": 400, "max_torque": 1.0, "obs": 10, "scene": "paper",
                                   "band": 0.05, "margin": 1.0},
     # an objective of its own: the relative energy error's band and margin
-    "roller_gym/RollerSwing-v0": {"steps": 400, "max_torque": 0.1, "obs": 9, "scene": "paper",
+    "roller_gym/RollerSwing-v1": {"steps": 400, "max_torque": 0.1, "obs": 9, "scene": "paper",
                                   "energy_band": 0.1, "energy_margin": 0.4},
     "roller_gym/RollerHoldRandomized-v1": {"steps": 200, "max_torque": 1.0, "obs": 9,
                                            "scene": "paper", "band": 0.05, "margin": 2.0},

@@ -711,7 +711,7 @@ def test_the_analysis_refuses_what_is_not_finite_and_never_shows_rolling_it_did_
 
 
 @pytest.mark.parametrize("env_id", ["roller_gym/RollerHold-v2", "roller_gym/RollerTrack-v1",
-                                    "roller_gym/RollerSwing-v0"])
+                                    "roller_gym/RollerSwing-v1"])
 def test_a_nearly_flat_cylinder_or_drum_gives_finite_targets(env_id):
     """|R| near float64's top made π/|q| overflow, and reset handed back a NaN target and
     observation. The held range is within START_TURNS turns of φ, so it stays finite."""
@@ -748,12 +748,12 @@ def test_swing_refuses_a_scene_whose_target_swing_has_no_energy():
     eccentric mass and a cylinder with friction stay allowed."""
     for scene in (Scene(R=math.inf, e=0.0), Scene(mu=0.0)):
         with pytest.raises(ValueError, match=r"gives a target swing no energy: E\* = 0 J"):
-            gym.make("roller_gym/RollerSwing-v0", scene=scene)
+            gym.make("roller_gym/RollerSwing-v1", scene=scene)
     with pytest.raises(ValueError, match=r"randomize\['e'\]=\(0\.0, 0\.05\) cannot be used"):
-        gym.make("roller_gym/RollerSwing-v0", scene="floor", randomize={"e": (0.0, 0.05)})
+        gym.make("roller_gym/RollerSwing-v1", scene="floor", randomize={"e": (0.0, 0.05)})
     for kwargs in ({"scene": "floor"}, {"randomize": {"e": (0.02, 0.09), "R": (0.3, 1.5)}},
                    {"scene": "drum"}):
-        env = gym.make("roller_gym/RollerSwing-v0", **kwargs)
+        env = gym.make("roller_gym/RollerSwing-v1", **kwargs)
         env.reset(seed=0)
         rewards = [env.step(np.zeros(1, np.float32))[1] for _ in range(3)]
         assert np.isfinite(rewards).all(), kwargs
@@ -767,7 +767,7 @@ def test_a_dt_too_long_for_the_tasks_own_start_speeds_is_refused_at_construction
     big = Scene(r=1e7, R=5e7, e=4e6, k=1e7)
     with pytest.raises(ValueError, match=r"dt=4000000\.0 s is too long .* starts up to 1 rad/s"):
         gym.make("roller_gym/RollerStabilize-v2", scene=big, dt=4e6)
-    gym.make("roller_gym/RollerSwing-v0", scene=big, dt=4e6)  # starts at rest
+    gym.make("roller_gym/RollerSwing-v1", scene=big, dt=4e6)  # starts at rest
     for env_id in roller_gym.ENV_IDS:
         task = gym.make(env_id).unwrapped.task
         grid = np.linspace(0.0, 1.0, 11)[None]
