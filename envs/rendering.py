@@ -16,6 +16,9 @@ from roller_gym.physics import Scene, kinematics
 __all__ = ["Renderer"]
 
 SIZE = 500  # window side [px]
+#: How far off the picture [px] a point is drawn: further ones are drawn there (unseen), since
+#: pygame's drawing takes 16-bit coordinates (a target hundreds of radians along a floor).
+_OFF = 8 * SIZE
 _WALL = (60, 60, 70)
 _ROLLER = (180, 200, 230)
 _RIM = (40, 70, 140)
@@ -64,7 +67,8 @@ class Renderer:
         cx0, cy0, scale = self._view(scene, o1x)
 
         def px(x: float, y: float) -> tuple[int, int]:
-            return int(SIZE / 2 + (x - cx0) * scale), int(SIZE / 2 - (y - cy0) * scale)
+            return (int(min(max(SIZE / 2 + (x - cx0) * scale, -_OFF), _OFF)),
+                    int(min(max(SIZE / 2 - (y - cy0) * scale, -_OFF), _OFF)))
 
         surf.fill(_BACKGROUND)
         r, R = float(scene.r), float(scene.R)

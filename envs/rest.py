@@ -16,7 +16,7 @@ import numpy as np
 from roller_gym.physics import Scene, equations, equilibria
 from roller_gym.physics.compiling import inlined
 from roller_gym.physics.integrators import SCENE_FIELDS, scene_arrays
-from roller_gym.physics.scene import shown
+from roller_gym.physics.scene import finite_real, require_scene, shown
 
 __all__ = [
     "START_TURNS",
@@ -34,6 +34,7 @@ __all__ = [
 def psi_rate(scene: Scene) -> float | np.ndarray:
     """dψ/dφ = rκ/(1 − rκ) [-]: ψ = psi_rate · φ (0 on the floor, where ψ stays 0); a float
     for a scalar scene, an array for a batch."""
+    scene = require_scene(scene)
     kappa = np.asarray(scene.kappa, dtype=float)
     rate = scene.r * kappa / (1.0 - scene.r * kappa)
     return float(rate) if np.ndim(rate) == 0 else rate
@@ -99,6 +100,11 @@ def _cached_per_scene(function):
 
     @functools.wraps(function)
     def wrapper(scene: Scene, *args):
+        scene = require_scene(scene)
+        try:
+            hash(args)
+        except TypeError:  # not a key (a list...): uncached, for the function's own checks
+            return function(scene, *args)
         return cached(tuple(scene.as_dict().items()), *args)
 
     return wrapper
@@ -119,8 +125,16 @@ def hold_ranges(scene: Scene, max_torque: float, torque_share: float = 0.8,
     grid point before the first one that fails (φ = 0 if that one fails, the end if none
     does), so the cost is proportional to the range's width, not to ``points``.
     """
-    if points < 1:
-        raise ValueError(f"points={shown(points)} must be >= 1")
+    scene = require_scene(scene)
+    if not (finite_real(max_torque) or max_torque == math.inf) or not max_torque > 0:
+        raise ValueError(f"max_torque={shown(max_torque)} [N·m] must be a real number > 0 "
+                         "(math.inf: no torque limit)")
+    for name, share in (("torque_share", torque_share), ("friction_share", friction_share)):
+        if not (finite_real(share) and 0 < share <= 1):
+            raise ValueError(f"{name}={shown(share)} must be a real number in (0, 1]")
+    if not (isinstance(points, int | np.integer) and not isinstance(points, bool)
+            and 1 <= points <= 10**7):
+        raise ValueError(f"points={shown(points)} must be an integer in [1, 10**7]")
     if not all(isinstance(getattr(scene, f.name), float | np.ndarray)
                for f in dataclasses.fields(Scene)):  # e.g. an int or float32 number
         scene = Scene(**{f.name: np.asarray(getattr(scene, f.name), float)[()]

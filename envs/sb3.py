@@ -274,9 +274,10 @@ class RollerVecEnv(VecEnv):
                              "sub-environment; a reset_mask does not apply here")
         for o in each:  # (here, not at every later reset)
             check_option_names(o or {})
-        for group, mask in _option_groups(each, self.num_envs):  # their values too
-            if group:
-                self.venv.check_options(group, mask)
+        seeds = None if all(s is None for s in self._seeds) else list(self._seeds)
+        for group, mask in _option_groups(each, self.num_envs):  # their values too, for
+            if group:  # the next reset's episodes (with the seeds set before)
+                self.venv.check_options(group, mask, seeds)
         super().set_options(options)
 
     def _get_indices(self, indices: VecEnvIndices) -> list[int]:

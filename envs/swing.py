@@ -130,22 +130,22 @@ class SwingTask(Task):
         return np.abs(s.energy / s.target_energy - 1.0) <= k.energy_band
 
     def check_scene(self, scene: Scene) -> None:
-        """Every target swing has an energy: E* != 0 [J] (finite) over the amplitudes drawn
-        on both sides (a grid of them), so that E/E* − 1 is defined. Not where the potential
-        is flat (a concentric roller on the floor) or the range friction holds is empty."""
+        """Every target swing has energy: E* > 0 [J] over the amplitudes drawn on both sides
+        (a grid of them), so that E/E* − 1 is defined and a swing turns back there. Not where
+        the potential is flat (a concentric roller on the floor), the range friction holds
+        is empty, or the target lies below the bottom (on a drum, E* < 0)."""
         low, high = hold_ranges(scene, math.inf)
         shares = np.linspace(*self.amplitude_shares, 65)
         amplitudes = np.concatenate([shares * low[0], shares * high[0]])
         target_energy = np.asarray(energy(scene, amplitudes, 0.0))
-        if not np.all(np.isfinite(target_energy) & (target_energy != 0.0)):
-            worst = int(np.argmin(np.where(np.isnan(target_energy), 0.0,
-                                           np.abs(target_energy))))
+        if not np.all(target_energy > 0.0):
+            worst = int(np.argmin(np.where(np.isnan(target_energy), -np.inf, target_energy)))
             raise ValueError(
                 f"{shown(scene)} gives a target swing no energy: E* = "
                 f"{float(target_energy[worst]):.3g} J at the amplitude phi* = "
                 f"{float(amplitudes[worst]):.4g} rad (the friction-held range is "
                 f"[{float(low[0]):.4g}, {float(high[0]):.4g}] rad), and the reward E/E* − 1 "
-                "needs E* != 0: use an eccentric mass (e > 0) on the floor, or friction (mu > 0) "
+                "needs E* > 0: use an eccentric mass (e > 0) on the floor, or friction (mu > 0) "
                 "inside a cylinder"
             )
 

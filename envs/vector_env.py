@@ -380,13 +380,23 @@ class RollerVectorEnv(VectorEnv):
             self._ready = bool(self._started.all())
         return self._observation(), self._masked_info(starts, idx)
 
-    def check_options(self, options: dict[str, Any] | None,
-                      mask: np.ndarray | None = None) -> None:
-        """Raise ValueError where a reset of the sub-environments of ``mask`` (a boolean
-        array of ``num_envs``; all if None) would refuse ``options``, as :meth:`reset` would
-        (its starts drawn from their streams as they stand); nothing changes."""
-        idx = np.flatnonzero(episode.reset_mask(mask, self.num_envs))
-        self._draw(idx, self._episodes[idx], episode.reset_options(options))
+    def check_options(self, options: dict[str, Any] | None, mask: np.ndarray | None = None,
+                      seed: int | Sequence[int | None] | None = None) -> None:
+        """Raise ValueError where the next :meth:`reset` of the sub-environments of ``mask``
+        (a boolean array of ``num_envs``; all if None) with ``seed`` (as reset's) would
+        refuse ``options``: their next episodes drawn as that reset would draw them (a
+        sub-environment without a seed yet: from its stream as it stands); nothing
+        changes."""
+        n = self.num_envs
+        idx = np.flatnonzero(episode.reset_mask(mask, n))
+        seeds = episode.vector_seeds(seed, n) or [None] * n
+        streams = np.array([self._seeds[i] if seeds[i] is None else seeds[i] for i in idx],
+                           dtype=np.uint64)
+        numbers = np.array([self._episodes[i] + 1 if seeds[i] is None and self._has_seed[i]
+                            else 0 for i in idx], dtype=np.uint64)
+        base = self._base if self._base.batch_size is None else episode.take(self._base, idx, n)
+        episode.start_episodes(self.config, base, streams, numbers,
+                               episode.reset_options(options))
 
     # -- a step --------------------------------------------------------------------------
     def step(

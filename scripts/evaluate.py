@@ -52,7 +52,13 @@ from roller_gym.agents.policies import (
     read_config,
     rollout,
 )
-from roller_gym.scripts.arguments import at_least, output_folder, program_parser, stage
+from roller_gym.scripts.arguments import (
+    at_least,
+    output_file,
+    output_folder,
+    program_parser,
+    stage,
+)
 from roller_gym.task import get_task
 
 #: How the baselines are named in the tables.
@@ -232,7 +238,7 @@ def main(argv: list[str] | None = None) -> None:
     matplotlib.use("Agg")  # files only, no window
     out = output_folder(args.out, "--out")
     if args.report is not None:
-        output_folder(Path(args.report).parent, "--report")
+        output_file(args.report, "--report")
     if args.models and len(args.env) > 1:
         raise SystemExit("--models names runs of one task; use --runs for several tasks")
     sections = []

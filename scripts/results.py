@@ -55,7 +55,14 @@ from roller_gym.agents.policies import (
 )
 from roller_gym.bench.records import package_versions
 from roller_gym.scripts import results_page
-from roller_gym.scripts.arguments import at_least, output_folder, program_parser, real_in, stage
+from roller_gym.scripts.arguments import (
+    at_least,
+    output_file,
+    output_folder,
+    program_parser,
+    real_in,
+    stage,
+)
 from roller_gym.scripts.evaluate import RETURN_TOLERANCE, classical_label, evaluate
 from roller_gym.task import get_task
 
@@ -253,16 +260,18 @@ def main(argv: list[str] | None = None) -> None:
                   f"{t['calibration_seeds'][1]}); registered {t['registered']}", flush=True)
         return
     out = output_folder(args.out, "--out")
-    output_folder(Path(args.report).parent, "--report")
+    output_file(args.report, "--report")
     if not args.render_only:
         for env_id in args.env:
             path = results_page.task_files(out) / f"{file_name(env_id)}.json"
             if args.keep_stored and not path.is_file():
                 raise SystemExit(f"--keep-stored: no stored file {path} of {env_id} to keep "
                                  "runs from")
+            # read before the evaluation, which takes long, so that a bad file ends it first
+            stored = results_page.read_task_file(path) if args.keep_stored else None
             record = measure(args, env_id)
-            if args.keep_stored:
-                record = keep_stored(record, json.loads(path.read_text()), args.algos, path)
+            if stored is not None:
+                record = keep_stored(record, stored, args.algos, path)
             path.parent.mkdir(parents=True, exist_ok=True)
             path.write_text(json.dumps(record, indent=1) + "\n")
             print(f"wrote {path}")

@@ -31,6 +31,10 @@ from roller_gym.task import TIERS
 
 #: The per-task files' layout version; :func:`load` reads this one only.
 FORMAT = 2
+#: The entries every task file has (``roller-gym results`` writes them; "kept" is optional).
+RECORD_KEYS = ("format", "task", "date", "command", "machine", "versions", "episodes",
+               "evaluation_seeds", "reward_threshold", "classical", "tier", "success_band",
+               "evaluation_s", "train_wall_s", "evaluations")
 #: The algorithms in the order the page lists them.
 ALGO_ORDER = ("sac", "td3", "ppo")
 #: The training evaluations whose success is shown beside the final model's.
@@ -52,12 +56,27 @@ def load(folder: Path) -> list[dict[str, Any]]:
     order = {_version(env_id)[0]: i for i, env_id in enumerate(roller_gym.ENV_IDS)}
     for path in sorted(task_files(folder).glob("*.json"),
                        key=lambda p: (order.get(_version(p.stem)[0], len(order)), p.stem)):
-        record = json.loads(path.read_text())
-        if record.get("format") != FORMAT:
-            raise SystemExit(f"{path}: format {record.get('format')!r}, not {FORMAT}; measure "
-                             "the task again with roller-gym results --env ...")
-        records.append(record)
+        records.append(read_task_file(path))
     return records
+
+
+def read_task_file(path: Path) -> dict[str, Any]:
+    """One task's results file, read and checked to be of this :data:`FORMAT` (SystemExit
+    naming the file otherwise)."""
+    try:
+        record = json.loads(Path(path).read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise SystemExit(f"{path}: not a readable results file ({exc}); measure the task "
+                         "again with roller-gym results --env ...") from None
+    found = record.get("format") if isinstance(record, dict) else type(record).__name__
+    if found != FORMAT:
+        raise SystemExit(f"{path}: format {found!r}, not {FORMAT}; measure the task again with "
+                         "roller-gym results --env ...")
+    missing = [key for key in RECORD_KEYS if key not in record]
+    if missing:
+        raise SystemExit(f"{path}: a results file without {', '.join(missing)}; measure the "
+                         "task again with roller-gym results --env ...")
+    return record
 
 
 def _version(task: str) -> tuple[str, int]:

@@ -244,6 +244,19 @@ def test_replay_refuses_an_output_it_cannot_write_before_rendering(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["file", "folder.gif"]
 
 
+def test_a_report_that_cannot_be_written_is_refused_before_the_work(tmp_path):
+    """--report in a folder that exists but cannot hold it (here: under a file) ended in a
+    traceback after the evaluation; now one line names --report first."""
+    blocked = tmp_path / "file"
+    blocked.write_text("")
+    for argv in (["evaluate", "--episodes", "1", "--baselines", "zero", "--out",
+                  str(tmp_path / "e")],
+                 ["results", "--render-only", "--out", str(tmp_path / "r")]):
+        result = roller_gym(*argv, "--report", str(blocked / "x.md"), check=False)
+        assert result.returncode == 1 and "Traceback" not in result.stderr, result.stderr
+        assert result.stderr.strip().splitlines()[-1].startswith("--report: cannot"), argv
+
+
 def test_replay_without_pygame_says_in_one_line_what_to_install(tmp_path):
     """pygame is imported only to draw: its absence is reported as one line too."""
     result = run_cli(["replay", "zero", "--env", "roller_gym/RollerStabilize-v2", "--out",

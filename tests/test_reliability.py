@@ -744,15 +744,18 @@ def test_every_held_target_needs_at_most_the_share_of_the_torque_it_promises(R):
 def test_swing_refuses_a_scene_whose_target_swing_has_no_energy():
     """A concentric roller on the floor has a flat potential: E* = 0 and the reward
     E/E* − 1 was NaN on every step; without friction in a cylinder, nothing beyond the
-    bottom is held. Refused by name at construction, on ranges too; a floor with an
-    eccentric mass and a cylinder with friction stay allowed."""
+    bottom is held; on a drum the target lies below the start (E* < 0: no swing turns back
+    there, and the roller slips off). Refused by name at construction, on ranges too; a
+    floor with an eccentric mass and a cylinder with friction stay allowed."""
     for scene in (Scene(R=math.inf, e=0.0), Scene(mu=0.0)):
         with pytest.raises(ValueError, match=r"gives a target swing no energy: E\* = 0 J"):
             gym.make("roller_gym/RollerSwing-v1", scene=scene)
+    for scene in ("drum", Scene(R=-0.5, e=0.0)):
+        with pytest.raises(ValueError, match=r"gives a target swing no energy: E\* = -[\d.]+ J"):
+            gym.make("roller_gym/RollerSwing-v1", scene=scene)
     with pytest.raises(ValueError, match=r"randomize\['e'\]=\(0\.0, 0\.05\) cannot be used"):
         gym.make("roller_gym/RollerSwing-v1", scene="floor", randomize={"e": (0.0, 0.05)})
-    for kwargs in ({"scene": "floor"}, {"randomize": {"e": (0.02, 0.09), "R": (0.3, 1.5)}},
-                   {"scene": "drum"}):
+    for kwargs in ({"scene": "floor"}, {"randomize": {"e": (0.02, 0.09), "R": (0.3, 1.5)}}):
         env = gym.make("roller_gym/RollerSwing-v1", **kwargs)
         env.reset(seed=0)
         rewards = [env.step(np.zeros(1, np.float32))[1] for _ in range(3)]
@@ -814,3 +817,53 @@ def test_tracks_target_stays_within_the_sines_domain_wherever_a_dt_is_accepted()
     with pytest.raises(ValueError, match=r"dt=1e\+16 s is too long .* starts up to 1 rad/s"):
         gym.make("roller_gym/RollerTrack-v1", scene=big, dt=1e16)
     assert 0.8 * 400 * 1e4 / 1.0 + 2 * math.pi < 2.0**50
+
+
+def test_a_surface_so_flat_that_r_kappa_underflows_is_the_floor_not_a_crash():
+    """r κ = 1e-17/1e308 underflows to 0: the equilibria's window divided by it
+    (ZeroDivisionError, through Balance's construction too). Such a surface is the floor's
+    case: a uniform roller has no isolated rest position, and Balance refuses it by name."""
+    flat = Scene(r=1e-17, R=1e308, e=0.0, k=1e-17)
+    assert roller_gym.physics.equilibria(flat) == []
+    for env_id in ("roller_gym/RollerBalance-v2", "roller_gym/RollerBalanceWeak-v0"):
+        with pytest.raises(ValueError, match=r"has no unstable rest position to balance at"):
+            gym.make(env_id, scene=flat, max_torque=1e-30)
+
+
+def test_the_analysis_refuses_a_speed_whose_square_overflows():
+    """φ' = 1e160 rad/s gave NaN forces, which contact showed as lift-off and slip; the
+    analysis now refuses |φ'| past 1e150 rad/s by name, and computes finitely up to it."""
+    paper = preset("paper")
+    for call in (lambda: roller_gym.physics.acceleration(paper, 0.0, 1e160, 0.0),
+                 lambda: roller_gym.physics.contact(paper, 0.0, [0.0, -1e200], 0.0),
+                 lambda: roller_gym.physics.energy(paper, 0.0, 1e200)):
+        with pytest.raises(ValueError, match=r"^phi_dot=.* must be within ±1e\+150 rad/s"):
+            call()
+    c = roller_gym.physics.contact(paper, 0.0, 1e150, 0.0)
+    assert np.isfinite([c.normal, c.friction]).all()
+    assert np.isfinite(roller_gym.physics.energy(paper, 0.0, 1e150))
+
+
+def test_the_task_helpers_refuse_bad_arguments_naming_them():
+    """hold_ranges took NaN or a negative torque limit as an empty range, truncated a
+    fractional grid, and gave AttributeError for a preset's name; each is now refused by
+    name (the rates too), and math.inf stays the limit of no limit."""
+    from roller_gym import task
+
+    paper = preset("paper")
+    for call, error, message in (
+            (lambda: task.hold_ranges(paper, float("nan")), ValueError, r"^max_torque=nan"),
+            (lambda: task.hold_ranges(paper, -1.0), ValueError, r"^max_torque=-1\.0"),
+            (lambda: task.hold_ranges(paper, "1"), ValueError, r"^max_torque='1'"),
+            (lambda: task.hold_ranges(paper, 1.0, points=2.5), ValueError, r"^points=2\.5"),
+            (lambda: task.hold_ranges(paper, 1.0, points=2**70), ValueError, r"^points="),
+            (lambda: task.hold_ranges(paper, 1.0, friction_share=-1), ValueError,
+             r"^friction_share=-1 must be a real number in \(0, 1\]"),
+            (lambda: task.hold_range(paper, [1.0]), ValueError, r"^max_torque=\[1\.0\]"),
+            (lambda: task.hold_ranges("paper", 1.0), TypeError, r"use preset\('paper'\)"),
+            (lambda: task.wrap_rate("paper"), TypeError, r"^scene='paper' must be a Scene"),
+            (lambda: task.angle_rate(None), TypeError, r"^scene=None must be a Scene")):
+        with pytest.raises(error, match=message):
+            call()
+    low, high = task.hold_ranges(paper, math.inf)
+    assert low[0] < 0 < high[0]

@@ -155,3 +155,15 @@ def test_vector_env_renders_one_frame_per_sub_env():
     single.reset(seed=0)
     np.testing.assert_array_equal(frames[0], single.render())  # seed 0 + 0, same state
     vec.close()
+
+
+def test_a_target_far_along_the_floor_is_off_the_picture_not_a_crash():
+    """On the floor the picture follows the roller: a target hundreds of radians away lies
+    beyond pygame's 16-bit coordinates, and drawing it raised OverflowError. It is drawn off
+    the picture (no target pixels), the roller and its contact still on it."""
+    env = gym.make("roller_gym/RollerHold-v2", scene="floor", render_mode="rgb_array")
+    env.reset(seed=0, options={"target": 0.0, "state": (1000.0, 0.0)})
+    frame = env.render()
+    assert len(pixels_of(frame, TARGET_RGB)) == 0 and len(pixels_of(frame, CONTACT_RGB)) > 5
+    env.reset(seed=0, options={"target": 0.0, "state": (0.3, 0.0)})  # near: on the picture
+    assert len(pixels_of(env.render(), TARGET_RGB)) > 5

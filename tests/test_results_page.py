@@ -298,3 +298,25 @@ def test_keep_stored_refuses_a_stored_file_that_measured_something_else(tmp_path
         keep_stored(fresh, stored, ["td3"], tmp_path / "x.json")
     with pytest.raises(SystemExit, match="no runs of an algorithm other than sac td3 ppo"):
         keep_stored(fresh, _retrained_td3()[0], ["sac", "td3", "ppo"], tmp_path / "x.json")
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ('{"format": 2', r"not a readable results file"),
+    ("[1, 2]", r"format 'list', not 2"),
+    ("{}", r"format None, not 2"),
+    ('{"format": 2}', r"a results file without task, date,"),
+])
+def test_a_broken_task_file_is_refused_naming_it_before_any_evaluation(tmp_path, text,
+                                                                        message):
+    """A stored file that does not parse, or lacks what the page reads, ended in a traceback
+    (JSONDecodeError, KeyError) after the whole evaluation; now before it, naming the file,
+    for --keep-stored and --render-only alike."""
+    from roller_gym.scripts import results
+
+    (tmp_path / "tasks").mkdir()
+    (tmp_path / "tasks" / "RollerHold-v2.json").write_text(text)
+    with pytest.raises(SystemExit, match=r"RollerHold-v2\.json: " + message):
+        results_page.load(tmp_path)
+    with pytest.raises(SystemExit, match=r"RollerHold-v2\.json: " + message):
+        results.main(["--runs", str(tmp_path / "nothing"), "--env", TASK, "--keep-stored",
+                      "--out", str(tmp_path), "--report", str(tmp_path / "R.md")])

@@ -328,6 +328,33 @@ def test_set_options_refuses_values_a_reset_would_refuse_and_keeps_the_last_ones
     assert env.get_attr("target") == twin.get_attr("target")
 
 
+def test_set_options_judges_the_values_on_the_next_resets_own_scene():
+    """In a scene drawn per episode, a target holdable in one episode's scene is not in
+    another's: set_options judges it on the episode the next reset draws, with the seed set
+    before it, so that what it accepts the reset takes and what it refuses the reset would
+    have refused (checked by setting the options past the check)."""
+    env = RollerVecEnv("roller_gym/RollerHoldRandomized-v1", n_envs=1, seed=0)
+    env.reset()
+    verdicts = []
+    for seed in range(12):
+        env.seed(seed)
+        try:
+            env.set_options({"target": 0.2})
+            accepted = True
+        except ValueError as exc:
+            assert "options['target']=0.2 rad cannot be held" in str(exc)
+            accepted = False
+            VecEnv.set_options(env, {"target": 0.2})
+        if accepted:
+            env.reset()
+        else:
+            with pytest.raises(ValueError, match=r"options\['target'\]=0.2 rad cannot be held"):
+                env.reset()
+            env.set_options(None)
+        verdicts.append(accepted)
+    assert any(verdicts) and not all(verdicts)
+
+
 def test_a_refused_reset_of_per_sub_environment_options_resets_none():
     """Options set per sub-environment reset in groups: where a later group's are refused,
     the earlier groups' sub-environments are as they were (they had already started anew),

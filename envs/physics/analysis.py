@@ -42,6 +42,10 @@ __all__ = [
 Array = float | np.ndarray
 
 
+#: The largest |φ'| [rad/s] the analysis takes: φ'² and the forces stay within float64.
+LARGEST_SPEED = 1e150
+
+
 def _numbers(**values: Any) -> tuple[Any, ...]:
     """``values`` (states, torques) as NumPy computes with them: numbers and arrays as they
     are, lists and tuples as arrays; a ValueError names the first that is not finite numbers
@@ -69,6 +73,9 @@ def _numbers(**values: Any) -> tuple[Any, ...]:
         if name == "phi" and not np.all(np.abs(np.real(value)) < trig.DOMAIN):
             raise ValueError(f"phi={shown(values[name])} must be within ±{trig.DOMAIN:.4g} rad, "
                              "where the sines are defined")
+        if name == "phi_dot" and not np.all(np.abs(np.real(value)) <= LARGEST_SPEED):
+            raise ValueError(f"phi_dot={shown(values[name])} must be within ±{LARGEST_SPEED:g} "
+                             "rad/s, where its square, the energy and the forces stay finite")
         out.append(value)
     return tuple(out)
 
@@ -258,11 +265,14 @@ def equilibria(scene: Scene, tau: float = 0.0, resolution: int = 4000) -> list[E
         raise ValueError(f"tau={shown(tau)} [N·m] must be a finite real number")
     _check_resolution(resolution)
     m, r, kappa, e, _, g, _ = scene.params
-    if kappa == 0 and e == 0:
+    if r * kappa == 0 and e == 0:  # the floor, or a surface so flat that rκ underflows
         return []
     s = 1.0 - r * kappa
     rate = abs(r * kappa / s)  # dψ/dφ
-    half = math.pi if kappa == 0 else math.pi * min(1.0 / rate, MAX_TURNS)
+    # (rκ can underflow to 0 on a nearly flat surface: as far as on the floor's window, or
+    # MAX_TURNS turns, whichever is further)
+    half = math.pi if kappa == 0 else math.pi * (MAX_TURNS if rate == 0.0
+                                                 else min(1.0 / rate, MAX_TURNS))
     count = int(resolution * half / math.pi) + 1
     pad = 2.0 * half / count  # a root at the window's ends is bracketed from outside too
     grid = np.linspace(-half - pad, half + pad, count + 2)
