@@ -26,9 +26,11 @@ DOCUMENTED = {
                                     "band": 0.1, "margin": 3.0},
     "roller_gym/RollerTrack-v1": {"steps": 400, "max_torque": 1.0, "obs": 10, "scene": "paper",
                                   "band": 0.05, "margin": 1.0},
-    # an objective of its own: the relative energy error's band and margin
+    # an objective of its own: the relative energy error's band, its margin and the wide
+    # term's margin and weight
     "roller_gym/RollerSwing-v1": {"steps": 400, "max_torque": 0.1, "obs": 9, "scene": "paper",
-                                  "energy_band": 0.1, "energy_margin": 0.4},
+                                  "energy_band": 0.1, "energy_margin": 0.4, "reach_margin": 2.0,
+                                  "reach_weight": 0.2},
     "roller_gym/RollerHoldRandomized-v1": {"steps": 200, "max_torque": 1.0, "obs": 9,
                                            "scene": "paper", "band": 0.05, "margin": 2.0},
     "roller_gym/RollerBalanceWeak-v0": {"steps": 400, "max_torque": 0.1, "obs": 5,
@@ -41,6 +43,15 @@ def balances(env_id: str) -> bool:
     """Whether the task balances at an unstable rest position (its documented scene is the
     preset "balance", whose unstable rest positions roll): its scenes must have one."""
     return DOCUMENTED[env_id]["scene"] == "balance"
+
+
+def posable(env_id: str, scene: str) -> bool:
+    """Whether the task can be posed on the preset ``scene``: a balancing task needs an
+    unstable rest position that rolls (not the floor's or the drum's); a swing, a target
+    above the bottom (not on a drum, where the start is the top)."""
+    if balances(env_id):
+        return scene not in ("floor", "drum")
+    return not (scene == "drum" and "RollerSwing" in env_id)
 
 
 # -- the physics, from PHYSICS.md ------------------------------------------------------

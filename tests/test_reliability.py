@@ -692,7 +692,8 @@ def test_the_analysis_takes_lists_as_arrays():
 def test_the_analysis_refuses_what_is_not_finite_and_never_shows_rolling_it_did_not_compute():
     """The physics' analysis functions passed NaN and inf through (holding_torque, energy,
     acceleration, linearize, contact), and contact reported a roller rolling (lifting and
-    slipping False) where its forces overflowed to NaN (φ' = 1e200 rad/s)."""
+    slipping False) where its forces overflowed to NaN (φ' = 1e200 rad/s: refused now,
+    see test_the_analysis_refuses_a_speed_whose_square_overflows)."""
     paper = roller_gym.physics.PRESETS["paper"]
     physics = roller_gym.physics
     cases = [(physics.holding_torque, (math.nan,), "phi=nan"),
@@ -703,9 +704,6 @@ def test_the_analysis_refuses_what_is_not_finite_and_never_shows_rolling_it_did_
     for function, args, name in cases:
         with pytest.raises(ValueError, match=name + r".* must be finite numbers"):
             function(paper, *args)
-    with np.errstate(all="ignore"):
-        far = physics.contact(paper, 0.0, 1e200, 0.0)
-    assert not np.isfinite(far.normal) and far.lifting and far.slipping
     near = physics.contact(paper, 0.0, 1.0, 0.0)  # at rest speeds, as before: it rolls
     assert near.liftoff_margin > 0 and not near.lifting and not near.slipping
 
