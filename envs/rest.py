@@ -21,11 +21,11 @@ from roller_gym.physics.scene import finite_real, require_scene, shown
 __all__ = [
     "START_TURNS",
     "angle_rate",
-    "half_range",
     "hold_range",
     "hold_ranges",
     "per_scene",
     "psi_rate",
+    "reach",
     "unstable_rest_positions",
     "wrap_rate",
 ]
@@ -69,10 +69,14 @@ def wrap_rate(scene: Scene) -> float | np.ndarray:
     q = np.asarray(psi_rate(scene), dtype=float)
     with np.errstate(divide="ignore", invalid="ignore"):
         turns = np.abs(1.0 / q)  # inf on the floor
-        whole_turns = np.abs(turns - np.round(turns)) <= WHOLE_TOLERANCE * turns
-    whole_rate = np.abs(np.abs(q) - np.round(np.abs(q))) <= WHOLE_TOLERANCE * np.abs(q)
-    rate = np.where(whole_turns & np.isfinite(turns), q, np.where(whole_rate, 1.0, 0.0))
+        rate = np.where(_whole(turns) & np.isfinite(turns), q,
+                        np.where(_whole(np.abs(q)), 1.0, 0.0))
     return float(rate) if rate.ndim == 0 else rate
+
+
+def _whole(x: np.ndarray) -> np.ndarray:
+    """Whether x >= 0 is a whole number, to :data:`WHOLE_TOLERANCE` (0 is; inf is not)."""
+    return np.abs(x - np.round(x)) <= WHOLE_TOLERANCE * x
 
 
 def per_scene(function, scene: Scene) -> np.ndarray:
@@ -120,7 +124,7 @@ def hold_ranges(scene: Scene, max_torque: float, torque_share: float = 0.8,
     :data:`START_TURNS` turns of φ (so that the grid below resolves sin φ), where
     the holding torque is at most ``torque_share``·max_torque [N·m] and the contact holds
     with margin: N > 0 and |F| <= ``friction_share``·μN (at rest N = m g cos ψ,
-    F = m g sin ψ). Each side is a grid of ``points`` values of φ from 0 to ±:func:`half_range`
+    F = m g sin ψ). Each side is a grid of ``points`` values of φ from 0 to ±:func:`reach`
     (those of ``np.linspace``, bit for bit), walked outward from φ = 0: the bound is the last
     grid point before the first one that fails (φ = 0 if that one fails, the end if none
     does), so the cost is proportional to the range's width, not to ``points``.
@@ -142,19 +146,20 @@ def hold_ranges(scene: Scene, max_torque: float, torque_share: float = 0.8,
     rows = dict(zip(SCENE_FIELDS, scene_arrays(scene), strict=True))  # each of n rollers
     numbers = [rows[name] for name in ("m", "r", "kappa", "e", "k", "g", "damping", "mu")]
     half = np.empty_like(numbers[0])
-    half[...] = np.reshape(half_range(scene), -1)
+    half[...] = np.reshape(reach(scene), -1)
     low, high = np.empty_like(half), np.empty_like(half)
     _hold_bounds(*numbers, half, float(torque_share * max_torque), float(friction_share),
                  int(points), low, high)
     return low, high
 
 
-def half_range(scene: Scene) -> float | np.ndarray:
-    """How far [rad of φ] a held target may lie from φ = 0 (:func:`hold_ranges`): ψ = ±π,
-    π/|q| with q from :func:`angle_rate` (q < 0 on a drum), at most :data:`START_TURNS`
-    turns."""
-    with np.errstate(over="ignore"):  # π/|q| overflows to inf for |R| near float64's top
-        return np.minimum(math.pi / np.abs(angle_rate(scene)), 2.0 * math.pi * START_TURNS)
+def reach(scene: Scene, angle: float = math.pi) -> float | np.ndarray:
+    """How far [rad of φ] from φ = 0 the angle ``angle`` [rad] of ψ reaches (of φ itself on
+    the floor): angle/|q| with q from :func:`angle_rate` (q < 0 on a drum), at most
+    :data:`START_TURNS` turns of φ. With the default ψ = ±π: how far a held target may lie
+    (:func:`hold_ranges`); a task's start ranges are stated as smaller angles."""
+    with np.errstate(over="ignore"):  # angle/|q| overflows to inf for |R| near float64's top
+        return np.minimum(angle / np.abs(angle_rate(scene)), 2.0 * math.pi * START_TURNS)
 
 
 @_cached_per_scene
@@ -202,7 +207,7 @@ _HOLD_BLOCK = 16
 def _hold_bounds(m, r, kappa, e, k, g, c, mu, half, torque_limit, friction_share, points,
                  low, high):
     """low[j], high[j] of :func:`hold_ranges` for roller j (scene numbers as rows, ``half``
-    :func:`half_range` [rad]): each side's grid walked outward from φ = 0, a block of
+    :func:`reach` [rad]): each side's grid walked outward from φ = 0, a block of
     :data:`_HOLD_BLOCK` points at a time, up to the first point that fails :func:`_holds`."""
     div = points - 1
     phi = np.empty(_HOLD_BLOCK)

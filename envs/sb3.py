@@ -144,7 +144,7 @@ class RollerVecEnv(VecEnv):
         """Every sub-environment starts a new episode, with the seeds and options set by
         ``seed()`` and ``set_options()`` (each sub-environment its own, as DummyVecEnv)."""
         n = self.num_envs
-        seeds = None if all(s is None for s in self._seeds) else list(self._seeds)
+        seeds = self._pending_seeds()
         groups = _option_groups(self._options, n)
         # one reset per group of sub-environments that share options: all of them, or none
         # where a later group's options are refused (the batch as it was before the first)
@@ -167,6 +167,11 @@ class RollerVecEnv(VecEnv):
         self._reset_seeds()
         self._reset_options()
         return obs
+
+    def _pending_seeds(self) -> list[int | None] | None:
+        """The seeds ``seed()`` set for the next reset (None: none set), as the batch's
+        ``reset(seed=...)`` takes them."""
+        return None if all(s is None for s in self._seeds) else list(self._seeds)
 
     def step_async(self, actions: np.ndarray) -> None:
         self._actions = actions  # checked (and clipped) by the batch's step, naming them
@@ -274,7 +279,7 @@ class RollerVecEnv(VecEnv):
                              "sub-environment; a reset_mask does not apply here")
         for o in each:  # (here, not at every later reset)
             check_option_names(o or {})
-        seeds = None if all(s is None for s in self._seeds) else list(self._seeds)
+        seeds = self._pending_seeds()
         for group, mask in _option_groups(each, self.num_envs):  # their values too, for
             if group:  # the next reset's episodes (with the seeds set before)
                 self.venv.check_options(group, mask, seeds)

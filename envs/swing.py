@@ -81,7 +81,7 @@ import numpy as np
 from roller_gym import rewards
 from roller_gym.physics import Scene, energy
 from roller_gym.physics.scene import shown
-from roller_gym.task import START_TURNS, Task, angle_rate, hold_ranges, objective, register
+from roller_gym.task import Task, hold_ranges, objective, reach, register
 
 __all__ = ["SwingTask"]
 
@@ -170,7 +170,5 @@ class SwingTask(Task):
     def start_candidates(
         self, u_phi: np.ndarray, u_dot: np.ndarray, scene: Scene
     ) -> tuple[np.ndarray, np.ndarray]:
-        q = np.abs(angle_rate(scene))
-        limit = np.minimum(math.radians(5.0) / np.asarray(q, float),
-                           2.0 * math.pi * START_TURNS).reshape(-1, 1)
+        limit = np.reshape(reach(scene, math.radians(5.0)), (-1, 1))
         return limit * (2.0 * u_phi - 1.0), 0.0 * u_dot

@@ -76,15 +76,16 @@ from roller_gym.rest import (  # the scene's rates and rest positions, importabl
     hold_ranges,
     per_scene,
     psi_rate,
+    reach,
     unstable_rest_positions,
     wrap_rate,
 )
 
-__all__ = ["NAMESPACE", "OBSERVATION_FIELDS", "SPEED_SCALE", "TASKS", "TASK_CONSTANTS", "TIERS",
-           "Task", "angle_rate", "get_task", "hold_range", "hold_ranges", "objective",
-           "observation_values", "per_scene", "position_error", "psi_rate", "register",
-           "state_observation", "step_reward", "step_success", "target_observation",
-           "unstable_rest_positions", "wrap_rate", "wrapped"]
+__all__ = ["NAMESPACE", "OBSERVATION_FIELDS", "SPEED_SCALE", "START_TURNS", "TASKS",
+           "TASK_CONSTANTS", "TIERS", "Task", "angle_rate", "get_task", "hold_range",
+           "hold_ranges", "objective", "observation_values", "per_scene", "position_error",
+           "psi_rate", "reach", "register", "state_observation", "step_reward", "step_success",
+           "target_observation", "unstable_rest_positions", "wrap_rate", "wrapped"]
 
 #: The Gymnasium namespace of every task: ``roller_gym/<Task>-v<version>``.
 NAMESPACE = "roller_gym"
@@ -340,9 +341,7 @@ class Task:
         to ±:attr:`start_speed`; φ within ±START_TURNS turns (on a nearly flat surface, R of
         thousands of r, ψ = ±60° lies further: float64's rounding of such a φ passes the
         tolerance)."""
-        q = np.abs(angle_rate(scene))  # q < 0 on a drum; q = 1 on the floor
-        limit = np.minimum(math.radians(60.0) / np.asarray(q, float),
-                           2.0 * math.pi * START_TURNS).reshape(-1, 1)
+        limit = np.reshape(reach(scene, math.radians(60.0)), (-1, 1))
         return limit * (2.0 * u_phi - 1.0), self.start_speed * (2.0 * u_dot - 1.0)
 
     @property

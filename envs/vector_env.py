@@ -341,31 +341,13 @@ class RollerVectorEnv(VectorEnv):
         :meth:`roller_gym.roller_env.RollerEnv.reset`, for every reset sub-environment.
         """
         clients.check_caller(self, self.autoreset_mode)  # a client that miscounts this mode
-        n = self.num_envs
         options = episode.reset_options(options)
-        mask = episode.reset_mask(options.pop("reset_mask", None), n)
-        seeds = episode.vector_seeds(seed, n) or [None] * n
-        given = np.array([s is not None for s in seeds])
-        # Seeded rows start their streams anew, as do rows without a seed yet (a fresh one);
-        # the others go on to their next episode. Refused options leave every count as it was.
-        kept = [(name, getattr(self, name).copy())
-                for name in ("_seeds", "_episodes", "_ahead_for", "_has_seed")]
-        anew = mask & (given | ~self._has_seed)
-        if anew.any():
-            rows = np.flatnonzero(anew)
-            self._seeds[rows] = np.array(
-                [episode.random_seed() if seeds[i] is None else seeds[i] for i in rows],
-                dtype=np.uint64)
-            self._episodes[rows] = 0
-            self._ahead_for[rows] = _NONE  # those drawn ahead came from the old seeds
-            self._has_seed[rows] = True
-        self._episodes[mask & ~anew] += np.uint64(1)
-        idx = np.flatnonzero(mask)
+        mask = episode.reset_mask(options.pop("reset_mask", None), self.num_envs)
+        kept = self._streams()  # refused options leave every count as it was
         try:
-            starts = self._draw(idx, self._episodes[idx], options)
+            idx, starts = self._next_starts(mask, seed, options)
         except Exception:
-            for name, value in kept:
-                setattr(self, name, value)
+            self._set_streams(kept)
             raise
         if isinstance(seed, int | np.integer):
             self._np_random, self._np_random_seed = seeding.np_random(int(seed))
@@ -385,18 +367,46 @@ class RollerVectorEnv(VectorEnv):
         """Raise ValueError where the next :meth:`reset` of the sub-environments of ``mask``
         (a boolean array of ``num_envs``; all if None) with ``seed`` (as reset's) would
         refuse ``options``: their next episodes drawn as that reset would draw them (a
-        sub-environment without a seed yet: from its stream as it stands); nothing
+        sub-environment without a seed yet: from a fresh seed, as there); nothing
         changes."""
+        kept = self._streams()
+        try:
+            self._next_starts(episode.reset_mask(mask, self.num_envs), seed,
+                              episode.reset_options(options))
+        finally:
+            self._set_streams(kept)
+
+    def _next_starts(self, mask: np.ndarray, seed: int | Sequence[int | None] | None,
+                     options: dict[str, Any]) -> tuple[np.ndarray, _Starts]:
+        """(the rows of ``mask``, the starts of their next episodes), their streams moved on
+        to them as :meth:`reset` with ``seed`` moves them: seeded rows start their streams
+        anew, as do rows without a seed yet (a fresh one); the others go on to their next
+        episode. Not undone if the draw is refused: see :meth:`_streams`."""
         n = self.num_envs
-        idx = np.flatnonzero(episode.reset_mask(mask, n))
         seeds = episode.vector_seeds(seed, n) or [None] * n
-        streams = np.array([self._seeds[i] if seeds[i] is None else seeds[i] for i in idx],
-                           dtype=np.uint64)
-        numbers = np.array([self._episodes[i] + 1 if seeds[i] is None and self._has_seed[i]
-                            else 0 for i in idx], dtype=np.uint64)
-        base = self._base if self._base.batch_size is None else episode.take(self._base, idx, n)
-        episode.start_episodes(self.config, base, streams, numbers,
-                               episode.reset_options(options))
+        given = np.array([s is not None for s in seeds])
+        anew = mask & (given | ~self._has_seed)
+        if anew.any():
+            rows = np.flatnonzero(anew)
+            self._seeds[rows] = np.array(
+                [episode.random_seed() if seeds[i] is None else seeds[i] for i in rows],
+                dtype=np.uint64)
+            self._episodes[rows] = 0
+            self._ahead_for[rows] = _NONE  # those drawn ahead came from the old seeds
+            self._has_seed[rows] = True
+        self._episodes[mask & ~anew] += np.uint64(1)
+        idx = np.flatnonzero(mask)
+        return idx, self._draw(idx, self._episodes[idx], options)
+
+    def _streams(self) -> list[tuple[str, np.ndarray]]:
+        """Copies of the sub-environments' streams and episode counts, for
+        :meth:`_set_streams` to put back."""
+        return [(name, getattr(self, name).copy())
+                for name in ("_seeds", "_episodes", "_ahead_for", "_has_seed")]
+
+    def _set_streams(self, kept: list[tuple[str, np.ndarray]]) -> None:
+        for name, value in kept:
+            setattr(self, name, value)
 
     # -- a step --------------------------------------------------------------------------
     def step(
