@@ -22,30 +22,25 @@ TensorBoard logs go to ``<log folder>/tensorboard``.
 from __future__ import annotations
 
 import argparse
-import ast
-import inspect
 import math
 import shlex
 import sys
-from collections.abc import Callable
 from importlib.resources import as_file
 from pathlib import Path
-from typing import Any
 
 import roller_gym  # registers the tasks
 from roller_gym.agents.hyperparams import ALGOS, config_file, hyperparams
-from roller_gym.agents.policies import ZOO_HINT, algorithm_class, find_run
-from roller_gym.physics.scene import finite_real
+from roller_gym.agents.policies import ZOO_HINT, find_run
 from roller_gym.scripts import zoo_train
 from roller_gym.scripts.arguments import (
     THREADS_MAX,
     at_least,
     check_env_kwargs,
     checked_env_kwargs,
-    key_values,
     output_folder,
     program_parser,
 )
+from roller_gym.scripts.zoo_hyperparams import checked_hyperparams
 
 #: Algorithms that learn from whole rollouts of n_envs x n_steps environment steps.
 ON_POLICY = ("ppo",)
@@ -94,158 +89,11 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-#: The entries of a hyperparameter file that rl-zoo3 reads itself (rl_zoo3.exp_manager);
-#: the others are keyword arguments of the algorithm's class.
-ZOO_KEYS = ("n_timesteps", "n_envs", "normalize", "normalize_kwargs", "env_wrapper",
-            "vec_env_wrapper", "callback", "frame_stack", "noise_type", "noise_std",
-            "monitor_kwargs", "env_kwargs")
-#: The algorithm's keyword arguments rl-zoo3 sets itself, from train's own options.
-ZOO_SETS = ("env", "tensorboard_log", "seed", "verbose", "device")
-
-
-#: The hyperparameters that count (environments, steps, samples, stacked frames): integers >= 1.
-COUNT_KEYS = ("n_envs", "n_timesteps", "n_steps", "batch_size", "n_epochs", "buffer_size",
-              "frame_stack", "learning_starts", "gradient_steps")
-#: The largest count a hyperparameter may take (a larger buffer could not be allocated).
-HYPERPARAM_COUNT_MAX = 10**9
-
-
-def checked_hyperparams(algo: str, items: list[str]) -> dict[str, Any]:
-    """``--hyperparams`` (``KEY:VALUE`` items) as a dict, each key checked to be one
-    rl-zoo3 reads or a keyword argument of the algorithm's class, and the counts
-    (:data:`COUNT_KEYS`) checked to be positive integers, before rl-zoo3 starts (where a wrong one
-    ends in a traceback from its setup or the algorithm's).
-
-    Raises:
-        SystemExit: naming ``--hyperparams``, the item and what is allowed.
-    """
-    values = key_values(items, "--hyperparams", ":", example="learning_rate:3e-4")
-    accepted = [*ZOO_KEYS, *(name for name in inspect.signature(algorithm_class(algo)).parameters
-                             if name not in ZOO_SETS and not name.startswith("_"))]
-    for key, value in values.items():
-        if key in ZOO_SETS:
-            raise SystemExit(f"--hyperparams: {key!r} is set by roller-gym train from its own "
-                             "options (--seed, --verbose, --log-folder), not by --hyperparams")
-        if key not in accepted:
-            raise SystemExit(f"--hyperparams: {key!r} is not a hyperparameter of {algo}; "
-                             f"allowed: {', '.join(sorted(accepted))}")
-        whole = int | float if key == "n_timesteps" else int  # (rl-zoo3 rounds n_timesteps)
-        least = 0 if key == "learning_starts" else 1
-        if key in COUNT_KEYS and not (
-                isinstance(value, whole) and finite_real(value) and value == int(value)
-                and least <= value <= HYPERPARAM_COUNT_MAX):
-            raise SystemExit(f"--hyperparams: {key}:{value!r} is not allowed: it must be an "
-                             f"integer >= {least} and <= {HYPERPARAM_COUNT_MAX:.0e}")
-        rule = VALUE_RULES.get(key)
-        if rule is not None and not rule[0](value):
-            raise SystemExit(f"--hyperparams: {key}:{value!r} is not allowed: it must be "
-                             f"{rule[1]}")
-        if key == "policy" and value not in POLICIES:
-            raise SystemExit(f"--hyperparams: policy:{value!r} is not allowed: the tasks' "
-                             f"observations are vectors, for {', '.join(POLICIES)}")
-        if key == "ent_coef" and isinstance(value, str) and algo != "sac":
-            raise SystemExit(f"--hyperparams: ent_coef:{value!r} is not allowed: 'auto' is "
-                             f"SAC's; {algo}'s ent_coef is a number >= 0")
-        if key in ("noise_type", "noise_std") and algo == "ppo":
-            raise SystemExit(f"--hyperparams: {key} is not allowed: PPO takes no action noise "
-                             "(it explores through its policy's own distribution)")
-        if key == "env_kwargs" and not isinstance(value, dict):
-            raise SystemExit(f"--hyperparams: env_kwargs:{value!r} is not allowed: it must be a "
-                             "dict of the environment's keyword arguments (or use --env-kwargs)")
-    return values
-
-
-def _real(low: float, high: float, open_low: bool = False) -> Callable[[Any], bool]:
-    """Whether a value is a real number in [low, high] ((low, high] with ``open_low``)."""
-    return lambda v: (finite_real(v) and not isinstance(v, bool)
-                      and (low < v if open_low else low <= v) and v <= high)
-
-
-def _train_freq(value: Any) -> bool:
-    """Whether ``value`` is SB3's train_freq: an integer >= 1, or (integer, "step"/"episode")
-    as a tuple or a list (rl-zoo3's files write both)."""
-    if isinstance(value, tuple | list) and len(value) == 2 and value[1] in ("step", "episode"):
-        value = value[0]
-    return isinstance(value, int) and not isinstance(value, bool) and 1 <= value <= 10**9
-
-
-def _schedule(low: float, high: float = math.inf) -> Callable[[Any], bool]:
-    """Whether a value is a number in (low, high], or rl-zoo3's linear schedule
-    "lin_<number>" from such a number down to 0."""
-    number = _real(low, high, open_low=True)
-
-    def check(value: Any) -> bool:
-        if isinstance(value, str) and value.startswith("lin_"):
-            try:
-                value = float(value[4:])
-            except ValueError:
-                return False
-        return number(value)
-    return check
-
-
-def _normalize(value: Any) -> bool:
-    """Whether ``value`` is rl-zoo3's normalize: a bool, or VecNormalize's keyword arguments as
-    a dict or its text ("dict(norm_obs=True)", "{'norm_obs': True}"), which rl-zoo3 evaluates."""
-    if isinstance(value, bool):
-        return True
-    if isinstance(value, str):
-        try:
-            tree = ast.parse(value.strip(), mode="eval").body
-            if (isinstance(tree, ast.Call) and isinstance(tree.func, ast.Name)
-                    and tree.func.id == "dict" and not tree.args):
-                value = {kw.arg: ast.literal_eval(kw.value) for kw in tree.keywords}
-            else:
-                value = ast.literal_eval(tree)
-        except (ValueError, SyntaxError, TypeError):
-            return False
-    if not isinstance(value, dict):
-        return False
-    from stable_baselines3.common.vec_env import VecNormalize
-    known = set(inspect.signature(VecNormalize).parameters) - {"venv"}
-    return set(value) <= known
-
-
-def _ent_coef(value: Any) -> bool:
-    """Whether ``value`` is an entropy coefficient: a number >= 0, or SAC's "auto" or
-    "auto_<initial value > 0>"."""
-    if isinstance(value, str) and value.startswith("auto"):
-        if value == "auto":
-            return True
-        try:
-            return value[4] == "_" and _real(0.0, math.inf, open_low=True)(float(value[5:]))
-        except (ValueError, IndexError):
-            return False
-    return _real(0.0, 1e9)(value)
-
-
-#: Values of hyperparameters checked before rl-zoo3 starts (where a wrong one fails later in
-#: rl-zoo3, stable-baselines3 or torch, or trains silently on nonsense): rule, what is allowed.
-VALUE_RULES: dict[str, tuple[Callable[[Any], bool], str]] = {
-    "gamma": (_real(0.0, 1.0, open_low=True), "a number in (0, 1]"),
-    "tau": (_real(0.0, 1.0, open_low=True), "a number in (0, 1]"),
-    "gae_lambda": (_real(0.0, 1.0), "a number in [0, 1]"),
-    "learning_rate": (_schedule(0.0), "a number > 0, or lin_<number> (from it down to 0)"),
-    "clip_range": (_schedule(0.0, 1e9), "a number > 0, or lin_<number> (from it down to 0)"),
-    "ent_coef": (_ent_coef, "a number >= 0, or for SAC 'auto' or 'auto_<initial value > 0>'"),
-    "vf_coef": (_real(0.0, 1e9), "a number >= 0"),
-    "max_grad_norm": (_real(0.0, 1e9, open_low=True), "a number > 0"),
-    "noise_std": (_real(0.0, 1e9, open_low=True), "a number > 0 (in action units)"),
-    "noise_type": (lambda v: v in ("normal", "ornstein-uhlenbeck"),
-                   "'normal' or 'ornstein-uhlenbeck', with noise_std"),
-    "normalize": (_normalize, "True, False or VecNormalize's keyword arguments (a dict, or its "
-                  "text: 'dict(norm_obs=True)')"),
-    "train_freq": (_train_freq, "an integer >= 1, or (integer, 'step' or 'episode')"),
-}
-#: The policies for the tasks' observations (a vector: a Box), by rl-zoo3's alias.
-POLICIES = ("MlpPolicy",)
-
-
 def zoo_arguments(args: argparse.Namespace, conf: str) -> list[str]:
     """The arguments of ``python -m rl_zoo3.train`` for ``args``, with the hyperparameter
     file ``conf``; ``--hyperparams`` and ``--env-kwargs`` checked first (SystemExit naming
     the option)."""
-    given = checked_hyperparams(args.algo, args.hyperparams)
+    given = checked_hyperparams(args.algo, args.hyperparams, args.env)
     hp = {**hyperparams(args.algo, args.env), **given}
     if "noise_type" in hp and "noise_std" not in hp:
         raise SystemExit("--hyperparams: noise_type needs noise_std (its standard deviation in "
