@@ -19,6 +19,7 @@ from roller_gym.physics.integrators import SCENE_FIELDS, scene_arrays
 from roller_gym.physics.scene import finite_real, require_scene, shown
 
 __all__ = [
+    "HOLD_TORQUE_SHARE",
     "START_TURNS",
     "angle_rate",
     "hold_range",
@@ -53,6 +54,10 @@ def angle_rate(scene: Scene) -> float | np.ndarray:
 #: The most turns of φ a start state or a held target lies from the bottom: on a nearly flat
 #: surface (R of hundreds of r and more), ψ = ±π lies further (see :func:`hold_ranges`).
 START_TURNS = 64
+
+#: The share of max_torque a held rest position may need (:func:`hold_ranges`); the rest is
+#: left for moving, e.g. along RollerTrack's target.
+HOLD_TORQUE_SHARE = 0.8
 
 #: How close to a whole number 1/|q| or |q| must be to count as one (relative).
 WHOLE_TOLERANCE = 1e-9
@@ -114,7 +119,7 @@ def _cached_per_scene(function):
     return wrapper
 
 
-def hold_ranges(scene: Scene, max_torque: float, torque_share: float = 0.8,
+def hold_ranges(scene: Scene, max_torque: float, torque_share: float = HOLD_TORQUE_SHARE,
                 friction_share: float = 0.9, points: int = 2001) -> tuple[np.ndarray, np.ndarray]:
     """The intervals [low, high] of rest positions φ [rad] around 0 that can be held at rest,
     one per roller of the batch ``scene`` (arrays of the batch's size; of 1 for a scalar
@@ -163,7 +168,7 @@ def reach(scene: Scene, angle: float = math.pi) -> float | np.ndarray:
 
 
 @_cached_per_scene
-def hold_range(scene: Scene, max_torque: float, torque_share: float = 0.8,
+def hold_range(scene: Scene, max_torque: float, torque_share: float = HOLD_TORQUE_SHARE,
                friction_share: float = 0.9, points: int = 2001) -> tuple[float, float]:
     """The interval (low, high) of rest positions φ [rad] around 0 that can be held at rest
     in the scalar ``scene``: :func:`hold_ranges` of it (the same compiled walk), memoized."""

@@ -46,7 +46,11 @@ grows: at the band's edge it keeps 0.86 of the reward on the target, at twice th
 ψ uniform in ±60° (φ within ±64 turns on a nearly flat surface), φ' uniform in ±1 rad/s
 (redrawn until the roller rolls). The target trajectory: center c within ±30 % of the
 holdable range's half-width about its middle; two sinusoids of amplitude 20–50 % each of
-what is left to the range's edge, of frequency 0.2–0.8 rad/s, and of uniform phase.
+what is left to the range's edge, of frequency 0.2–0.8 rad/s, and of uniform phase. Holding
+at rest in that range needs at most 80 % of ``max_torque``; where moving along the target
+could need more than the other 20 % (larger cylinders: R of 5 m and more at the defaults),
+both amplitudes are scaled down until it cannot, so the target can be followed within the
+torque limit. On the default scene they never are.
 
 ## Episode end
 
@@ -59,7 +63,10 @@ what is left to the range's edge, of frequency 0.2–0.8 rad/s, and of uniform p
 * v0: the first version.
 * v1: the reward sees the success band: its precision term falls from the target on, so
   moving with the target at the band's edge keeps 0.86 of the reward on it and at twice the
-  band 0.62 (v0: 1.0 and about 0.99); dynamics unchanged.
+  band 0.62 (v0: 1.0 and about 0.99); dynamics unchanged. Later within v1: on scenes where
+  moving along a drawn target could need more than max_torque (larger cylinders), its
+  amplitudes are scaled down; the trajectories of the default scene and the presets are drawn
+  bit for bit as before.
 """
 
 from __future__ import annotations
@@ -68,6 +75,8 @@ from typing import Any
 
 import numpy as np
 from roller_gym.physics import Scene, trig
+from roller_gym.physics.integrators import SCENE_FIELDS, scene_arrays
+from roller_gym.rest import HOLD_TORQUE_SHARE
 from roller_gym.task import Task, hold_range, hold_ranges, register
 
 __all__ = ["TrackTask"]
@@ -95,13 +104,30 @@ class TrackTask(Task):
         center = middle + 0.3 * half * (2.0 * u[:, 0] - 1.0)
         room = half - np.abs(center - middle)  # the sinusoids stay within the range
         f_low, f_high = self.frequencies
-        return np.stack([
-            center,
-            room * (0.2 + 0.3 * u[:, 1]), f_low + (f_high - f_low) * u[:, 2],
-            2.0 * np.pi * u[:, 3],
-            room * (0.2 + 0.3 * u[:, 4]), f_low + (f_high - f_low) * u[:, 5],
-            2.0 * np.pi * u[:, 6],
-        ], axis=1)
+        a1, a2 = room * (0.2 + 0.3 * u[:, 1]), room * (0.2 + 0.3 * u[:, 4])
+        w1, w2 = f_low + (f_high - f_low) * u[:, 2], f_low + (f_high - f_low) * u[:, 5]
+        scale = self.followable_scale(scene, a1 * w1 + a2 * w2, a1 * w1 * w1 + a2 * w2 * w2)
+        return np.stack([center, a1 * scale, w1, 2.0 * np.pi * u[:, 3],
+                         a2 * scale, w2, 2.0 * np.pi * u[:, 6]], axis=1)
+
+    def followable_scale(self, scene: Scene, speed: np.ndarray, accel: np.ndarray
+                         ) -> np.ndarray:
+        """The factor in (0, 1] by which the sinusoids' amplitudes are scaled so that moving
+        along the target never needs more than the torque the held range leaves,
+        (1 − HOLD_TORQUE_SHARE)·max_torque [N·m], given the bounds ``speed`` >= |φ*'| [rad/s]
+        and ``accel`` >= |φ*''| [rad/s²] at scale 1: the equation of motion's moving part
+        J_I φ'' + ½ J_I' φ'² + c φ' is bounded with J_I <= m (k² + (r + |e|)²) and
+        |J_I'| <= 2 m r |e| / |1 − rκ| (``equations.inertia``, ``equations.dinertia``), so the
+        bound is linear·s + quadratic·s² at scale s. 1 wherever the bound fits (the default
+        scenes: the trajectory is drawn unchanged)."""
+        rows = dict(zip(SCENE_FIELDS, scene_arrays(scene), strict=True))
+        m, r, kappa, e, k, c = (rows[f] for f in ("m", "r", "kappa", "e", "k", "damping"))
+        budget = (1.0 - HOLD_TORQUE_SHARE) * self.max_torque  # inf: no torque limit
+        linear = m * (k * k + (r + np.abs(e)) ** 2) * accel + c * speed
+        quadratic = m * r * np.abs(e) / np.abs(1.0 - r * kappa) * speed * speed
+        with np.errstate(invalid="ignore", over="ignore"):  # the largest s in (0, 1] that fits
+            fits = 2.0 * budget / (linear + np.sqrt(linear * linear + 4.0 * quadratic * budget))
+        return np.where(linear + quadratic <= budget, 1.0, fits)
 
     def target_at(self, params: np.ndarray, t: Any) -> tuple[Any, Any]:
         c, a1, w1, p1, a2, w2, p2 = (params[..., j] for j in range(7))

@@ -158,6 +158,29 @@ def test_track_target_moves_smoothly_inside_the_holdable_range():
         np.testing.assert_allclose(central, rates[1:-1], atol=0.01 * np.abs(rates).max() + 1e-3)
 
 
+@pytest.mark.parametrize("R", [None, 2.0, 5.0, 30.0, 1e3])
+def test_track_target_can_be_followed_within_the_torque_limit(R):
+    """Moving along the target never needs more than max_torque, larger cylinders included
+    (R = 5 m needed 1.8× max_torque before the amplitudes were bounded): the torque that keeps
+    the roller on φ*(t) over the episode's 20 s, from the equation of motion the simulation
+    steps (affine in τ) and φ*'' by central differences of the target, for 500 drawn
+    trajectories."""
+    from roller_gym.physics import equations
+
+    env = gym.make(TRACK) if R is None else gym.make(
+        TRACK, scene=Scene(**{**gym.make(TRACK).unwrapped.scene.as_dict(), "R": R}))
+    task, scene = env.unwrapped.task, env.unwrapped.scene
+    params = task.sample_target_params(np.random.default_rng(7).random((500, 7)), scene)
+    t, h = np.arange(0.0, 20.0, 0.01)[:, None], 1e-4
+    phi, phi_dot = task.target_at(params, t)
+    phi_ddot = (task.target_at(params, t + h)[1] - task.target_at(params, t - h)[1]) / (2 * h)
+    m, r, kappa, e, k, g, c = scene.params
+    free = equations.accel(phi, phi_dot, 0.0, m, r, kappa, e, k, g, c)
+    per_torque = equations.accel(phi, phi_dot, 1.0, m, r, kappa, e, k, g, c) - free
+    needed = np.abs((phi_ddot - free) / per_torque).max()
+    assert needed <= task.max_torque
+
+
 def test_track_refuses_a_fixed_target_option():
     with pytest.raises(ValueError, match="moves"):
         gym.make(TRACK).reset(seed=0, options={"target": 0.1})
