@@ -120,7 +120,8 @@ def _cached_per_scene(function):
 
 
 def hold_ranges(scene: Scene, max_torque: float, torque_share: float = HOLD_TORQUE_SHARE,
-                friction_share: float = 0.9, points: int = 2001) -> tuple[np.ndarray, np.ndarray]:
+                friction_share: float = 0.9, points: int = 2001, rising: bool = False
+                ) -> tuple[np.ndarray, np.ndarray]:
     """The intervals [low, high] of rest positions φ [rad] around 0 that can be held at rest,
     one per roller of the batch ``scene`` (arrays of the batch's size; of 1 for a scalar
     scene), in one compiled call whatever the batch's size.
@@ -129,7 +130,9 @@ def hold_ranges(scene: Scene, max_torque: float, torque_share: float = HOLD_TORQ
     :data:`START_TURNS` turns of φ (so that the grid below resolves sin φ), where
     the holding torque is at most ``torque_share``·max_torque [N·m] and the contact holds
     with margin: N > 0 and |F| <= ``friction_share``·μN (at rest N = m g cos ψ,
-    F = m g sin ψ). Each side is a grid of ``points`` values of φ from 0 to ±:func:`reach`
+    F = m g sin ψ); with ``rising``, also where the potential rises away from the bottom
+    (φ·dV/dφ > 0: a swing from the bottom turns back there, before any barrier of the
+    potential). Each side is a grid of ``points`` values of φ from 0 to ±:func:`reach`
     (those of ``np.linspace``, bit for bit), walked outward from φ = 0: the bound is the last
     grid point before the first one that fails (φ = 0 if that one fails, the end if none
     does), so the cost is proportional to the range's width, not to ``points``.
@@ -144,6 +147,8 @@ def hold_ranges(scene: Scene, max_torque: float, torque_share: float = HOLD_TORQ
     if not (isinstance(points, int | np.integer) and not isinstance(points, bool)
             and 1 <= points <= 10**7):
         raise ValueError(f"points={shown(points)} must be an integer in [1, 10**7]")
+    if not isinstance(rising, bool | np.bool_):
+        raise ValueError(f"rising={shown(rising)} must be True or False")
     if not all(isinstance(getattr(scene, f.name), float | np.ndarray)
                for f in dataclasses.fields(Scene)):  # e.g. an int or float32 number
         scene = Scene(**{f.name: np.asarray(getattr(scene, f.name), float)[()]
@@ -154,7 +159,7 @@ def hold_ranges(scene: Scene, max_torque: float, torque_share: float = HOLD_TORQ
     half[...] = np.reshape(reach(scene), -1)
     low, high = np.empty_like(half), np.empty_like(half)
     _hold_bounds(*numbers, half, float(torque_share * max_torque), float(friction_share),
-                 int(points), low, high)
+                 int(points), bool(rising), low, high)
     return low, high
 
 
@@ -169,23 +174,25 @@ def reach(scene: Scene, angle: float = math.pi) -> float | np.ndarray:
 
 @_cached_per_scene
 def hold_range(scene: Scene, max_torque: float, torque_share: float = HOLD_TORQUE_SHARE,
-               friction_share: float = 0.9, points: int = 2001) -> tuple[float, float]:
+               friction_share: float = 0.9, points: int = 2001, rising: bool = False
+               ) -> tuple[float, float]:
     """The interval (low, high) of rest positions φ [rad] around 0 that can be held at rest
     in the scalar ``scene``: :func:`hold_ranges` of it (the same compiled walk), memoized."""
-    low, high = hold_ranges(scene, max_torque, torque_share, friction_share, points)
+    low, high = hold_ranges(scene, max_torque, torque_share, friction_share, points, rising)
     return float(low[0]), float(high[0])
 
 
 @inlined
-def _holds(phi, m, r, kappa, e, k, g, c, mu, torque_limit, friction_share):
+def _holds(phi, m, r, kappa, e, k, g, c, mu, torque_limit, friction_share, rising):
     """Whether the roller can be held at rest at φ [rad] (:func:`hold_ranges`' condition): its
     holding torque τ = dV/dφ [N·m] within ``torque_limit``, and under τ at rest N > 0 and
-    |F| <= ``friction_share``·μN."""
+    |F| <= ``friction_share``·μN; with ``rising``, also φ·τ > 0 (or φ = 0)."""
     tau = equations.dpotential(phi, m, r, kappa, e, g)
     phi_ddot = equations.accel(phi, 0.0, tau, m, r, kappa, e, k, g, c)
     normal, friction = equations.contact_forces(phi, 0.0, phi_ddot, m, r, kappa, e, g)
     return ((abs(tau) <= torque_limit) & (normal > 0)
-            & (abs(friction) <= friction_share * mu * normal))
+            & (abs(friction) <= friction_share * mu * normal)
+            & ((not rising) | (phi * tau > 0) | (phi == 0.0)))
 
 
 @inlined
@@ -210,7 +217,7 @@ _HOLD_BLOCK = 16
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _hold_bounds(m, r, kappa, e, k, g, c, mu, half, torque_limit, friction_share, points,
-                 low, high):
+                 rising, low, high):
     """low[j], high[j] of :func:`hold_ranges` for roller j (scene numbers as rows, ``half``
     :func:`reach` [rad]): each side's grid walked outward from φ = 0, a block of
     :data:`_HOLD_BLOCK` points at a time, up to the first point that fails :func:`_holds`."""
@@ -229,7 +236,7 @@ def _hold_bounds(m, r, kappa, e, k, g, c, mu, half, torque_limit, friction_share
                 for b in range(count):  # a loop without exits: SIMD lanes
                     phi[b] = sign * _linspace_at(start + b, div, step, stop)
                     ok[b] = _holds(phi[b], m[j], r[j], kappa[j], e[j], k[j], g[j], c[j], mu[j],
-                                   torque_limit, friction_share)
+                                   torque_limit, friction_share, rising)
                 failed = False
                 for b in range(count):
                     if not ok[b]:

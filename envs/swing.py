@@ -46,8 +46,10 @@ swing (τ = 0) pays most: no torque is needed to keep a swing of the target's en
 
 At rest, ψ uniform in ±5° (redrawn until the roller rolls there under every torque of the
 limit); the amplitude φ* uniform in [45 %, 85 %] of the range where friction can hold the
-roller at rest (|F| <= 0.9 μN, :func:`roller_gym.task.hold_ranges` without a torque limit),
-on either side.
+roller at rest (|F| <= 0.9 μN, :func:`roller_gym.task.hold_ranges` without a torque limit)
+and the potential rises from the bottom on, on either side. On larger cylinders (R of
+2 m and more at the defaults) the starts are kept where the potential is at most half the
+smallest target's energy, so that no start has the target swing's energy.
 
 ## Episode end
 
@@ -67,7 +69,10 @@ tolerance=..., integrator=..., substeps=..., randomize=..., render_mode=...)``: 
 
 * v1: the reward's wide term (0.2 near(ε_E, 2)) pays for the energy gained on the way up:
   without it the reward at rest was 6e-7 and TD3 never learned to pump on 1 or 2 of 5
-  seeds.
+  seeds. Later within v1: the amplitudes stop where the potential stops rising (before the
+  eccentric mass's first barrier: larger cylinders, the preset "balance", drums), and starts
+  stay below half the smallest target's energy; the default scene's episodes are drawn bit
+  for bit as before.
 * v0: the first version.
 """
 
@@ -79,7 +84,8 @@ from typing import Any
 
 import numpy as np
 from roller_gym import rewards
-from roller_gym.physics import Scene, energy
+from roller_gym.physics import Scene, energy, equations
+from roller_gym.physics.integrators import SCENE_FIELDS, scene_arrays
 from roller_gym.physics.scene import shown
 from roller_gym.task import Task, hold_ranges, objective, reach, register
 
@@ -104,9 +110,12 @@ class SwingTask(Task):
     reach_margin = 2.0
     reach_weight = 0.2
     control_weight = 0.2
-    #: The amplitude's range, as shares of the range friction holds on its side.
+    #: The amplitude's range, as shares of :meth:`amplitude_ranges` on its side.
     amplitude_shares = (0.45, 0.85)
-    start_rule = "at rest, ψ within ±5° (|φ| <= 64 turns)"
+    #: A start's potential energy is at most this share of the smallest target's E*.
+    start_energy_share = 0.5
+    start_rule = ("at rest, ψ within ±5° (|φ| <= 64 turns) and the potential at most half the "
+                  "smallest target's energy")
     start_speed = 0.0
     parameters = ("energy_band", "energy_margin", "reach_margin", "reach_weight",
                   "control_weight", "max_torque",
@@ -132,9 +141,10 @@ class SwingTask(Task):
     def check_scene(self, scene: Scene) -> None:
         """Every target swing has energy: E* > 0 [J] over the amplitudes drawn on both sides
         (a grid of them), so that E/E* − 1 is defined and a swing turns back there. Not where
-        the potential is flat (a concentric roller on the floor), the range friction holds
-        is empty, or the target lies below the bottom (on a drum, E* < 0)."""
-        low, high = hold_ranges(scene, math.inf)
+        the potential is flat (a concentric roller on the floor), falls from the bottom on
+        (on a drum, a mass center too near the axle), or the range friction holds is
+        empty."""
+        low, high = self.amplitude_ranges(scene)
         shares = np.linspace(*self.amplitude_shares, 65)
         amplitudes = np.concatenate([shares * low[0], shares * high[0]])
         target_energy = np.asarray(energy(scene, amplitudes, 0.0))
@@ -143,7 +153,8 @@ class SwingTask(Task):
             raise ValueError(
                 f"{shown(scene)} gives a target swing no energy: E* = "
                 f"{float(target_energy[worst]):.3g} J at the amplitude phi* = "
-                f"{float(amplitudes[worst]):.4g} rad (the friction-held range is "
+                f"{float(amplitudes[worst]):.4g} rad (the range friction holds and the "
+                f"potential rises in is "
                 f"[{float(low[0]):.4g}, {float(high[0]):.4g}] rad), and the reward E/E* − 1 "
                 "needs E* > 0: use an eccentric mass (e > 0) on the floor, or friction (mu > 0) "
                 "inside a cylinder"
@@ -151,24 +162,57 @@ class SwingTask(Task):
 
     def scene_proven(self, params: Any, estimates: Sequence[Scene]) -> bool:
         """Proven for a box inside a cylinder (κ > 0) with μ >= 0.01 (the first point of the
-        friction-held range's grid, |ψ| <= π/2000, holds), where the potential rises with
+        amplitudes' range's grid, |ψ| <= π/2000 and |φ| <= 0.2 rad, is held, and there the
+        potential rises: r sin ψ and e sin φ are both > 0), where the potential rises with
         |ψ| on both sides, or on the floor (κ = 0) with e > 0; not elsewhere."""
         kappa, e, mu = params.kappa, params.e, params.mu
         return bool((np.all(kappa.lo > 0.0) and np.all(mu.lo >= 0.01))
                     or (np.all(kappa.lo == 0.0) and np.all(kappa.hi == 0.0)
                     and np.all(e.lo > 0.0)))
 
+    def amplitude_ranges(self, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+        """The ranges [low, high] [rad of φ] the amplitudes are shares of, one per roller: where
+        friction holds the roller at rest and the potential rises from the bottom on
+        (:func:`roller_gym.task.hold_ranges` without a torque limit, ``rising``), so that a
+        swing of energy E* = V(φ*) turns back at ±φ*, before any barrier of the potential."""
+        return hold_ranges(scene, math.inf, rising=True)
+
     def sample_targets(self, u: np.ndarray, scene: Scene) -> np.ndarray:
-        low, high = hold_ranges(scene, math.inf)
+        low, high = self.amplitude_ranges(scene)
         lo, hi = self.amplitude_shares
         share = lo + (hi - lo) * np.abs(2.0 * u - 1.0)  # the side from u's half
         return np.where(u < 0.5, share * low, share * high)
 
     def default_target(self, scene: Scene) -> float:
-        return float(hold_ranges(scene, math.inf)[1][0]) * sum(self.amplitude_shares) / 2
+        return float(self.amplitude_ranges(scene)[1][0]) * sum(self.amplitude_shares) / 2
 
     def start_candidates(
         self, u_phi: np.ndarray, u_dot: np.ndarray, scene: Scene
     ) -> tuple[np.ndarray, np.ndarray]:
-        limit = np.reshape(reach(scene, math.radians(5.0)), (-1, 1))
+        limit = np.reshape(self.start_limits(scene), (-1, 1))
         return limit * (2.0 * u_phi - 1.0), 0.0 * u_dot
+
+    def start_limits(self, scene: Scene) -> np.ndarray:
+        """How far [rad of φ] from the bottom a start lies, one per roller: ψ within ±5°
+        (:func:`roller_gym.task.reach`), and no further than where the potential reaches
+        start_energy_share of the smallest target's energy E*: a start at rest never has
+        the target swing's energy (success needs pumping). The latter by bisection on the
+        rising potential (60 halvings), only where the former reaches past it."""
+        angle = np.reshape(reach(scene, math.radians(5.0)), -1).astype(float)
+        low, high = self.amplitude_ranges(scene)
+        rows = dict(zip(SCENE_FIELDS, scene_arrays(scene), strict=True))
+        m, r, kappa, e, g = (rows[f] for f in ("m", "r", "kappa", "e", "g"))
+
+        def potential(phi: np.ndarray) -> np.ndarray:
+            return equations.potential(phi, m, r, kappa, e, g)
+
+        smallest = self.amplitude_shares[0] * np.minimum(-low, high)
+        level = self.start_energy_share * np.minimum(
+            potential(self.amplitude_shares[0] * low), potential(smallest))
+        below, above = np.zeros_like(smallest), np.minimum(angle, smallest)
+        over = potential(above) > level  # (the potential rises on [0, smallest])
+        for _ in range(60):
+            middle = 0.5 * (below + above)
+            higher = potential(middle) > level
+            below, above = np.where(higher, below, middle), np.where(higher, middle, above)
+        return np.where(over, below, angle)

@@ -47,11 +47,9 @@ def balances(env_id: str) -> bool:
 
 def posable(env_id: str, scene: str) -> bool:
     """Whether the task can be posed on the preset ``scene``: a balancing task needs an
-    unstable rest position that rolls (not the floor's or the drum's); a swing, a target
-    above the bottom (not on a drum, where the start is the top)."""
-    if balances(env_id):
-        return scene not in ("floor", "drum")
-    return not (scene == "drum" and "RollerSwing" in env_id)
+    unstable rest position that rolls (not the floor's or the drum's); the others any
+    preset (a swing on the drum, in the well its eccentric mass makes at the top)."""
+    return not (balances(env_id) and scene in ("floor", "drum"))
 
 
 # -- the physics, from PHYSICS.md ------------------------------------------------------
