@@ -111,7 +111,7 @@ def _posable(task: Task, scene: Scene, dt: float,
         weight_arm, j_min = validation.integration_magnitudes(m, r, e, k, g)
         rates = validation.integration_rates(m, r, kappa, e, g, c, j_min, task.max_torque,
                                              task.start_speed)
-        ok = sum(rates) * dt <= validation.LARGEST_PHASE_PER_STEP
+        ok = validation.step_phase(rates, dt) <= validation.LARGEST_PHASE_PER_STEP
         for x in (weight_arm, j_min):
             ok &= (np.abs(x) >= validation.SMALLEST) & (np.abs(x) <= validation.LARGEST)
     ok &= (task.max_torque >= validation.SMALLEST) & (task.max_torque <= validation.LARGEST)
@@ -147,11 +147,9 @@ def _integrable_proven(p: Params, dt: float, max_torque: float,
     # are ∝ 1/m: largest at the least m), so that m's range is not counted twice.
     least = Interval(p.m.lo)
     _, j_unit = validation.integration_magnitudes(1.0, p.r, p.e, p.k, p.g)
-    omega, spin, decay, start = validation.integration_rates(1.0, p.r, p.kappa, p.e, p.g,
-                                                             p.c / least, j_unit,
-                                                             max_torque / least, start_speed)
-    return ok & (((omega + spin + decay + start) * dt).hi
-                 <= validation.LARGEST_PHASE_PER_STEP)
+    rates = validation.integration_rates(1.0, p.r, p.kappa, p.e, p.g, p.c / least, j_unit,
+                                         max_torque / least, start_speed)
+    return ok & (validation.step_phase(rates, dt).hi <= validation.LARGEST_PHASE_PER_STEP)
 
 
 def _corners(scene: Scene, boxes: Sequence[Box]) -> Scene:

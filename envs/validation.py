@@ -167,9 +167,9 @@ def check_integrable(scene: Scene, dt: float, max_torque: float,
                     f"{shown(one)} cannot be integrated in float64: {label} = {x:.3g} (SI) lies "
                     "outside [1e-100, 1e100]; rescale the scene's units"
                 )
-        omega, spin, decay, start = integration_rates(m, r, kappa, e, g, c, j_min, max_torque,
-                                                      start_speed)
-        phase = (omega + spin + decay + start) * dt
+        rates = integration_rates(m, r, kappa, e, g, c, j_min, max_torque, start_speed)
+        omega, spin, decay, start = rates
+        phase = step_phase(rates, dt)
         if not phase <= LARGEST_PHASE_PER_STEP:
             raise ValueError(
                 f"dt={shown(dt)} s is too long for {shown(one)}: its fastest time scale is "
@@ -179,6 +179,14 @@ def check_integrable(scene: Scene, dt: float, max_torque: float,
                 f"where at most {LARGEST_PHASE_PER_STEP:g} can be followed; use a shorter dt, "
                 "a larger k, a smaller e or less damping"
             )
+
+
+def step_phase(rates: tuple[Any, Any, Any, Any], dt: float) -> Any:
+    """The fastest phase per control step [rad] of :func:`check_integrable`: the sum of
+    :func:`integration_rates` times ``dt`` [s] (floats, arrays or intervals), at most
+    :data:`LARGEST_PHASE_PER_STEP`."""
+    omega, spin, decay, start = rates
+    return (omega + spin + decay + start) * dt
 
 
 def integration_magnitudes(m: Any, r: Any, e: Any, k: Any, g: Any) -> tuple[Any, Any]:
