@@ -121,6 +121,10 @@ def check_env_kwargs(env_id: str, kwargs: dict[str, Any], option: str) -> None:
     if mode is not None and mode not in modes:
         raise SystemExit(f"{option}: render_mode={mode!r} is not allowed: it must be None or "
                          f"one of {', '.join(map(repr, modes))}")
+    steps = kwargs.get("max_episode_steps", 1)
+    if not (isinstance(steps, int) and not isinstance(steps, bool) and steps >= 1):
+        raise SystemExit(f"{option}: max_episode_steps={steps!r} is not allowed: it must be an "
+                         "integer >= 1 (training and evaluation need episodes that end)")
     try:
         gym.make(env_id, **kwargs).close()
     except (TypeError, ValueError) as exc:

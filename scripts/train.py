@@ -28,6 +28,7 @@ import sys
 from importlib.resources import as_file
 from pathlib import Path
 
+import numpy as np
 import roller_gym  # registers the tasks
 from roller_gym.agents.hyperparams import ALGOS, config_file, hyperparams
 from roller_gym.agents.policies import ZOO_HINT, find_run
@@ -40,7 +41,7 @@ from roller_gym.scripts.arguments import (
     output_folder,
     program_parser,
 )
-from roller_gym.scripts.zoo_hyperparams import checked_hyperparams
+from roller_gym.scripts.zoo_hyperparams import check_together, checked_hyperparams
 
 #: Algorithms that learn from whole rollouts of n_envs x n_steps environment steps.
 ON_POLICY = ("ppo",)
@@ -95,6 +96,7 @@ def zoo_arguments(args: argparse.Namespace, conf: str) -> list[str]:
     the option)."""
     given = checked_hyperparams(args.algo, args.hyperparams, args.env)
     hp = {**hyperparams(args.algo, args.env), **given}
+    check_together(args.algo, hp, _observation_size(args.env))
     if "noise_type" in hp and "noise_std" not in hp:
         raise SystemExit("--hyperparams: noise_type needs noise_std (its standard deviation in "
                          "action units), e.g. noise_std:0.1")
@@ -133,6 +135,15 @@ def zoo_arguments(args: argparse.Namespace, conf: str) -> list[str]:
         raise SystemExit(f"after --: {', '.join(own)} are set by roller-gym train from its own "
                          "options (give them before --: --env, --algo, --seed, ...)")
     return out + list(args.zoo_args)
+
+
+def _observation_size(env_id: str) -> int:
+    """How many numbers a task's observation holds."""
+    import gymnasium as gym
+
+    env = gym.make(env_id)
+    env.close()
+    return int(np.prod(env.observation_space.shape))
 
 
 #: rl_zoo3.train's options that roller-gym train sets itself (not to be given after --).

@@ -28,6 +28,8 @@ ZOO_KEYS = ("n_timesteps", "n_envs", "normalize", "env_wrapper", "vec_env_wrappe
 ZOO_SETS = ("env", "tensorboard_log", "seed", "verbose", "device")
 #: The largest count a hyperparameter may take (a larger buffer could not be allocated).
 HYPERPARAM_COUNT_MAX = 10**9
+#: The most observations frame_stack may stack (the tasks' episodes are 200–400 steps).
+FRAME_STACK_MAX = 1000
 #: The policies for the tasks' observations (a vector: a Box), by rl-zoo3's alias.
 POLICIES = ("MlpPolicy",)
 
@@ -87,6 +89,40 @@ def checked_hyperparams(algo: str, items: list[str], env_id: str | None = None
             raise SystemExit(f"--hyperparams: {key}:{value!r} is not allowed: it must be "
                              f"{allowed}{why}")
     return values
+
+
+def check_together(algo: str, hp: dict[str, Any], observation_size: int) -> None:
+    """The checks of the hyperparameters that will train (the file's, then ``--hyperparams``)
+    taken together: PPO's samples (a rollout and a minibatch of at least 2), episodic
+    training on one environment, and the memory of the buffers (``observation_size``
+    numbers per observation, before frame_stack).
+
+    Raises:
+        SystemExit: naming ``--hyperparams``, the values and what is allowed.
+    """
+    from roller_gym.physics.integrators.layout import check_memory
+
+    n_envs, stack = int(hp.get("n_envs", 1)), int(hp.get("frame_stack", 1))
+    if algo == "ppo":
+        rollout = n_envs * int(hp["n_steps"])
+        if rollout < 2 or int(hp["batch_size"]) < 2:
+            raise SystemExit(f"--hyperparams: n_steps:{hp['n_steps']} x n_envs:{n_envs} and "
+                             f"batch_size:{hp['batch_size']} are not allowed: PPO needs a "
+                             "rollout of at least 2 steps and minibatches of at least 2")
+        entries, batch = rollout, 0
+    else:
+        freq = hp.get("train_freq", 1)
+        if isinstance(freq, tuple | list) and freq[1] == "episode" and n_envs > 1:
+            raise SystemExit(f"--hyperparams: train_freq:{freq!r} with n_envs:{n_envs} is not "
+                             "allowed: training by episodes takes one environment (n_envs:1)")
+        entries, batch = int(hp.get("buffer_size", 1_000_000)), int(hp.get("batch_size", 256))
+    # float32 observations (twice: the next ones too), actions, rewards and flags per entry
+    size = 4 * (2 * observation_size * stack + 4)
+    try:
+        check_memory("--hyperparams buffer_size (or n_steps x n_envs)", entries, size)
+        check_memory("--hyperparams batch_size", batch, 2 * size)
+    except ValueError as error:
+        raise SystemExit(str(error)) from None
 
 
 def _real(low: float, high: float, open_low: bool = False) -> Callable[[Any, Given], bool]:
@@ -191,7 +227,14 @@ def _policy_kwargs(value: Any, given: Given) -> bool:
     observation, action = _spaces()
     if given.values.get("use_sde") is True:
         kwargs = {"use_sde": True, **kwargs}
-    _built("the policy", lambda: policy(observation, action, lambda _: 1e-3, **kwargs))
+    built = _built("the policy", lambda: policy(observation, action, lambda _: 1e-3, **kwargs))
+    import torch
+
+    parameters = list(built.parameters())
+    if any(p.numel() == 0 for p in parameters):
+        raise ValueError("the policy has a layer of no units: it cannot see the observation")
+    if not all(bool(torch.isfinite(p).all()) for p in parameters):
+        raise ValueError("the policy's initial parameters are not all finite")
     return True
 
 
@@ -215,16 +258,6 @@ def _replay_buffer(value: Any, given: Given) -> bool:
     return True
 
 
-def _monitor_kwargs(value: Any, _: Given | None = None) -> bool:
-    """Whether ``value`` is Monitor's keyword arguments (a dict, or its text) but those
-    rl-zoo3 sets (the file)."""
-    from stable_baselines3.common.monitor import Monitor
-
-    kwargs = _evaluated(value)
-    known = set(inspect.signature(Monitor).parameters) - {"env", "filename"}
-    return isinstance(kwargs, dict) and set(kwargs) <= known
-
-
 def _normalize(value: Any, _: Given | None = None) -> bool:
     """Whether ``value`` is rl-zoo3's normalize: a bool, or VecNormalize's keyword arguments as
     a dict or its text ("dict(norm_obs=True)", "{'norm_obs': True}"), which rl-zoo3 evaluates."""
@@ -242,9 +275,28 @@ def _normalize(value: Any, _: Given | None = None) -> bool:
             return False
     if not isinstance(value, dict):
         return False
-    from stable_baselines3.common.vec_env import VecNormalize
-    known = set(inspect.signature(VecNormalize).parameters) - {"venv"}
-    return set(value) <= known
+    for key, item in value.items():
+        rule = NORMALIZE_RULES.get(key)
+        if rule is None:
+            raise ValueError(f"{key!r} is not an argument of VecNormalize; allowed: "
+                             f"{', '.join(NORMALIZE_RULES)}")
+        if not rule[0](item):
+            raise ValueError(f"its {key}={item!r} must be {rule[1]}")
+    return True
+
+
+#: VecNormalize's keyword arguments (but venv) and what each may be: a wrong one trained on
+#: nonsense (clip_obs <= 0 maps every observation to one value) or failed in torch.
+NORMALIZE_RULES: dict[str, tuple[Callable[[Any], bool], str]] = {
+    "training": (lambda v: isinstance(v, bool), "True or False"),
+    "norm_obs": (lambda v: isinstance(v, bool), "True or False"),
+    "norm_reward": (lambda v: isinstance(v, bool), "True or False"),
+    "clip_obs": (lambda v: _real(0.0, 1e9, open_low=True)(v), "a number > 0"),
+    "clip_reward": (lambda v: _real(0.0, 1e9, open_low=True)(v), "a number > 0"),
+    "gamma": (lambda v: _real(0.0, 1.0, open_low=True)(v), "a number in (0, 1]"),
+    "epsilon": (lambda v: _real(0.0, 1.0, open_low=True)(v), "a number in (0, 1]"),
+    "norm_obs_keys": (lambda v: v is None, "None (the observations are vectors)"),
+}
 
 
 def _wrapper(key: str) -> Callable[[Any, Given], bool]:
@@ -268,9 +320,11 @@ def _wrapper(key: str) -> Callable[[Any, Given], bool]:
         spaces = env.observation_space, env.action_space
         env.close()
         if not all(isinstance(s, gym.spaces.Box) for s in spaces) or not (
-                np.all(np.isfinite(spaces[1].low)) and np.all(np.isfinite(spaces[1].high))):
+                np.all(np.isfinite(spaces[1].low)) and np.all(np.isfinite(spaces[1].high))
+                and spaces[0].shape and np.prod(spaces[0].shape) > 0):
             raise ValueError(f"the wrapped environment's spaces are {spaces[0]} and {spaces[1]}; "
-                             "the algorithms take vectors, and actions with finite bounds")
+                             "the algorithms take non-empty vectors, and actions with finite "
+                             "bounds")
         return True
     return check
 
@@ -301,8 +355,9 @@ _COUNT = "an integer >= 1 and <= 1e+09"
 RULES: dict[str, Rule] = {
     # counts (environments, steps, samples, stacked frames, intervals)
     **{key: (_integer(1), _COUNT) for key in (
-        "n_envs", "n_steps", "batch_size", "n_epochs", "buffer_size", "frame_stack",
+        "n_envs", "n_steps", "batch_size", "n_epochs", "buffer_size",
         "target_update_interval", "policy_delay", "stats_window_size")},
+    "frame_stack": (_integer(1, FRAME_STACK_MAX), f"an integer >= 1 and <= {FRAME_STACK_MAX}"),
     "n_timesteps": (_integer(1, whole_float=True), _COUNT),
     "learning_starts": (_integer(0), "an integer >= 0 and <= 1e+09"),
     "gradient_steps": (lambda v, _=None: v == -1 or _integer(1)(v),
@@ -313,7 +368,8 @@ RULES: dict[str, Rule] = {
     "gamma": (_real(0.0, 1.0, open_low=True), "a number in (0, 1]"),
     "tau": (_real(0.0, 1.0, open_low=True), "a number in (0, 1]"),
     "gae_lambda": (_real(0.0, 1.0), "a number in [0, 1]"),
-    "learning_rate": (_schedule(0.0), "a number > 0, or lin_<number> (from it down to 0)"),
+    "learning_rate": (_schedule(0.0, 1.0), "a number in (0, 1], or lin_<number> (from it "
+                      "down to 0)"),
     "clip_range": (_schedule(0.0, 1e9), "a number > 0, or lin_<number> (from it down to 0)"),
     "clip_range_vf": (_schedule(0.0, 1e9), "a number > 0, or lin_<number> (from it down to 0); "
                       "leave it out for no clipping of the value function"),
@@ -343,8 +399,8 @@ RULES: dict[str, Rule] = {
                   "text: 'dict(norm_obs=True)')"),
     "env_kwargs": (_env_kwargs, "a dict of the environment's keyword arguments (or use "
                    "--env-kwargs)"),
-    "monitor_kwargs": (_monitor_kwargs, "Monitor's keyword arguments but filename (a dict, or "
-                       "its text)"),
+    "monitor_kwargs": (_refused, "left out: the native batch reports each episode's return, "
+                       "length and time as Monitor does, and no info or reset keywords"),
     "policy_kwargs": (_policy_kwargs, "the policy's keyword arguments (a dict, or its text as "
                       "rl-zoo3 evaluates it: 'dict(net_arch=[64, 64], activation_fn=nn.Tanh)')"),
     "replay_buffer_class": (_replay_buffer, "a replay buffer class for vector observations, "

@@ -430,6 +430,9 @@ def test_train_passes_env_kwargs_to_rl_zoo3_as_python_literals():
     ("render_mode=1", "--env-kwargs: render_mode=1 is not allowed: it must be None or one of "
                       "'human', 'rgb_array'"),
     ("dt=1" + "0" * 400, r"--env-kwargs: dt=10+\.\.\.0+ is out of range"),
+    # (no time limit: a 600-step run's first evaluation never ended)
+    ("max_episode_steps=-1", "--env-kwargs: max_episode_steps=-1 is not allowed: it must be an "
+                             "integer >= 1"),
 ])
 @pytest.mark.parametrize("show", [[], ["--show-command"]])
 def test_train_refuses_env_kwargs_the_env_refuses_before_rl_zoo3_starts(item, message, show,
@@ -483,7 +486,7 @@ def test_train_rllib_refuses_env_kwargs_the_env_refuses_before_ray_starts(item, 
     # (NameError, "Maximum allowed dimension exceeded", AssertionError in rl-zoo3 or SB3; the
     # environment's arguments given here skipped the check of --env-kwargs)
     ("sac", "learning_rate:abc", "--hyperparams: learning_rate:'abc' is not allowed: it must "
-                                 "be a number > 0, or lin_<number>"),
+                                 "be a number in \\(0, 1\\], or lin_<number>"),
     ("sac", "learning_rate:-1e-3", "--hyperparams: learning_rate:-0.001 is not allowed"),
     ("sac", "buffer_size:" + "1" * 400, "--hyperparams: buffer_size:1{400} is not allowed"),
     ("sac", "frame_stack:0", "--hyperparams: frame_stack:0 is not allowed"),
@@ -557,9 +560,33 @@ def test_train_rllib_refuses_env_kwargs_the_env_refuses_before_ray_starts(item, 
     ("ppo", "rollout_buffer_class:RolloutBuffer", "rollout_buffer_class:'RolloutBuffer' is not "
                                                   "allowed: it must be left out"),
     ("ppo", "rollout_buffer_kwargs:{'gamma': 0.5}", "rollout_buffer_kwargs:.* is not allowed"),
-    ("sac", "monitor_kwargs:dict(filename='x')", "monitor_kwargs:.* is not allowed: it must be "
-                                                 "Monitor's keyword arguments but filename"),
     ("sac", "normalize_kwargs:{}", "'normalize_kwargs' is not a hyperparameter of sac"),
+    # (trained on nonsense: clip_obs -1 mapped every observation to -1; gamma 5 ran; NaN in
+    # torch; a zero-sized layer trained a policy blind to its input; SB3's AssertionError
+    # or numpy's MemoryError, some after training had started; Monitor's keywords dropped)
+    ("ppo", "normalize:dict(clip_obs=-1.0)", "normalize:.* is not allowed: .*its clip_obs=-1.0 "
+                                             "must be a number > 0"),
+    ("sac", "normalize:dict(gamma=5.0)", "normalize:.* is not allowed: .*its gamma=5.0 must be"),
+    ("ppo", "normalize:dict(epsilon=-1.0)", "normalize:.* is not allowed: .*its epsilon=-1.0"),
+    ("sac", "policy_kwargs:dict(net_arch=[0])", "policy_kwargs:.* is not allowed: .*a layer of no "
+                                                "units"),
+    ("ppo", "policy_kwargs:dict(log_std_init=float('nan'))", "policy_kwargs:.* is not allowed: "
+                                                             ".*not all finite"),
+    ("ppo", "learning_rate:1e9", "--hyperparams: learning_rate:1000000000.0 is not allowed: it "
+                                 "must be a number in \\(0, 1\\]"),
+    ("ppo", "batch_size:1", "--hyperparams: n_steps:.* and batch_size:1 are not allowed: PPO "
+                            "needs"),
+    ("sac", ("train_freq:[1, 'episode']", "n_envs:2"),
+     "--hyperparams: train_freq:\\[1, 'episode'\\] with n_envs:2 is not allowed"),
+    ("sac", "frame_stack:10000000", "--hyperparams: frame_stack:10000000 is not allowed: it must "
+                                    "be an integer >= 1 and <= 1000"),
+    ("sac", "batch_size:900000000", "--hyperparams batch_size=900000000 is too many: their "
+                                    "arrays need about"),
+    ("td3", "buffer_size:900000000", "--hyperparams buffer_size .*=900000000 is too many"),
+    ("ppo", "vec_env_wrapper:{'stable_baselines3.common.vec_env.VecFrameStack': {'n_stack': 0}}",
+     "vec_env_wrapper:.* is not allowed: .*non-empty vectors"),
+    ("sac", "monitor_kwargs:dict(info_keywords=('is_success',))", "monitor_kwargs:.* is not "
+                                                                  "allowed: it must be left out"),
 ])
 def test_train_refuses_hyperparams_before_rl_zoo3_starts(algo, item, message, tmp_path,
                                                           monkeypatch):
@@ -570,7 +597,8 @@ def test_train_refuses_hyperparams_before_rl_zoo3_starts(algo, item, message, tm
 
     monkeypatch.setattr(rl_zoo3.train, "train", lambda: pytest.fail("rl-zoo3 started"))
     with pytest.raises(SystemExit, match=message):
-        train.main(["--algo", algo, "--hyperparams", item, "--log-folder", str(tmp_path)])
+        items = list(item) if isinstance(item, tuple) else [item]  # (keys checked together)
+        train.main(["--algo", algo, "--hyperparams", *items, "--log-folder", str(tmp_path)])
 
 
 @NEEDS_RL_ZOO3
@@ -590,7 +618,6 @@ def test_train_refuses_hyperparams_before_rl_zoo3_starts(algo, item, message, tm
             "{'max_episodes': 5}}"),
     ("td3", "optimize_memory_usage:True"),  # with the buffer's keyword arguments below
     ("ppo", "clip_range_vf:lin_0.2"), ("ppo", "target_kl:0.02"),
-    ("sac", "monitor_kwargs:dict(info_keywords=('is_success',))"),
 ])
 def test_train_takes_the_forms_of_rl_zoo3s_own_files(algo, item):
     from roller_gym.scripts import train
