@@ -379,8 +379,9 @@ def _geometric(low: float, high: float) -> bool:
 def _share(part: tuple[float, float], whole: tuple[float, float]) -> float:
     """How much of a field's range ``whole`` a box's ``part`` covers: on a log scale where the
     range spans orders of magnitude (:data:`GEOMETRIC_RATIO`), else linearly."""
-    if _geometric(*whole):
-        return math.log(part[1] / part[0]) / math.log(whole[1] / whole[0])
+    if _geometric(*whole):  # (logs of each end: a ratio of ends near float64's top overflows)
+        return ((math.log(abs(part[1])) - math.log(abs(part[0])))
+                / (math.log(abs(whole[1])) - math.log(abs(whole[0]))))
     return (part[1] - part[0]) / (whole[1] - whole[0])
 
 
@@ -388,7 +389,7 @@ def _split(low: float, high: float, whole: tuple[float, float]) -> float:
     """Where a box's side [low, high] is split: its geometric middle where the field's range
     spans orders of magnitude, so that each decade is examined alike; else its middle."""
     if _geometric(*whole):
-        return math.copysign(math.sqrt(low * high), low)
+        return math.copysign(math.sqrt(abs(low)) * math.sqrt(abs(high)), low)  # (no overflow)
     return 0.5 * low + 0.5 * high
 
 

@@ -379,3 +379,18 @@ def test_a_range_over_orders_of_magnitude_is_examined_decade_by_decade():
     part = re.search(r"feasible part of the range: \[([^,]+), ([^\]]+)\]", str(info.value))
     bound = 1e100 / (scene.g * scene.r)
     assert float(part[1]) == 1.0 and 0.99 * bound <= float(part[2]) <= 1.03 * bound
+
+
+def test_a_range_up_to_float64s_top_is_split_without_overflow():
+    """A range like R in (0.3, 1e307) is split on a log scale; its middle sqrt(low·high)
+    overflowed to inf, and the next box's share (log of its ends' ratio) failed with a math
+    domain error, ending construction in a traceback. The middle is now the geometric mean of
+    the ends taken one by one, inside the box, and the shares of the two halves add to the
+    whole's."""
+    from roller_gym.feasibility import _share, _split
+
+    for low, high in ((0.3, 1e307), (1e200, 1e307), (-1e307, -1e200), (1e-300, 1e300)):
+        middle = _split(low, high, (low, high))
+        assert low < middle < high and math.isfinite(middle)
+        halves = _share((low, middle), (low, high)) + _share((middle, high), (low, high))
+        assert halves == pytest.approx(1.0, rel=1e-12)
