@@ -50,6 +50,12 @@ At rest near the bottom: φ and φ' uniform in ±0.1 (rad, rad/s).
 * Truncated: 400 steps (20 s).
 * ``info["is_success"]``: |ε| <= 0.1 rad and |φ'| <= 0.2 rad/s.
 
+## Scenes
+
+Checked at construction (and proven over ``randomize`` ranges): the unstable rest position
+exists and the roller rolls there at rest, and the swing-up outruns the damping: c·ω <= 0.5
+max_torque at ω = sqrt(2 V(φ_b) / J_I(0)), the bottom speed of a swing that reaches φ_b.
+
 ## Version History
 
 * v0: the first version.
@@ -68,7 +74,7 @@ from typing import Any
 
 import numpy as np
 from roller_gym import feasibility
-from roller_gym.physics import Scene, contact
+from roller_gym.physics import Scene, contact, energy, equations
 from roller_gym.physics.analysis import nearest_unstable_rests
 from roller_gym.physics.scene import shown
 from roller_gym.task import Task, register, unstable_rest_positions
@@ -90,8 +96,25 @@ class BalanceTask(Task):
     success_band = 0.1
     success_speed = 0.2
 
+    #: The damping's torque at the swing-up's fastest speed is at most this share of
+    #: max_torque, so that pumping at max_torque still gains energy there.
+    damping_share = 0.5
+
     def check_scene(self, scene: Scene) -> None:
-        self.default_target(scene)
+        """The unstable rest position exists and holds (:meth:`default_target`), and the
+        swing-up outruns the damping: c·ω <= damping_share·max_torque at ω =
+        sqrt(2 V(φ_b) / J_I(0)) [rad/s], the speed at the bottom of a swing that reaches φ_b."""
+        phi_b = self.default_target(scene)
+        m, r, kappa, e, k, _, c = scene.params
+        speed = math.sqrt(2.0 * float(energy(scene, phi_b, 0.0))
+                          / float(equations.inertia(0.0, m, r, kappa, e, k)))
+        if c * speed > self.damping_share * self.max_torque:
+            raise ValueError(
+                f"damping={c:g} N·m·s/rad of {shown(scene)} takes {c * speed:.3g} N·m at the "
+                f"swing-up's fastest speed ({speed:.3g} rad/s), more than "
+                f"{self.damping_share:g} of max_torque={self.max_torque:g} N·m: the swing-up "
+                f"cannot reach the unstable rest position; use damping <= "
+                f"{self.damping_share * self.max_torque / speed:.3g} or a larger max_torque")
 
     def default_target(self, scene: Scene) -> float:
         """φ_b > 0 [rad], the unstable rest position (its mirror −φ_b counts as well)."""
@@ -102,13 +125,27 @@ class BalanceTask(Task):
         if c.lifting or c.slipping:
             raise ValueError(
                 f"the unstable rest position phi={phi_b:.4f} rad of {shown(scene)} is not "
-                f"reachable: N={float(c.normal):.4g} N, F={float(c.friction):.4g} N, "
-                f"mu={scene.mu}"
+                f"reachable: at rest there N={float(c.normal):.4g} N and "
+                f"F={float(c.friction):.4g} N, so the roller "
+                + ("lifts off (N <= 0): the position lies where the wall cannot hold the roller "
+                   "up; use a larger e, which brings it toward the bottom (the preset "
+                   "'balance' has one that holds)" if c.lifting else
+                   f"slips (|F| > mu N, mu={scene.mu:g}): use more friction (a larger mu)")
             )
         return phi_b
 
     def scene_proven(self, params: Any, estimates: Sequence[Scene]) -> bool:
-        return feasibility.unstable_rest_proven(params, estimates)
+        """:func:`roller_gym.feasibility.unstable_rest_proven`, and the damping's condition
+        bounded over the box: V(φ_b) <= m g (2 |R − r| + 2 |e|) (each term of V at most
+        twice its height), J_I(0) = m (k² + (r − e)²)."""
+        if not feasibility.unstable_rest_proven(params, estimates):
+            return False
+        p = params
+        if np.all(p.c.hi == 0.0):
+            return True
+        height = 2.0 * abs((1.0 - p.r * p.kappa) / p.kappa) + 2.0 * abs(p.e)
+        speed = (2.0 * p.g * height / (p.k * p.k + (p.r - p.e) ** 2)).sqrt()
+        return bool(np.all((p.c * speed).hi <= self.damping_share * self.max_torque))
 
     start_rule = "near rest at the bottom, |φ| <= 0.1 rad and |φ'| <= 0.1 rad/s"
     start_speed = 0.1

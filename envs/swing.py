@@ -47,9 +47,19 @@ swing (τ = 0) pays most: no torque is needed to keep a swing of the target's en
 At rest, ψ uniform in ±5° (redrawn until the roller rolls there under every torque of the
 limit); the amplitude φ* uniform in [45 %, 85 %] of the range where friction can hold the
 roller at rest (|F| <= 0.9 μN, :func:`roller_gym.task.hold_ranges` without a torque limit)
-and the potential rises from the bottom on, on either side. On larger cylinders (R of
-2 m and more at the defaults) the starts are kept where the potential is at most half the
-smallest target's energy, so that no start has the target swing's energy.
+and the potential rises from the bottom on, on either side; the upper end is lowered
+where a swing with the success band's highest energy, 1.1 E*, would pass over the
+potential's first barrier (the floor, larger cylinders). On larger cylinders (R of 2 m and
+more at the defaults) the starts are kept where the potential is at most half the smallest
+target's energy, so that no start has the target swing's energy.
+
+## Scenes
+
+Checked at construction, each scene of a vector env too: every target swing has energy
+(E* > 0), rolls all the way within the success band under any torque of the limit
+(N > 0, |F| <= 0.9 μN), and the pump outruns the damping (c·ω <= 0.5 max_torque at the
+swing's fastest speed ω). No ``randomize`` range is accepted: these are checked per scene,
+and no proof over a range of scenes covers them yet.
 
 ## Episode end
 
@@ -69,15 +79,17 @@ tolerance=..., integrator=..., substeps=..., randomize=..., render_mode=...)``: 
 
 * v1: the reward's wide term (0.2 near(ε_E, 2)) pays for the energy gained on the way up:
   without it the reward at rest was 6e-7 and TD3 never learned to pump on 1 or 2 of 5
-  seeds. Later within v1: the amplitudes stop where the potential stops rising (before the
-  eccentric mass's first barrier: larger cylinders, the preset "balance", drums), and starts
-  stay below half the smallest target's energy; the default scene's episodes are drawn bit
-  for bit as before.
+  seeds. Later within v1: the amplitudes stop where the potential stops rising and where
+  1.1 E* would pass the first barrier (larger cylinders, the presets "balance", "floor" and
+  "drum"), starts stay below half the smallest target's energy, and scenes whose target
+  swings cannot roll or be pumped against the damping ("rim_mass") are refused, as are
+  ``randomize`` ranges; the default scene's episodes are drawn bit for bit as before.
 * v0: the first version.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from typing import Any
@@ -87,7 +99,7 @@ from roller_gym import rewards
 from roller_gym.physics import Scene, energy, equations
 from roller_gym.physics.integrators import SCENE_FIELDS, scene_arrays
 from roller_gym.physics.scene import shown
-from roller_gym.task import Task, hold_ranges, objective, reach, register
+from roller_gym.task import Task, hold_ranges, objective, per_scene, reach, register
 
 __all__ = ["SwingTask"]
 
@@ -114,6 +126,9 @@ class SwingTask(Task):
     amplitude_shares = (0.45, 0.85)
     #: A start's potential energy is at most this share of the smallest target's E*.
     start_energy_share = 0.5
+    #: The damping's torque at the target swing's fastest speed is at most this share of
+    #: max_torque, so that pumping at max_torque still gains energy there.
+    damping_share = 0.5
     start_rule = ("at rest, ψ within ±5° (|φ| <= 64 turns) and the potential at most half the "
                   "smallest target's energy")
     start_speed = 0.0
@@ -139,14 +154,25 @@ class SwingTask(Task):
         return np.abs(s.energy / s.target_energy - 1.0) <= k.energy_band
 
     def check_scene(self, scene: Scene) -> None:
-        """Every target swing has energy: E* > 0 [J] over the amplitudes drawn on both sides
-        (a grid of them), so that E/E* − 1 is defined and a swing turns back there. Not where
-        the potential is flat (a concentric roller on the floor), falls from the bottom on
-        (on a drum, a mass center too near the axle), or the range friction holds is
-        empty."""
+        """The scene poses every target swing drawn (checked on a grid of amplitudes on both
+        sides, up to :meth:`top_shares`): E* > 0 [J], so that E/E* − 1 is defined (not where
+        the potential is flat, a concentric roller on the floor, or falls from the bottom
+        on, a drum with its mass center too near the axle); the swing within the success
+        band rolls all the way, N > 0 and |F| <= 0.9 μN under any torque of the limit
+        (:meth:`rolling_margins`); and the pump at max_torque outruns the damping at the
+        swing's fastest speed, c·ω <= damping_share·max_torque."""
         low, high = self.amplitude_ranges(scene)
-        shares = np.linspace(*self.amplitude_shares, 65)
-        amplitudes = np.concatenate([shares * low[0], shares * high[0]])
+        lo = self.amplitude_shares[0]
+        tops = [float(t[0]) for t in self.top_shares(scene)]
+        if min(tops) < lo:
+            raise ValueError(
+                f"{shown(scene)} lets the smallest target swing (amplitude {lo:.0%} of "
+                f"[{float(low[0]):.4g}, {float(high[0]):.4g}] rad, the range friction holds and "
+                "the potential rises in), with the success band's energy, pass over the "
+                "potential's barrier: use a deeper well (a larger e on the floor, friction "
+                "inside a cylinder)")
+        amplitudes = np.concatenate([np.linspace(lo, tops[0], 65) * low[0],
+                                     np.linspace(lo, tops[1], 65) * high[0]])
         target_energy = np.asarray(energy(scene, amplitudes, 0.0))
         if not np.all(target_energy > 0.0):
             worst = int(np.argmin(np.where(np.isnan(target_energy), -np.inf, target_energy)))
@@ -156,19 +182,79 @@ class SwingTask(Task):
                 f"{float(amplitudes[worst]):.4g} rad (the range friction holds and the "
                 f"potential rises in is "
                 f"[{float(low[0]):.4g}, {float(high[0]):.4g}] rad), and the reward E/E* − 1 "
-                "needs E* > 0: use an eccentric mass (e > 0) on the floor, or friction (mu > 0) "
-                "inside a cylinder"
+                "needs E* > 0: use an eccentric mass, e > 0 on the floor or "
+                "e > r²|κ|/(1 + r|κ|) on a drum (κ = 1/R), or friction (mu > 0) inside a "
+                "cylinder"
             )
+        lift, slip, speed = self.rolling_margins(scene, amplitudes[::4])
+        if lift <= 0.0 or slip < 0.0:
+            raise ValueError(
+                f"{shown(scene)} poses target swings that cannot roll: on the swing of the "
+                f"success band's energy, N/(m g) falls to {lift:.3g} (<= 0: lift-off) or "
+                f"(0.9 mu N − |F|)/(m g) to {slip:.3g} (< 0: slip); use more friction (mu), a "
+                "mass center nearer the axle (smaller e) or a smaller max_torque")
+        if scene.damping * speed > self.damping_share * self.max_torque:
+            raise ValueError(
+                f"damping={scene.damping:g} N·m·s/rad of {shown(scene)} takes "
+                f"{scene.damping * speed:.3g} N·m at the target swing's fastest speed "
+                f"({speed:.3g} rad/s), more than {self.damping_share:g} of "
+                f"max_torque={self.max_torque:g} N·m: the pump cannot reach the target swing; "
+                f"use damping <= {self.damping_share * self.max_torque / speed:.3g} or a larger "
+                "max_torque")
+
+    def rolling_margins(self, scene: Scene, amplitudes: np.ndarray) -> tuple[float, float, float]:
+        """(least N/(m g), least (0.9 μN − |F|)/(m g), fastest |φ'| [rad/s]) over the swings
+        of the scalar ``scene`` that turn back at ``amplitudes`` [rad], with the target's
+        energy and the success band's highest, either way round, under torques −max_torque,
+        0 and max_torque: 129 points of φ between the turning points (V is even in φ)."""
+        m, r, kappa, e, k, g, c = scene.params
+        top = np.abs(np.asarray(amplitudes, float))[:, None, None]
+        level = np.asarray(energy(scene, top, 0.0)) * np.array([1.0, 1.0 + self.energy_band]
+                                                               )[None, :, None]
+        phi = top * np.linspace(-1.0, 1.0, 129)[None, None, :]
+        potential = equations.potential(phi, m, r, kappa, e, g)
+        inertia = equations.inertia(phi, m, r, kappa, e, k)
+        speed = np.sqrt(np.maximum(2.0 * (level - potential) / inertia, 0.0))
+        lift, slip = math.inf, math.inf
+        for phi_dot in (speed, -speed):
+            for tau in (-self.max_torque, 0.0, self.max_torque):
+                accel = equations.accel(phi, phi_dot, tau, m, r, kappa, e, k, g, c)
+                normal, friction = equations.contact_forces(phi, phi_dot, accel, m, r, kappa,
+                                                            e, g)
+                lift = min(lift, float(np.min(normal)) / (m * g))
+                slip = min(slip, float(np.min(0.9 * scene.mu * normal - np.abs(friction)))
+                           / (m * g))
+        return lift, slip, float(np.max(speed))
+
+    def top_shares(self, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+        """The largest amplitude shares (low side, high side; one per roller) of
+        :meth:`amplitude_ranges`: amplitude_shares' upper end, lowered where a swing with the
+        success band's highest energy, (1 + energy_band)·V(φ*), would pass over the
+        potential's barrier (:func:`barrier_energy`) and spin over the top."""
+        low, high = self.amplitude_ranges(scene)
+        hi = self.amplitude_shares[1]
+        barrier = per_scene(barrier_energy, scene)
+        rows = dict(zip(SCENE_FIELDS, scene_arrays(scene), strict=True))
+        m, r, kappa, e, g = (rows[f] for f in ("m", "r", "kappa", "e", "g"))
+        tops = []
+        for side in (low, high):
+            def over(share: np.ndarray, side: np.ndarray = side) -> np.ndarray:
+                return ((1.0 + self.energy_band)
+                        * equations.potential(share * side, m, r, kappa, e, g) > barrier)
+            capped = over(np.full_like(side, hi))
+            below, above = np.zeros_like(side), np.full_like(side, hi)
+            for _ in range(60):  # bisection on the rising potential
+                middle = 0.5 * (below + above)
+                higher = over(middle)
+                below, above = np.where(higher, below, middle), np.where(higher, middle, above)
+            tops.append(np.where(capped, below, hi))
+        return tops[0], tops[1]
 
     def scene_proven(self, params: Any, estimates: Sequence[Scene]) -> bool:
-        """Proven for a box inside a cylinder (κ > 0) with μ >= 0.01 (the first point of the
-        amplitudes' range's grid, |ψ| <= π/2000 and |φ| <= 0.2 rad, is held, and there the
-        potential rises: r sin ψ and e sin φ are both > 0), where the potential rises with
-        |ψ| on both sides, or on the floor (κ = 0) with e > 0; not elsewhere."""
-        kappa, e, mu = params.kappa, params.e, params.mu
-        return bool((np.all(kappa.lo > 0.0) and np.all(mu.lo >= 0.01))
-                    or (np.all(kappa.lo == 0.0) and np.all(kappa.hi == 0.0)
-                    and np.all(e.lo > 0.0)))
+        """Not proven for any range of scenes: the rolling of the target swings and the
+        barrier are checked per scene on grids (:meth:`check_scene`), which no bound over a
+        box covers yet; a fixed scene, or a list of them for a vector env, is checked."""
+        return False
 
     def amplitude_ranges(self, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
         """The ranges [low, high] [rad of φ] the amplitudes are shares of, one per roller: where
@@ -179,12 +265,15 @@ class SwingTask(Task):
 
     def sample_targets(self, u: np.ndarray, scene: Scene) -> np.ndarray:
         low, high = self.amplitude_ranges(scene)
-        lo, hi = self.amplitude_shares
-        share = lo + (hi - lo) * np.abs(2.0 * u - 1.0)  # the side from u's half
-        return np.where(u < 0.5, share * low, share * high)
+        lo = self.amplitude_shares[0]
+        top_low, top_high = self.top_shares(scene)
+        wide = np.abs(2.0 * u - 1.0)  # the side from u's half
+        return np.where(u < 0.5, (lo + (top_low - lo) * wide) * low,
+                        (lo + (top_high - lo) * wide) * high)
 
     def default_target(self, scene: Scene) -> float:
-        return float(self.amplitude_ranges(scene)[1][0]) * sum(self.amplitude_shares) / 2
+        top = float(self.top_shares(scene)[1][0])
+        return float(self.amplitude_ranges(scene)[1][0]) * (self.amplitude_shares[0] + top) / 2
 
     def start_candidates(
         self, u_phi: np.ndarray, u_dot: np.ndarray, scene: Scene
@@ -216,3 +305,21 @@ class SwingTask(Task):
             higher = potential(middle) > level
             below, above = np.where(higher, below, middle), np.where(higher, middle, above)
         return np.where(over, below, angle)
+
+
+def barrier_energy(scene: Scene) -> float:
+    """The potential energy [J] of the scalar ``scene``'s first barrier away from the bottom:
+    V at the end of the run over which V rises from φ = 0 (at most :func:`reach`, ψ = ±π: a
+    cylinder's top; :data:`~roller_gym.task.START_TURNS` turns on a nearly flat surface),
+    on a grid of 20,001 points; a swing with more energy passes over it. Memoized."""
+    return _barrier_energy(tuple(scene.as_dict().items()))
+
+
+@functools.lru_cache(maxsize=1024)
+def _barrier_energy(items: tuple[tuple[str, float], ...]) -> float:
+    scene = Scene(**dict(items))
+    m, r, kappa, e, _, g, _ = scene.params
+    potential = equations.potential(np.linspace(0.0, float(reach(scene)), 20001), m, r, kappa,
+                                    e, g)
+    falls = np.flatnonzero(np.diff(potential) <= 0.0)
+    return float(potential[falls[0]] if falls.size else potential[-1])

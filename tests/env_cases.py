@@ -47,9 +47,18 @@ def balances(env_id: str) -> bool:
 
 def posable(env_id: str, scene: str) -> bool:
     """Whether the task can be posed on the preset ``scene``: a balancing task needs an
-    unstable rest position that rolls (not the floor's or the drum's); the others any
-    preset (a swing on the drum, in the well its eccentric mass makes at the top)."""
-    return not (balances(env_id) and scene in ("floor", "drum"))
+    unstable rest position that rolls (not the floor's or the drum's); a swing, target
+    swings that roll (not the preset "rim_mass"'s, which lift off); the others any preset (a
+    swing on the drum, in the well its eccentric mass makes at the top)."""
+    if balances(env_id):
+        return scene not in ("floor", "drum")
+    return not ("RollerSwing" in env_id and scene == "rim_mass")
+
+
+def randomizable(env_id: str) -> bool:
+    """Whether the task takes ``randomize`` ranges: RollerSwing checks its scenes one by one
+    (the rolling of its target swings, the barrier), which no proof over a range covers."""
+    return "RollerSwing" not in env_id
 
 
 # -- the physics, from PHYSICS.md ------------------------------------------------------

@@ -28,6 +28,7 @@ from env_cases import (
     model,
     posable,
     psi_rate,
+    randomizable,
 )
 from gymnasium import spaces
 from gymnasium.utils.env_checker import check_env as gym_check_env
@@ -303,6 +304,8 @@ def test_substeps_argument_is_the_number_of_fixed_substeps(integrator, n):
 
 @pytest.mark.parametrize("env_id", IDS)
 def test_randomize_draws_scenes_within_the_ranges(env_id):
+    if not randomizable(env_id):
+        pytest.skip("takes no randomize range (env_cases.randomizable): refused")
     ranges = {"m": (0.8, 1.2), "e": (0.06, 0.09)} if balances(env_id) else {
         "m": (0.8, 1.2), "e": (0.03, 0.05)}
     env = gym.make(env_id, randomize=ranges)
@@ -340,6 +343,8 @@ def test_checkers_pass_without_warnings(env_id, kwargs, monkeypatch, tmp_path):
     integrator, with domain randomization and with rendering."""
     if not posable(env_id, kwargs.get("scene", DOCUMENTED[env_id]["scene"])):
         pytest.skip("not posable there (env_cases.posable): refused at construction")
+    if "randomize" in kwargs and not randomizable(env_id):
+        pytest.skip("takes no randomize range (env_cases.randomizable): refused")
     pytest.importorskip("pygame", reason="Gymnasium's checker renders: the render extra")
     monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")  # Gymnasium's checker also renders "human"
     monkeypatch.setenv("XDG_RUNTIME_DIR", str(tmp_path))

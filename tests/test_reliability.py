@@ -17,6 +17,7 @@ import roller_gym
 from roller_gym import Scene, preset
 from roller_gym.physics import analysis, predicted_substeps, step
 from roller_gym.roller_env import RollerEnv
+from roller_gym.task import angle_rate
 from scipy.optimize import brentq, minimize_scalar
 
 STABILIZE, HOLD, BALANCE = (roller_gym.TASKS[f"Roller{t}"].env_id()
@@ -718,7 +719,10 @@ def test_a_nearly_flat_cylinder_or_drum_gives_finite_targets(env_id):
         for seed in range(3):
             obs, info = env.reset(seed=seed)
             assert np.isfinite(obs).all() and np.isfinite(info["target_phi"]), (scene, seed)
-    vec = gym.make_vec(env_id, num_envs=4, randomize={"R": (0.3, 1e307)})
+    if "RollerSwing" in env_id:  # (no randomize range: its scenes are checked one by one)
+        vec = gym.make_vec(env_id, num_envs=4, scene=[Scene(R=1e307), "paper"] * 2)
+    else:
+        vec = gym.make_vec(env_id, num_envs=4, randomize={"R": (0.3, 1e307)})
     obs, info = vec.reset(seed=0)
     assert np.isfinite(obs).all() and np.isfinite(info["target_phi"]).all()
 
@@ -752,8 +756,7 @@ def test_swing_refuses_a_scene_whose_target_swing_has_no_energy():
             gym.make("roller_gym/RollerSwing-v1", scene=scene)
     with pytest.raises(ValueError, match=r"randomize\['e'\]=\(0\.0, 0\.05\) cannot be used"):
         gym.make("roller_gym/RollerSwing-v1", scene="floor", randomize={"e": (0.0, 0.05)})
-    for kwargs in ({"scene": "floor"}, {"scene": "drum"},
-                   {"randomize": {"e": (0.02, 0.09), "R": (0.3, 1.5)}}):
+    for kwargs in ({"scene": "floor"}, {"scene": "drum"}):
         env = gym.make("roller_gym/RollerSwing-v1", **kwargs)
         env.reset(seed=0)
         rewards = [env.step(np.zeros(1, np.float32))[1] for _ in range(3)]
@@ -782,6 +785,50 @@ def test_swing_targets_lie_before_the_first_barrier_and_no_start_succeeds_unpump
             assert not info["is_success"], (seed, info)
             if terminated or truncated:
                 break
+
+
+def test_swing_refuses_target_swings_that_cannot_roll_or_be_pumped_and_every_range():
+    """The preset "rim_mass" was accepted, yet a swing of the target's energy lifted off in
+    2–5 steps; damping 0.02 capped the energy at 0.32 J below every E* (0.59–1.21 J). Both are
+    refused by name; the check's margins agree with the contact the environment reports on
+    the paper preset's largest swing (independently: a zero-torque episode started on it
+    rolls all 400 steps); and randomize ranges are refused, also where every corner poses
+    the task, as no proof covers them."""
+    with pytest.raises(ValueError, match=r"poses target swings that cannot roll: .*N/\(m g\) "
+                                         r"falls to -"):
+        gym.make("roller_gym/RollerSwing-v1", scene="rim_mass")
+    with pytest.raises(ValueError, match=r"damping=0\.02 N·m·s/rad of .* more than 0\.5 of "
+                                         r"max_torque=0\.1 N·m: the pump cannot reach"):
+        gym.make("roller_gym/RollerSwing-v1", scene=Scene(damping=0.02))
+    for ranges in ({"e": (0.02, 0.09), "R": (0.3, 1.5)}, {"m": (0.9, 1.1)}):
+        with pytest.raises(ValueError, match=r"randomize.* cannot be used|may be feasible"):
+            gym.make("roller_gym/RollerSwing-v1", randomize=ranges)
+    env = gym.make("roller_gym/RollerSwing-v1")
+    task, scene = env.unwrapped.task, env.unwrapped.scene
+    top = task.amplitude_ranges(scene)[1][0] * task.amplitude_shares[1]
+    lift, slip, _ = task.rolling_margins(scene, np.array([top]))
+    assert lift > 0.5 and slip > 0.3
+    env.reset(seed=0, options={"state": (float(top), 0.0)})
+    for _ in range(400):
+        _, _, terminated, _, info = env.step(np.zeros(1, np.float32))
+        assert not terminated and info["normal_force"] > 0, info
+
+
+@pytest.mark.parametrize("scene", ["floor", "balance", Scene(R=2.0), Scene(R=5.0)])
+def test_swing_targets_cannot_spin_over_the_top_within_the_success_band(scene):
+    """On the floor 11 % of episodes drew a target whose success band's energy, 1.1 E*, lay
+    above the barrier at φ = π: the roller spun over the top, reported a success on every
+    step. Every drawn target's 1.1 E* is now below the potential's first barrier, found
+    here independently (the physics' own energy on a grid out to ψ = ±π or 64 turns)."""
+    env = gym.make("roller_gym/RollerSwing-v1", scene=scene)
+    physics_scene = env.unwrapped.scene
+    far = min(math.pi / abs(angle_rate(physics_scene)), 2 * math.pi * 64)
+    grid = np.asarray(roller_gym.physics.energy(physics_scene, np.linspace(0, far, 40001), 0.0))
+    barrier = grid[np.argmax(np.diff(grid) <= 0)] if np.any(np.diff(grid) <= 0) else grid[-1]
+    for seed in range(200):
+        _, info = env.reset(seed=seed)
+        target_energy = float(roller_gym.physics.energy(physics_scene, info["target_phi"], 0.0))
+        assert 1.1 * target_energy <= barrier * (1 + 1e-6), (seed, info["target_phi"])
 
 
 def test_a_dt_too_long_for_the_tasks_own_start_speeds_is_refused_at_construction():
@@ -889,3 +936,37 @@ def test_the_task_helpers_refuse_bad_arguments_naming_them():
             call()
     low, high = task.hold_ranges(paper, math.inf)
     assert low[0] < 0 < high[0]
+
+
+@pytest.mark.parametrize(("env_id", "damping"), [("roller_gym/RollerBalance-v2", 0.1),
+                                                 ("roller_gym/RollerBalanceWeak-v0", 0.02)])
+def test_balance_refuses_damping_the_swing_up_cannot_outrun(env_id, damping):
+    """Damping 0.1 (Balance) or 0.02 (BalanceWeak) was accepted, yet the most power a policy
+    can put in, τ = max_torque·sgn(φ'), peaked at 0.09 and 0.11 of the top's energy (a
+    simulation of it here, 400 steps, confirms the top unreachable); randomize up to such
+    damping was "proven". Both are refused by name; a damping the check allows is reached by
+    the same bang-bang input."""
+    scene = preset("balance").replace(damping=damping)
+    with pytest.raises(ValueError, match=rf"damping={damping:g} N·m·s/rad .* the swing-up "
+                                         r"cannot reach the unstable rest position"):
+        gym.make(env_id, scene=scene)
+    with pytest.raises(ValueError, match=r"randomize\['damping'\]=\(0\.0, 10\.0\) cannot be used"):
+        gym.make(env_id, randomize={"damping": (0.0, 10.0)})
+
+    def peak_share(damping: float) -> float:
+        """The bang-bang input's highest energy over 400 steps, as a share of the top's."""
+        scene = preset("balance").replace(damping=damping)
+        top = float(roller_gym.physics.energy(scene, analysis.nearest_unstable_rests(
+            np.array([scene.r]), np.array([scene.kappa]), np.array([scene.e]))[0], 0.0))
+        tau = gym.make(env_id).unwrapped.task.max_torque
+        phi, phi_dot, peak = 0.01, 0.0, 0.0
+        for _ in range(400):
+            result = step(scene, phi, phi_dot, tau * (1.0 if phi_dot >= 0 else -1.0), 0.05)
+            phi, phi_dot = result.phi, result.phi_dot
+            peak = max(peak, result.energy)
+        return peak / top
+
+    assert peak_share(damping) < 0.5
+    allowed = 0.001  # below the check's bound for both tasks (0.00975 and 0.00244)
+    gym.make(env_id, scene=preset("balance").replace(damping=allowed))
+    assert peak_share(allowed) >= 1.0
