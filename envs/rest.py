@@ -167,7 +167,13 @@ def reach(scene: Scene, angle: float = math.pi) -> float | np.ndarray:
     """How far [rad of φ] from φ = 0 the angle ``angle`` [rad] of ψ reaches (of φ itself on
     the floor): angle/|q| with q from :func:`angle_rate` (q < 0 on a drum), at most
     :data:`START_TURNS` turns of φ. With the default ψ = ±π: how far a held target may lie
-    (:func:`hold_ranges`); a task's start ranges are stated as smaller angles."""
+    (:func:`hold_ranges`); a task's start ranges are stated as smaller angles.
+
+    Raises:
+        ValueError: ``angle`` is not a real number > 0.
+    """
+    if not (finite_real(angle) and angle > 0):
+        raise ValueError(f"angle={shown(angle)} [rad] must be a real number > 0")
     with np.errstate(over="ignore"):  # angle/|q| overflows to inf for |R| near float64's top
         return np.minimum(angle / np.abs(angle_rate(scene)), 2.0 * math.pi * START_TURNS)
 

@@ -106,6 +106,10 @@ class RollerVecEnv(VecEnv):
             raise ValueError(f"env_id={shown(env_id)} is not a roller-gym task ID "
                              "('roller_gym/<Task>-v<N>'): RollerVecEnv batches roller-gym's "
                              "tasks only; for other environments use SB3's make_vec_env")
+        registered = sorted(i for i in gym.registry if i.startswith("roller_gym/"))
+        if env_id.rpartition(":")[2] not in registered:
+            raise ValueError(f"env_id={shown(env_id)} is not a registered roller-gym task ID; "
+                             f"registered: {', '.join(registered)}")
         self.venv = gym.make_vec(env_id, num_envs=n_envs, vectorization_mode="vector_entry_point",
                                  autoreset_mode=AutoresetMode.SAME_STEP, **env_kwargs)
         base = self.venv.unwrapped

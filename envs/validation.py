@@ -177,7 +177,7 @@ def check_integrable(scene: Scene, dt: float, max_torque: float,
                 f"torque spin-up {spin:.3g} rad/s, damping c/J_min = {decay:.3g} 1/s, starts "
                 f"up to {start_speed:g} rad/s: {start:.3g} rad/s), {phase:.3g} rad per step "
                 f"where at most {LARGEST_PHASE_PER_STEP:g} can be followed; use a shorter dt, "
-                "a larger k, a smaller e or less damping"
+                "a smaller max_torque, a larger k, a smaller e or less damping"
             )
 
 

@@ -255,7 +255,10 @@ def test_what_would_break_the_batch_is_refused_where_it_is_given(call, message):
     ({"num_envs": 3, "vectorization_mode": "sync"},
      r"num_envs, vectorization_mode: RollerVecEnv sets these itself"),
     ({"env_id": "CartPole-v1"}, r"env_id='CartPole-v1' is not a roller-gym task ID"),
-    ({"env_id": 3}, r"env_id=3 is not a roller-gym task ID")])
+    ({"env_id": 3}, r"env_id=3 is not a roller-gym task ID"),
+    # (Gymnasium's NameNotFound)
+    ({"env_id": "roller_gym/Foo-v0"}, r"env_id='roller_gym/Foo-v0' is not a registered "
+                                      r"roller-gym task ID; registered: .*RollerStabilize-v2")])
 def test_bad_arguments_are_refused_naming_them(kwargs, message):
     """(Another task's ID failed in its own vector environment: "unexpected keyword
     argument 'autoreset_mode'".)"""

@@ -225,7 +225,16 @@ class Scene:
         return int(np.prod(shape)) if shape else None
 
     def replace(self, **changes: Any) -> Scene:
-        """A copy with some fields changed (validated again)."""
+        """A copy with some fields changed (validated again).
+
+        Raises:
+            ValueError: a name that is not a field of Scene, or a value a field refuses.
+        """
+        names = [f.name for f in fields(self)]
+        unknown = [name for name in changes if name not in names]
+        if unknown:
+            raise ValueError(f"{unknown[0]!r} is not a field of Scene; its fields: "
+                             f"{', '.join(names)}")
         return replace(self, **changes)
 
     def item(self, i: int) -> Scene:

@@ -219,7 +219,13 @@ class Stepper(_Base):
 
         ``fused``: a compiled kernel run in place of :attr:`kernel`, as for
         :meth:`BatchStepper.run`.
+
+        Raises:
+            ValueError: a state or torque that is not a finite real number.
         """
+        if not (isinstance(phi, float) and isinstance(phi_dot, float)
+                and isinstance(tau, float) and math.isfinite(phi + phi_dot + tau)):
+            _check_states(phi=phi, phi_dot=phi_dot, tau=tau)
         return self._run(phi, phi_dot, tau, 4, fused, extra)
 
     def bind(self, one: Callable | None = None,
@@ -387,6 +393,9 @@ class BatchStepper(_Base):
         advancing them (while their numbers are in cache): it must advance them as
         :attr:`kernel` does (the same chunks, on the same cores); ``result`` is the returned
         table.
+
+        The arrays are not checked here (a batch's check would cost a pass over them every
+        step): a caller's own, such as the vector env's, or :meth:`advance`, which checks.
         """
         return self._run(phi, phi_dot, tau, 4, fused, extra)
 
