@@ -19,6 +19,7 @@ from roller_gym.physics.integrators import SCENE_FIELDS, scene_arrays
 from roller_gym.physics.scene import finite_real, require_scene, shown
 
 __all__ = [
+    "HOLD_FRICTION_SHARE",
     "HOLD_TORQUE_SHARE",
     "START_TURNS",
     "angle_rate",
@@ -58,6 +59,8 @@ START_TURNS = 64
 #: The share of max_torque a held rest position may need (:func:`hold_ranges`); the rest is
 #: left for moving, e.g. along RollerTrack's target.
 HOLD_TORQUE_SHARE = 0.8
+#: The share of μN the friction at a held rest position may need (:func:`hold_ranges`).
+HOLD_FRICTION_SHARE = 0.9
 
 #: How close to a whole number 1/|q| or |q| must be to count as one (relative).
 WHOLE_TOLERANCE = 1e-9
@@ -120,8 +123,8 @@ def _cached_per_scene(function):
 
 
 def hold_ranges(scene: Scene, max_torque: float, torque_share: float = HOLD_TORQUE_SHARE,
-                friction_share: float = 0.9, points: int = 2001, rising: bool = False
-                ) -> tuple[np.ndarray, np.ndarray]:
+                friction_share: float = HOLD_FRICTION_SHARE, points: int = 2001,
+                rising: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """The intervals [low, high] of rest positions φ [rad] around 0 that can be held at rest,
     one per roller of the batch ``scene`` (arrays of the batch's size; of 1 for a scalar
     scene), in one compiled call whatever the batch's size.
@@ -180,8 +183,8 @@ def reach(scene: Scene, angle: float = math.pi) -> float | np.ndarray:
 
 @_cached_per_scene
 def hold_range(scene: Scene, max_torque: float, torque_share: float = HOLD_TORQUE_SHARE,
-               friction_share: float = 0.9, points: int = 2001, rising: bool = False
-               ) -> tuple[float, float]:
+               friction_share: float = HOLD_FRICTION_SHARE, points: int = 2001,
+               rising: bool = False) -> tuple[float, float]:
     """The interval (low, high) of rest positions φ [rad] around 0 that can be held at rest
     in the scalar ``scene``: :func:`hold_ranges` of it (the same compiled walk), memoized."""
     low, high = hold_ranges(scene, max_torque, torque_share, friction_share, points, rising)

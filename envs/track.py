@@ -47,10 +47,10 @@ grows: at the band's edge it keeps 0.86 of the reward on the target, at twice th
 (redrawn until the roller rolls). The target trajectory: center c within ±30 % of the
 holdable range's half-width about its middle; two sinusoids of amplitude 20–50 % each of
 what is left to the range's edge, of frequency 0.2–0.8 rad/s, and of uniform phase. Holding
-at rest in that range needs at most 80 % of ``max_torque``; where moving along the target
-could need more than the other 20 % (larger cylinders: R of 5 m and more at the defaults),
-both amplitudes are scaled down until it cannot, so the target can be followed within the
-torque limit. On the default scene they never are.
+at rest in that range needs at most 80 % of ``max_torque`` and 90 % of μN; where moving along
+the target could need more than the rest of either (larger cylinders: R of 2 m and more at
+the defaults; drums), both amplitudes are scaled down until it cannot, so the target can be
+followed within the torque limit and without slipping. On the default scene they never are.
 
 ## Episode end
 
@@ -64,19 +64,20 @@ torque limit. On the default scene they never are.
 * v1: the reward sees the success band: its precision term falls from the target on, so
   moving with the target at the band's edge keeps 0.86 of the reward on it and at twice the
   band 0.62 (v0: 1.0 and about 0.99); dynamics unchanged. Later within v1: on scenes where
-  moving along a drawn target could need more than max_torque (larger cylinders), its
-  amplitudes are scaled down; the trajectories of the default scene and the presets are drawn
-  bit for bit as before.
+  moving along a drawn target could need more than max_torque (larger cylinders) or more
+  friction than μN (drums), its amplitudes are scaled down; the trajectories of the default
+  scene are drawn bit for bit as before.
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 from roller_gym.physics import Scene, trig
 from roller_gym.physics.integrators import SCENE_FIELDS, scene_arrays
-from roller_gym.rest import HOLD_TORQUE_SHARE
+from roller_gym.rest import HOLD_FRICTION_SHARE, HOLD_TORQUE_SHARE
 from roller_gym.task import Task, hold_range, hold_ranges, register
 
 __all__ = ["TrackTask"]
@@ -106,28 +107,50 @@ class TrackTask(Task):
         f_low, f_high = self.frequencies
         a1, a2 = room * (0.2 + 0.3 * u[:, 1]), room * (0.2 + 0.3 * u[:, 4])
         w1, w2 = f_low + (f_high - f_low) * u[:, 2], f_low + (f_high - f_low) * u[:, 5]
-        scale = self.followable_scale(scene, a1 * w1 + a2 * w2, a1 * w1 * w1 + a2 * w2 * w2)
+        scale = self.followable_scale(scene, a1 * w1 + a2 * w2, a1 * w1 * w1 + a2 * w2 * w2,
+                                      np.maximum(np.abs(low), np.abs(high)))
         return np.stack([center, a1 * scale, w1, 2.0 * np.pi * u[:, 3],
                          a2 * scale, w2, 2.0 * np.pi * u[:, 6]], axis=1)
 
-    def followable_scale(self, scene: Scene, speed: np.ndarray, accel: np.ndarray
-                         ) -> np.ndarray:
-        """The factor in (0, 1] by which the sinusoids' amplitudes are scaled so that moving
-        along the target never needs more than the torque the held range leaves,
-        (1 − HOLD_TORQUE_SHARE)·max_torque [N·m], given the bounds ``speed`` >= |φ*'| [rad/s]
-        and ``accel`` >= |φ*''| [rad/s²] at scale 1: the equation of motion's moving part
-        J_I φ'' + ½ J_I' φ'² + c φ' is bounded with J_I <= m (k² + (r + |e|)²) and
-        |J_I'| <= 2 m r |e| / |1 − rκ| (``equations.inertia``, ``equations.dinertia``), so the
-        bound is linear·s + quadratic·s² at scale s. 1 wherever the bound fits (the default
-        scenes: the trajectory is drawn unchanged)."""
+    def followable_scale(self, scene: Scene, speed: np.ndarray, accel: np.ndarray,
+                         reach: np.ndarray) -> np.ndarray:
+        """The factor in (0, 1] by which the sinusoids' amplitudes are scaled so that the
+        roller can follow the target within the limits the held range leaves, given the bounds
+        ``speed`` >= |φ*'| [rad/s] and ``accel`` >= |φ*''| [rad/s²] at scale 1 and ``reach``
+        >= |φ*| [rad]. Each limit's bound is linear·s + quadratic·s² at scale s:
+
+        * the torque: the equation of motion's moving part J_I φ'' + ½ J_I' φ'² + c φ', with
+          J_I <= m (k² + (r + |e|)²) and |J_I'| <= 2 m r |e| / |1 − rκ|
+          (``equations.inertia``, ``equations.dinertia``), within
+          (1 − HOLD_TORQUE_SHARE)·max_torque [N·m];
+        * the contact: the moving parts of F and N (``equations.contact_forces``), |ΔF| <=
+          m ((r + |e|) |φ''| + |e| φ'²) and |ΔN| <= m (|e| |φ''| + (r²|κ|/|1 − rκ| + |e|) φ'²),
+          with |ΔF| + μ |ΔN| within (1 − HOLD_FRICTION_SHARE)·μ·m g cos ψ, the least N at
+          rest over |ψ| <= |q|·reach: then |F| <= μN on the way, as |F| <= HOLD_FRICTION_SHARE
+          μN at rest there.
+
+        1 wherever both fit (the default scene and the presets: the trajectory is drawn
+        unchanged)."""
         rows = dict(zip(SCENE_FIELDS, scene_arrays(scene), strict=True))
-        m, r, kappa, e, k, c = (rows[f] for f in ("m", "r", "kappa", "e", "k", "damping"))
-        budget = (1.0 - HOLD_TORQUE_SHARE) * self.max_torque  # inf: no torque limit
-        linear = m * (k * k + (r + np.abs(e)) ** 2) * accel + c * speed
-        quadratic = m * r * np.abs(e) / np.abs(1.0 - r * kappa) * speed * speed
-        with np.errstate(invalid="ignore", over="ignore"):  # the largest s in (0, 1] that fits
-            fits = 2.0 * budget / (linear + np.sqrt(linear * linear + 4.0 * quadratic * budget))
-        return np.where(linear + quadratic <= budget, 1.0, fits)
+        m, r, kappa, e, k, g, c, mu = (rows[f] for f in ("m", "r", "kappa", "e", "k", "g",
+                                                         "damping", "mu"))
+        s, e = 1.0 - r * kappa, np.abs(e)
+        psi = np.minimum(np.abs(r * kappa / s) * reach, math.pi)
+        bounds = (  # (linear, quadratic, budget) of the torque, then of the contact
+            (m * (k * k + (r + e) ** 2) * accel + c * speed,
+             m * r * e / np.abs(s) * speed * speed,
+             (1.0 - HOLD_TORQUE_SHARE) * self.max_torque),  # inf: no torque limit
+            (m * (r + e + mu * e) * accel,
+             m * (e + mu * (r * r * np.abs(kappa) / np.abs(s) + e)) * speed * speed,
+             (1.0 - HOLD_FRICTION_SHARE) * mu * m * g * np.maximum(np.cos(psi), 0.0)))
+        scale = np.ones_like(speed)
+        for linear, quadratic, budget in bounds:
+            with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+                fits = 2.0 * budget / (linear + np.sqrt(linear * linear
+                                                        + 4.0 * quadratic * budget))
+            scale = np.where(linear + quadratic <= budget, scale,
+                             np.minimum(scale, np.nan_to_num(fits, nan=0.0)))
+        return scale
 
     def target_at(self, params: np.ndarray, t: Any) -> tuple[Any, Any]:
         c, a1, w1, p1, a2, w2, p2 = (params[..., j] for j in range(7))

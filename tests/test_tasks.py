@@ -158,27 +158,35 @@ def test_track_target_moves_smoothly_inside_the_holdable_range():
         np.testing.assert_allclose(central, rates[1:-1], atol=0.01 * np.abs(rates).max() + 1e-3)
 
 
-@pytest.mark.parametrize("R", [None, 2.0, 5.0, 30.0, 1e3])
-def test_track_target_can_be_followed_within_the_torque_limit(R):
-    """Moving along the target never needs more than max_torque, larger cylinders included
-    (R = 5 m needed 1.8× max_torque before the amplitudes were bounded): the torque that keeps
-    the roller on φ*(t) over the episode's 20 s, from the equation of motion the simulation
-    steps (affine in τ) and φ*'' by central differences of the target, for 500 drawn
-    trajectories."""
+@pytest.mark.parametrize(("scene", "max_torque"), [
+    (None, None), ({"R": 2.0}, None), ({"R": 5.0}, None), ({"R": 30.0}, None),
+    ({"R": 1e3}, None), ({"R": -5.0, "e": 0.09}, 3.0),
+    ({"m": 0.6628, "r": 0.2280, "R": -14.727, "e": 0.2151, "k": 0.1576, "mu": 2.407}, 8.754)],
+    ids=["default", "R=2", "R=5", "R=30", "R=1e3", "drum R=-5", "drum R=-14.7"])
+def test_track_target_can_be_followed_within_the_torque_and_the_friction(scene, max_torque):
+    """Moving along the target never needs more than max_torque, nor more friction than μN,
+    larger cylinders and drums included (R = 5 m needed 1.8× max_torque before the amplitudes
+    were bounded; on the two drums a follower within 2e-5 and 9e-5 rad slipped): the torque
+    that keeps the roller on φ*(t) over the episode's 20 s, from the equation of motion the
+    simulation steps (affine in τ) and φ*'' by central differences of the target, and the
+    contact forces it then takes (the physics' own), for 2,000 drawn trajectories."""
     from roller_gym.physics import equations
 
-    env = gym.make(TRACK) if R is None else gym.make(
-        TRACK, scene=Scene(**{**gym.make(TRACK).unwrapped.scene.as_dict(), "R": R}))
+    kwargs = {} if max_torque is None else {"max_torque": max_torque}
+    if scene is not None:
+        kwargs["scene"] = Scene(**{**gym.make(TRACK).unwrapped.scene.as_dict(), **scene})
+    env = gym.make(TRACK, **kwargs)
     task, scene = env.unwrapped.task, env.unwrapped.scene
-    params = task.sample_target_params(np.random.default_rng(7).random((500, 7)), scene)
+    params = task.sample_target_params(np.random.default_rng(7).random((2000, 7)), scene)
     t, h = np.arange(0.0, 20.0, 0.01)[:, None], 1e-4
     phi, phi_dot = task.target_at(params, t)
     phi_ddot = (task.target_at(params, t + h)[1] - task.target_at(params, t - h)[1]) / (2 * h)
     m, r, kappa, e, k, g, c = scene.params
     free = equations.accel(phi, phi_dot, 0.0, m, r, kappa, e, k, g, c)
     per_torque = equations.accel(phi, phi_dot, 1.0, m, r, kappa, e, k, g, c) - free
-    needed = np.abs((phi_ddot - free) / per_torque).max()
-    assert needed <= task.max_torque
+    assert np.abs((phi_ddot - free) / per_torque).max() <= task.max_torque
+    normal, friction = equations.contact_forces(phi, phi_dot, phi_ddot, m, r, kappa, e, g)
+    assert normal.min() > 0 and (np.abs(friction) - scene.mu * normal).max() <= 0
 
 
 def test_track_refuses_a_fixed_target_option():
