@@ -116,6 +116,11 @@ def check_together(algo: str, hp: dict[str, Any], observation_size: int) -> None
             raise SystemExit(f"--hyperparams: train_freq:{freq!r} with n_envs:{n_envs} is not "
                              "allowed: training by episodes takes one environment (n_envs:1)")
         entries, batch = int(hp.get("buffer_size", 1_000_000)), int(hp.get("batch_size", 256))
+        if hp.get("optimize_memory_usage") is True and entries // n_envs < 2:
+            raise SystemExit(f"--hyperparams: buffer_size:{entries} with n_envs:{n_envs} and "
+                             "optimize_memory_usage:True is not allowed: that buffer keeps "
+                             "each environment's next observation in the next slot, so it "
+                             "needs buffer_size >= 2 x n_envs")
     # float32 observations (twice: the next ones too), actions, rewards and flags per entry
     size = 4 * (2 * observation_size * stack + 4)
     try:
@@ -174,7 +179,7 @@ def _ent_coef(value: Any, _: Given | None = None) -> bool:
         if value == "auto":
             return True
         try:
-            return value[4] == "_" and _real(0.0, math.inf, open_low=True)(float(value[5:]))
+            return value[4] == "_" and _real(0.0, 1e9, open_low=True)(float(value[5:]))
         except (ValueError, IndexError):
             return False
     return _real(0.0, 1e9)(value)
@@ -235,7 +240,16 @@ def _policy_kwargs(value: Any, given: Given) -> bool:
         raise ValueError("the policy has a layer of no units: it cannot see the observation")
     if not all(bool(torch.isfinite(p).all()) for p in parameters):
         raise ValueError("the policy's initial parameters are not all finite")
+    log_std = kwargs.get("log_std_init", 0.0)
+    if not _real(-LOG_STD_MAX, LOG_STD_MAX)(log_std):
+        raise ValueError(f"log_std_init={log_std!r} must be a number in [-{LOG_STD_MAX:g}, "
+                         f"{LOG_STD_MAX:g}] (exp of it, the action noise's scale, overflows "
+                         "float32 past about 88)")
     return True
+
+
+#: The largest |log_std_init| a policy may start from (SAC's own clamp of log σ is [-20, 2]).
+LOG_STD_MAX = 20.0
 
 
 def _replay_buffer(value: Any, given: Given) -> bool:
@@ -373,7 +387,8 @@ RULES: dict[str, Rule] = {
     "clip_range": (_schedule(0.0, 1e9), "a number > 0, or lin_<number> (from it down to 0)"),
     "clip_range_vf": (_schedule(0.0, 1e9), "a number > 0, or lin_<number> (from it down to 0); "
                       "leave it out for no clipping of the value function"),
-    "ent_coef": (_ent_coef, "a number >= 0, or for SAC 'auto' or 'auto_<initial value > 0>'"),
+    "ent_coef": (_ent_coef, "a number in [0, 1e9], or for SAC 'auto' or 'auto_<initial "
+                 "value in (0, 1e9]>'"),
     "target_entropy": (_target_entropy, "'auto' or a number (nats)"),
     "vf_coef": (_real(0.0, 1e9), "a number >= 0"),
     "max_grad_norm": (_real(0.0, 1e9, open_low=True), "a number > 0"),

@@ -589,6 +589,16 @@ def test_train_rllib_refuses_env_kwargs_the_env_refuses_before_ray_starts(item, 
      "vec_env_wrapper:.* is not allowed: .*non-empty vectors"),
     ("sac", "monitor_kwargs:dict(info_keywords=('is_success',))", "monitor_kwargs:.* is not "
                                                                   "allowed: it must be left out"),
+    # (NaN in torch: an entropy coefficient or a noise scale past float32's range; numpy's
+    # ValueError sampling a one-slot buffer that keeps the next observation in the next slot)
+    ("sac", "ent_coef:auto_1e300", "--hyperparams: ent_coef:'auto_1e300' is not allowed"),
+    ("ppo", "policy_kwargs:dict(log_std_init=100)", "policy_kwargs:.* is not allowed: "
+                                                    ".*log_std_init=100 must be a number in "
+                                                    "\\[-20, 20\\]"),
+    ("sac", ("optimize_memory_usage:True", "buffer_size:1",
+             "replay_buffer_kwargs:dict(handle_timeout_termination=False)"),
+     "--hyperparams: buffer_size:1 with n_envs:1 and optimize_memory_usage:True is not "
+     "allowed: .*needs buffer_size >= 2 x n_envs"),
 ])
 def test_train_refuses_hyperparams_before_rl_zoo3_starts(algo, item, message, tmp_path,
                                                           monkeypatch):
