@@ -92,6 +92,8 @@ class Settings:
         "construction the task is proven posable in every scene of the box of ranges "
         "(:mod:`roller_gym.feasibility`), so no later reset can fail on a drawn scene; "
         "otherwise a ``ValueError`` names the field and a feasible part of its range. "
+        "RollerSwing takes none: its scenes are checked one by one (its target swings must "
+        "roll and stay below the potential's barrier). "
         "Default: the task's own ranges (``Task.scene_ranges``: none but for the tasks "
         "whose scene varies unobserved); ``{}`` fixes the scene."))
     render_mode: str | None = field(default=None, metadata=_doc(
@@ -209,7 +211,7 @@ class EnvConfig:
         for i, one in distinct.values():
             try:
                 validation.check_integrable(one, dt, task.max_torque, task.start_speed)
-                reason = task.infeasible(one)
+                reason = task.infeasible(one, dt)
                 if reason is not None:
                     raise ValueError(reason)
                 ranges = check_randomize(task, one, dt, task.scene_ranges if randomize is None

@@ -93,7 +93,7 @@ def problem(task: Task, scene: Scene, dt: float) -> str | None:
         validation.check_integrable(scene, dt, task.max_torque, task.start_speed)
     except ValueError as error:
         return str(error)
-    return task.infeasible(scene)
+    return task.infeasible(scene, dt)
 
 
 def _posable(task: Task, scene: Scene, dt: float,
@@ -194,6 +194,11 @@ def _boxes_proven(task: Task, scene: Scene, dt: float, boxes: Sequence[Box],
                 estimates = (scene.replace(**_middle(boxes[i])),  # the nearer first
                              scene.replace(**_middle(ranges)))
                 ok[i] = task.scene_proven(box_params(scene, boxes[i]), estimates)
+        if type(task).pump_time is not Task.pump_time:  # the target within the episode's reach
+            episode = task.PUMP_SHARE * task.max_episode_steps * dt
+            for i in np.flatnonzero(ok):
+                bound = task.pump_time_bound(box_params(scene, boxes[i]))
+                ok[i] = bound is not None and bool(np.all(bound.hi <= episode))
     return ok
 
 

@@ -57,9 +57,10 @@ target's energy, so that no start has the target swing's energy.
 
 Checked at construction, each scene of a vector env too: every target swing has energy
 (E* > 0), rolls all the way within the success band under any torque of the limit
-(N > 0, |F| <= 0.9 μN), and the pump outruns the damping (c·ω <= 0.5 max_torque at the
-swing's fastest speed ω). No ``randomize`` range is accepted: these are checked per scene,
-and no proof over a range of scenes covers them yet.
+(N > 0, |F| <= 0.9 μN), the pump outruns the damping (c·ω <= 0.5 max_torque at the
+swing's fastest speed ω), and the torque can bring the largest target's energy within a
+quarter of the episode (E / (max_torque·ω) <= 0.25 · 400 · dt). No ``randomize`` range is
+accepted: these are checked per scene, and no proof over a range of scenes covers them yet.
 
 ## Episode end
 
@@ -91,8 +92,6 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Sequence
-from typing import Any
 
 import numpy as np
 from roller_gym import rewards
@@ -250,11 +249,16 @@ class SwingTask(Task):
             tops.append(np.where(capped, below, hi))
         return tops[0], tops[1]
 
-    def scene_proven(self, params: Any, estimates: Sequence[Scene]) -> bool:
-        """Not proven for any range of scenes: the rolling of the target swings and the
-        barrier are checked per scene on grids (:meth:`check_scene`), which no bound over a
-        box covers yet; a fixed scene, or a list of them for a vector env, is checked."""
-        return False
+    def pump_time(self, scene: Scene) -> tuple[float, float, float]:
+        """(1 − energy_band)·E* [J] of the largest target (the least energy that succeeds),
+        the fastest speed ω [rad/s] of its swing in the band (at the bottom), and that energy
+        / (max_torque·ω) [s]."""
+        low, high = self.amplitude_ranges(scene)
+        top = max(float(t[0]) * abs(float(side[0]))
+                  for t, side in zip(self.top_shares(scene), (low, high), strict=True))
+        speed = self.rolling_margins(scene, np.array([top]))[2]
+        needed = (1.0 - self.energy_band) * float(energy(scene, top, 0.0))
+        return needed, speed, needed / (self.max_torque * speed)
 
     def amplitude_ranges(self, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
         """The ranges [low, high] [rad of φ] the amplitudes are shares of, one per roller: where

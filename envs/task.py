@@ -281,15 +281,45 @@ class Task:
         refused)."""
         return type(self).check_scene is Task.check_scene
 
-    def infeasible(self, scene: Scene) -> str | None:
+    #: The share of an episode (max_episode_steps·dt) in which the most power the torque can
+    #: put in must bring the target's energy, for a task with a :meth:`pump_time`.
+    PUMP_SHARE: ClassVar[float] = 0.25
+
+    def pump_time(self, scene: Scene) -> tuple[float, float, float] | None:
+        """For a task whose target needs energy pumped in (a swing, a swing-up): (the energy
+        [J] to bring, the fastest speed ω [rad/s] on the way, the least time [s] the torque
+        needs for it, energy / (max_torque·ω)) in the scalar ``scene``; None (the default)
+        for the others."""
+        return None
+
+    def pump_time_bound(self, params: Any) -> Any:
+        """An upper bound [s] of :meth:`pump_time`'s time over a box of scenes (``params``
+        as for :meth:`scene_proven`, intervals): None where the task pumps no energy in, or
+        has no bound (then a range is not proven)."""
+        return None
+
+    def infeasible(self, scene: Scene, dt: float | None = None) -> str | None:
         """Why the task cannot be posed in the scalar ``scene``, or None if it can: the
-        task's own condition (:meth:`check_scene`), and a start state: one of the
+        task's own condition (:meth:`check_scene`); with the control step ``dt`` [s], the
+        target within reach of the torque in the episode (:meth:`pump_time` at most
+        PUMP_SHARE of max_episode_steps·dt); and a start state: one of the
         :meth:`fallback_starts` must roll under every torque within the limit (the draw
         falls back to it, so a start-state draw never fails where this holds)."""
         try:
             self.check_scene(scene)
         except ValueError as error:
             return str(error)
+        pumped = self.pump_time(scene) if dt is not None else None
+        episode = self.max_episode_steps * (dt or 0.0)
+        if pumped is not None and not pumped[2] <= self.PUMP_SHARE * episode:
+            energy, speed, seconds = pumped
+            return (f"max_torque={self.max_torque:g} N·m is too weak for {shown(scene)} in "
+                    f"episodes of {self.max_episode_steps} steps of dt={dt:g} s "
+                    f"({episode:.3g} s): even the most power it can put in, max_torque·ω = "
+                    f"{self.max_torque * speed:.3g} W at the target's fastest speed ω = "
+                    f"{speed:.3g} rad/s, needs {seconds:.3g} s to bring the target's "
+                    f"{energy:.3g} J, more than {self.PUMP_SHARE:g} of the episode; use a "
+                    "larger max_torque or a longer dt")
         if self.fallback_start(scene) is None:
             return (f"no start state of {shown(scene)} rolls under torques up to "
                     f"{self.max_torque} N·m (the roller slips or lifts off at every state of "

@@ -205,7 +205,7 @@ def start_episodes(
     task = config.task
     if options.get("scene") is not None:
         scene = config.resolve_option_scene(options["scene"])
-        reason = task.infeasible(scene)
+        reason = task.infeasible(scene, config.dt)
         if reason is not None:
             raise ValueError(f"options['scene']: {reason}")
         validation.check_integrable(scene, config.dt, task.max_torque, task.start_speed)
