@@ -23,8 +23,11 @@ __all__ = [
     "HOLD_TORQUE_SHARE",
     "START_TURNS",
     "angle_rate",
+    "barrier_energy",
+    "cached_per_scene",
     "hold_range",
     "hold_ranges",
+    "last_within",
     "per_scene",
     "psi_rate",
     "reach",
@@ -103,8 +106,9 @@ def per_scene(function, scene: Scene) -> np.ndarray:
     return values[np.asarray(inverse).reshape(-1)]
 
 
-def _cached_per_scene(function):
-    """Memoize ``function(scene, *args)`` on the scene's values (resets call it per episode)."""
+def cached_per_scene(function):
+    """Memoize ``function(scene, *args)`` on the scene's values (resets call it per episode;
+    ``args`` hashable, else uncached)."""
 
     @functools.lru_cache(maxsize=1024)
     def cached(values: tuple[tuple[str, float], ...], *args):
@@ -181,7 +185,7 @@ def reach(scene: Scene, angle: float = math.pi) -> float | np.ndarray:
         return np.minimum(angle / np.abs(angle_rate(scene)), 2.0 * math.pi * START_TURNS)
 
 
-@_cached_per_scene
+@cached_per_scene
 def hold_range(scene: Scene, max_torque: float, torque_share: float = HOLD_TORQUE_SHARE,
                friction_share: float = HOLD_FRICTION_SHARE, points: int = 2001,
                rising: bool = False) -> tuple[float, float]:
@@ -261,7 +265,7 @@ def _hold_bounds(m, r, kappa, e, k, g, c, mu, half, torque_limit, friction_share
                 low[j] = bound
 
 
-@_cached_per_scene
+@cached_per_scene
 def unstable_rest_positions(scene: Scene) -> tuple[float, ...]:
     """The unstable rest positions φ [rad] at zero torque nearest to φ = 0 on each side
     (d²V/dφ² < 0: neutral ones, as everywhere for a uniform disc on the floor, do not count)."""
@@ -276,3 +280,28 @@ def unstable_rest_positions(scene: Scene) -> tuple[float, ...]:
     if negative:
         out.append(max(negative))
     return tuple(out)
+
+
+@cached_per_scene
+def barrier_energy(scene: Scene) -> float:
+    """The potential energy [J] of the scalar ``scene``'s first barrier away from the bottom:
+    V at the end of the run over which V rises from φ = 0 (at most :func:`reach`, ψ = ±π: a
+    cylinder's top; :data:`START_TURNS` turns on a nearly flat surface), on a grid of 20,001
+    points; a swing with more energy passes over it. Memoized."""
+    m, r, kappa, e, _, g, _ = scene.params
+    potential = equations.potential(np.linspace(0.0, float(reach(scene)), 20001), m, r, kappa,
+                                    e, g)
+    falls = np.flatnonzero(np.diff(potential) <= 0.0)
+    return float(potential[falls[0]] if falls.size else potential[-1])
+
+
+def last_within(exceeds, below: np.ndarray, above: np.ndarray, halvings: int = 60
+                ) -> np.ndarray:
+    """Bisection, elementwise: from ``below`` (where ``exceeds`` is False) and ``above`` (where
+    it is True), the last point found where ``exceeds(x)`` is still False, after ``halvings``
+    halvings; ``exceeds`` monotone between them (e.g. a potential rising past a level)."""
+    for _ in range(halvings):
+        middle = 0.5 * (below + above)
+        higher = exceeds(middle)
+        below, above = np.where(higher, below, middle), np.where(higher, middle, above)
+    return below

@@ -90,7 +90,6 @@ tolerance=..., integrator=..., substeps=..., randomize=..., render_mode=...)``: 
 
 from __future__ import annotations
 
-import functools
 import math
 
 import numpy as np
@@ -98,6 +97,7 @@ from roller_gym import rewards
 from roller_gym.physics import Scene, energy, equations
 from roller_gym.physics.integrators import SCENE_FIELDS, scene_arrays
 from roller_gym.physics.scene import shown
+from roller_gym.rest import barrier_energy, last_within
 from roller_gym.task import Task, hold_ranges, objective, per_scene, reach, register
 
 __all__ = ["SwingTask"]
@@ -240,13 +240,8 @@ class SwingTask(Task):
             def over(share: np.ndarray, side: np.ndarray = side) -> np.ndarray:
                 return ((1.0 + self.energy_band)
                         * equations.potential(share * side, m, r, kappa, e, g) > barrier)
-            capped = over(np.full_like(side, hi))
-            below, above = np.zeros_like(side), np.full_like(side, hi)
-            for _ in range(60):  # bisection on the rising potential
-                middle = 0.5 * (below + above)
-                higher = over(middle)
-                below, above = np.where(higher, below, middle), np.where(higher, middle, above)
-            tops.append(np.where(capped, below, hi))
+            top = np.full_like(side, hi)  # the potential rises on the side's range
+            tops.append(np.where(over(top), last_within(over, np.zeros_like(side), top), hi))
         return tops[0], tops[1]
 
     def pump_time(self, scene: Scene) -> tuple[float, float, float]:
@@ -302,28 +297,9 @@ class SwingTask(Task):
         smallest = self.amplitude_shares[0] * np.minimum(-low, high)
         level = self.start_energy_share * np.minimum(
             potential(self.amplitude_shares[0] * low), potential(smallest))
-        below, above = np.zeros_like(smallest), np.minimum(angle, smallest)
-        over = potential(above) > level  # (the potential rises on [0, smallest])
-        for _ in range(60):
-            middle = 0.5 * (below + above)
-            higher = potential(middle) > level
-            below, above = np.where(higher, below, middle), np.where(higher, middle, above)
-        return np.where(over, below, angle)
+        def over(phi: np.ndarray) -> np.ndarray:
+            return potential(phi) > level
 
+        above = np.minimum(angle, smallest)  # (the potential rises on [0, smallest])
+        return np.where(over(above), last_within(over, np.zeros_like(smallest), above), angle)
 
-def barrier_energy(scene: Scene) -> float:
-    """The potential energy [J] of the scalar ``scene``'s first barrier away from the bottom:
-    V at the end of the run over which V rises from φ = 0 (at most :func:`reach`, ψ = ±π: a
-    cylinder's top; :data:`~roller_gym.task.START_TURNS` turns on a nearly flat surface),
-    on a grid of 20,001 points; a swing with more energy passes over it. Memoized."""
-    return _barrier_energy(tuple(scene.as_dict().items()))
-
-
-@functools.lru_cache(maxsize=1024)
-def _barrier_energy(items: tuple[tuple[str, float], ...]) -> float:
-    scene = Scene(**dict(items))
-    m, r, kappa, e, _, g, _ = scene.params
-    potential = equations.potential(np.linspace(0.0, float(reach(scene)), 20001), m, r, kappa,
-                                    e, g)
-    falls = np.flatnonzero(np.diff(potential) <= 0.0)
-    return float(potential[falls[0]] if falls.size else potential[-1])
