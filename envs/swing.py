@@ -241,7 +241,9 @@ class SwingTask(Task):
                 return ((1.0 + self.energy_band)
                         * equations.potential(share * side, m, r, kappa, e, g) > barrier)
             top = np.full_like(side, hi)  # the potential rises on the side's range
-            tops.append(np.where(over(top), last_within(over, np.zeros_like(side), top), hi))
+            capped = over(top)  # (a reset's cost: bisect only where some roller needs it)
+            tops.append(np.where(capped, last_within(over, np.zeros_like(side), top), hi)
+                        if capped.any() else top)
         return tops[0], tops[1]
 
     def pump_time(self, scene: Scene) -> tuple[float, float, float]:
@@ -301,5 +303,7 @@ class SwingTask(Task):
             return potential(phi) > level
 
         above = np.minimum(angle, smallest)  # (the potential rises on [0, smallest])
-        return np.where(over(above), last_within(over, np.zeros_like(smallest), above), angle)
+        capped = over(above)
+        return (np.where(capped, last_within(over, np.zeros_like(smallest), above), angle)
+                if capped.any() else angle)
 
