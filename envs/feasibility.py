@@ -194,11 +194,6 @@ def _boxes_proven(task: Task, scene: Scene, dt: float, boxes: Sequence[Box],
                 estimates = (scene.replace(**_middle(boxes[i])),  # the nearer first
                              scene.replace(**_middle(ranges)))
                 ok[i] = task.scene_proven(box_params(scene, boxes[i]), estimates)
-        if type(task).pump_time is not Task.pump_time:  # the target within the episode's reach
-            episode = task.PUMP_SHARE * task.max_episode_steps * dt
-            for i in np.flatnonzero(ok):
-                bound = task.pump_time_bound(box_params(scene, boxes[i]))
-                ok[i] = bound is not None and bool(np.all(bound.hi <= episode))
     return ok
 
 
@@ -418,12 +413,13 @@ def _check_ranges_cached(task_class: type[Task], max_torque: float,
     def fails(values: Mapping[str, float]) -> str | None:
         return problem(task, scene.replace(**values), dt)
 
-    if (type(task).check_scene is not Task.check_scene
-            and type(task).scene_proven is Task.scene_proven):
+    if ((type(task).check_scene is not Task.check_scene
+         and type(task).scene_proven is Task.scene_proven)
+            or type(task).pump_time is not Task.pump_time):  # (no bound of it over a box)
         return (f"randomize={shown(ranges)} cannot be used with {task.name}: the task has its own "
-                "condition on the scene (check_scene) and no proof of it over a range of "
-                "scenes (scene_proven), so that every scene of the range can pose it cannot be "
-                "shown; use a fixed scene")
+                "condition on the scene (check_scene, pump_time) and no proof of it over a "
+                "range of scenes (scene_proven), so that every scene of the range can pose it "
+                "cannot be shown; use a fixed scene")
     names = list(ranges)
     for ends in itertools.product(*(ranges[n] for n in names)):  # a quick look first
         corner = dict(zip(names, ends, strict=True))

@@ -289,13 +289,8 @@ class Task:
         """For a task whose target needs energy pumped in (a swing, a swing-up): (the energy
         [J] to bring, the fastest speed ω [rad/s] on the way, the least time [s] the torque
         needs for it, energy / (max_torque·ω)) in the scalar ``scene``; None (the default)
-        for the others."""
-        return None
-
-    def pump_time_bound(self, params: Any) -> Any:
-        """An upper bound [s] of :meth:`pump_time`'s time over a box of scenes (``params``
-        as for :meth:`scene_proven`, intervals): None where the task pumps no energy in, or
-        has no bound (then a range is not proven)."""
+        for the others. No bound of it over a range of scenes is written yet, so a task
+        with one takes no ``randomize`` range (:mod:`roller_gym.feasibility`)."""
         return None
 
     def infeasible(self, scene: Scene, dt: float | None = None) -> str | None:
