@@ -30,6 +30,10 @@ ZOO_SETS = ("env", "tensorboard_log", "seed", "verbose", "device")
 HYPERPARAM_COUNT_MAX = 10**9
 #: The most observations frame_stack may stack (the tasks' episodes are 200–400 steps).
 FRAME_STACK_MAX = 1000
+#: The counts an SB3 or rl-zoo3 callback keeps as attributes, each an integer >= 1 (0 ends the
+#: first call in a ZeroDivisionError, a float or a negative one never fires).
+CALLBACK_COUNTS = ("save_freq", "eval_freq", "n_eval_episodes", "n_steps", "max_episodes",
+                   "gradient_steps")
 #: The policies for the tasks' observations (a vector: a Box), by rl-zoo3's alias.
 POLICIES = ("MlpPolicy",)
 
@@ -350,7 +354,19 @@ def _callback(value: Any, _: Given | None = None) -> bool:
     from stable_baselines3.common.callbacks import BaseCallback
 
     made = _built("the callbacks", lambda: get_callback_list({"callback": value}))
-    return bool(made) and all(isinstance(c, BaseCallback) for c in made)
+    if not made or not all(isinstance(c, BaseCallback) for c in made):
+        return False
+    pending = list(made)
+    while pending:  # each callback, and those it calls (EveryNTimesteps, CallbackList)
+        callback = pending.pop()
+        for name in CALLBACK_COUNTS:
+            count = getattr(callback, name, 1)
+            if not _integer(1)(count):
+                raise ValueError(f"{type(callback).__name__}'s {name}={count!r} must be "
+                                 f"{_COUNT} (it divides or counts the training's steps)")
+        pending += [c for c in (getattr(callback, "callback", None),
+                                *getattr(callback, "callbacks", ())) if c is not None]
+    return True
 
 
 def _env_kwargs(value: Any, _: Given | None = None) -> bool:

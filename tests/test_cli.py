@@ -543,6 +543,13 @@ def test_train_rllib_refuses_env_kwargs_the_env_refuses_before_ray_starts(item, 
                                          "allowed: .*building the callbacks raised"),
     ("sac", "callback:{'stable_baselines3.common.callbacks.StopTrainingOnMaxEpisodes': "
             "{'bogus': 1}}", "callback:.* is not allowed: .*building the callbacks raised"),
+    # (a ZeroDivisionError at the callback's first call, once training had started)
+    ("sac", "callback:{'stable_baselines3.common.callbacks.CheckpointCallback': "
+            "{'save_freq': 0, 'save_path': 'ckpt'}}",
+     "callback:.* is not allowed: .*CheckpointCallback's save_freq=0 must be an integer >= 1"),
+    ("td3", "callback:{'rl_zoo3.callbacks.SaveVecNormalizeCallback': "
+            "{'save_freq': 2.5, 'save_path': 'ckpt'}}",
+     "callback:.* is not allowed: .*SaveVecNormalizeCallback's save_freq=2.5 must be"),
     ("sac", "gradient_steps:0", "--hyperparams: gradient_steps:0 is not allowed: it must be an "
                                 "integer >= 1 and <= 1e\\+09, or -1"),
     ("td3", "policy_delay:0", "--hyperparams: policy_delay:0 is not allowed"),
@@ -628,6 +635,8 @@ def test_train_refuses_hyperparams_before_rl_zoo3_starts(algo, item, message, tm
     ("ppo", "vec_env_wrapper:stable_baselines3.common.vec_env.VecMonitor"),
     ("sac", "callback:{'stable_baselines3.common.callbacks.StopTrainingOnMaxEpisodes': "
             "{'max_episodes': 5}}"),
+    ("ppo", "callback:{'stable_baselines3.common.callbacks.CheckpointCallback': "
+            "{'save_freq': 1000, 'save_path': 'checkpoints'}}"),
     ("td3", "optimize_memory_usage:True"),  # with the buffer's keyword arguments below
     ("ppo", "clip_range_vf:lin_0.2"), ("ppo", "target_kl:0.02"),
 ])
