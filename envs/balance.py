@@ -53,8 +53,10 @@ At rest near the bottom: φ and φ' uniform in ±0.1 (rad, rad/s).
 ## Scenes
 
 Checked at construction (and proven over ``randomize`` ranges): the unstable rest position
-exists and the roller rolls there at rest, and the swing-up outruns the damping: c·ω <= 0.5
-max_torque at ω = sqrt(2 V(φ_b) / J_I(0)), the bottom speed of a swing that reaches φ_b.
+exists and the roller rolls there at rest; the swing-up outruns the damping: c·ω <= 0.5
+max_torque at ω = sqrt(2 V(φ_b) / J_I(0)), the bottom speed of a swing that reaches φ_b;
+and the torque can pump the energy success needs within a quarter of the episode, even at
+its most power, max_torque·ω.
 
 ## Version History
 
@@ -102,12 +104,11 @@ class BalanceTask(Task):
 
     def check_scene(self, scene: Scene) -> None:
         """The unstable rest position exists and holds (:meth:`default_target`), and the
-        swing-up outruns the damping: c·ω <= damping_share·max_torque at ω =
-        sqrt(2 V(φ_b) / J_I(0)) [rad/s], the speed at the bottom of a swing that reaches φ_b."""
+        swing-up outruns the damping: c·ω <= damping_share·max_torque at ω [rad/s] of
+        :meth:`swing_up_speed`."""
         phi_b = self.default_target(scene)
-        m, r, kappa, e, k, _, c = scene.params
-        speed = math.sqrt(2.0 * float(energy(scene, phi_b, 0.0))
-                          / float(equations.inertia(0.0, m, r, kappa, e, k)))
+        c = scene.damping
+        speed = self.swing_up_speed(scene, phi_b)
         if c * speed > self.damping_share * self.max_torque:
             raise ValueError(
                 f"damping={c:g} N·m·s/rad of {shown(scene)} takes {c * speed:.3g} N·m at the "
@@ -115,6 +116,26 @@ class BalanceTask(Task):
                 f"{self.damping_share:g} of max_torque={self.max_torque:g} N·m: the swing-up "
                 f"cannot reach the unstable rest position; use damping <= "
                 f"{self.damping_share * self.max_torque / speed:.3g} or a larger max_torque")
+
+    @staticmethod
+    def swing_up_speed(scene: Scene, phi_b: float) -> float:
+        """ω = sqrt(2 V(φ_b) / J_I(0)) [rad/s]: the speed at the bottom of a swing that
+        reaches φ_b, the fastest |φ'| of any motion with energy up to V(φ_b) (V >= 0 and
+        J_I >= J_I(0) between the bottom and ±φ_b)."""
+        m, r, kappa, e, k, _, _ = scene.params
+        return math.sqrt(2.0 * float(energy(scene, phi_b, 0.0))
+                         / float(equations.inertia(0.0, m, r, kappa, e, k)))
+
+    def pump_time(self, scene: Scene) -> tuple[float, float, float]:
+        """(the least energy [J] a start must gain to succeed: from the most a start has,
+        E(±0.1 rad, ±0.1 rad/s), to V(φ_b − success_band); ω of :meth:`swing_up_speed`;
+        that energy / (max_torque·ω) [s]), since dE/dt <= τ φ' <= max_torque·ω."""
+        phi_b = self.default_target(scene)
+        speed = self.swing_up_speed(scene, phi_b)
+        reached = float(energy(scene, max(phi_b - self.success_band, 0.0), 0.0))
+        start = float(energy(scene, self.start_width, self.start_width))
+        needed = max(reached - start, 0.0)
+        return needed, speed, needed / (self.max_torque * speed) if speed > 0 else 0.0
 
     def default_target(self, scene: Scene) -> float:
         """φ_b > 0 [rad], the unstable rest position (its mirror −φ_b counts as well)."""
@@ -134,21 +155,28 @@ class BalanceTask(Task):
             )
         return phi_b
 
-    def scene_proven(self, params: Any, estimates: Sequence[Scene]) -> bool:
-        """:func:`roller_gym.feasibility.unstable_rest_proven`, and the damping's condition
-        bounded over the box: V(φ_b) <= m g (2 |R − r| + 2 |e|) (each term of V at most
-        twice its height), J_I(0) = m (k² + (r − e)²)."""
-        if not feasibility.unstable_rest_proven(params, estimates):
+    def scene_proven(self, params: Any, estimates: Sequence[Scene], dt: float) -> bool:
+        """:func:`roller_gym.feasibility.unstable_rest_enclosure` (Φ, holding φ_b), and with
+        V(Φ) and J_I(0) on intervals over the box, the damping's condition (c·ω, ω <=
+        sqrt(2 V / J_I(0))) and the pump time (at most V(φ_b) / (max_torque·ω) =
+        sqrt(V J_I(0) / 2) / max_torque) bounded by their upper ends."""
+        phi = feasibility.unstable_rest_enclosure(params, estimates)
+        if phi is None:
             return False
         p = params
-        if np.all(p.c.hi == 0.0):
-            return True
-        height = 2.0 * abs((1.0 - p.r * p.kappa) / p.kappa) + 2.0 * abs(p.e)
-        speed = (2.0 * p.g * height / (p.k * p.k + (p.r - p.e) ** 2)).sqrt()
-        return bool(np.all((p.c * speed).hi <= self.damping_share * self.max_torque))
+        height = _potential_upper(p, phi)
+        least = equations.inertia(0.0 * phi, p.m, p.r, p.kappa, p.e, p.k)
+        if not (math.isfinite(height) and least.lo > 0):
+            return False
+        speed = math.sqrt(2.0 * height / least.lo)
+        pump = math.sqrt(0.5 * height * least.hi) / self.max_torque
+        return bool(p.c.hi * speed <= self.damping_share * self.max_torque
+                    and pump <= self.PUMP_SHARE * self.max_episode_steps * dt)
 
     start_rule = "near rest at the bottom, |φ| <= 0.1 rad and |φ'| <= 0.1 rad/s"
     start_speed = 0.1
+    #: The start's φ [rad] and φ' [rad/s] lie within ± this.
+    start_width = 0.1
 
     def sample_targets(self, u: np.ndarray, scene: Scene) -> np.ndarray:
         """φ_b of each roller: :func:`unstable_rest_targets`. (The scenes of a range were
@@ -158,8 +186,26 @@ class BalanceTask(Task):
     def start_candidates(
         self, u_phi: np.ndarray, u_dot: np.ndarray, scene: Scene
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Near rest at the bottom: φ [rad] and φ' [rad/s] uniform in ±0.1."""
-        return 0.2 * u_phi - 0.1, 0.2 * u_dot - 0.1
+        """Near rest at the bottom: φ [rad] and φ' [rad/s] uniform in ±start_width."""
+        w = self.start_width
+        return 2.0 * w * u_phi - w, 2.0 * w * u_dot - w
+
+
+def _potential_upper(p: Any, phi: Any) -> float:
+    """An upper end [J], >= 0, of V (:func:`equations.potential`) over the box ``p`` and
+    φ in the interval ``phi`` inside the search window (|ψ| < π): V = m g [A sinc(ψ/2) +
+    2 e sin²(φ/2)] with A = r φ sin(ψ/2), where A >= 0 in a cylinder (the first term is
+    then at most A, sinc <= 1) and A <= 0 on a drum (at most A's upper end times the least
+    sinc, sinc(max |ψ|/2) > 0, as sinc falls on [0, π/2]). (The sinc itself has no
+    enclosure on intervals at ψ = 0.)"""
+    _, psi, _ = equations.shape_factors(phi, p.r, p.kappa)
+    rolled = float(np.max((p.r * phi * np.sin(0.5 * psi)).hi))
+    if rolled < 0:
+        x = 0.5 * float(np.max(np.maximum(np.abs(psi.lo), np.abs(psi.hi))))
+        rolled *= (math.sin(x) / x if x > 0 else 1.0) * (1.0 - 1e-12)  # (rounded down)
+    half = np.sin(0.5 * phi)
+    upper = (p.m * p.g * (rolled + 2.0 * p.e * half * half)).hi
+    return max(float(np.max(upper)), 0.0)
 
 
 def unstable_rest_targets(scene: Scene) -> np.ndarray:

@@ -23,7 +23,7 @@ What is proven on a box B (the conditions of :func:`problem`, in exact arithmeti
    |q| = |rκ/(1 − rκ)| monotone in r and in R on either side of R = 0, which a range cannot
    cross).
 3. The task's own condition (:meth:`Task.scene_proven`): none for Stabilize and Hold; for
-   Balance, :func:`unstable_rest_proven`.
+   Balance, :func:`unstable_rest_enclosure`.
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ from roller_gym.physics.scene import shown
 from roller_gym.task import Task, unstable_rest_positions
 
 __all__ = ["MAX_BOXES", "Params", "box_params", "check_ranges", "problem",
-           "unstable_rest_proven"]
+           "unstable_rest_enclosure"]
 
 #: The most boxes the branch and bound examines before it refuses a range as not proven.
 MAX_BOXES = 4000
@@ -193,7 +193,7 @@ def _boxes_proven(task: Task, scene: Scene, dt: float, boxes: Sequence[Box],
             for i in np.flatnonzero(ok):
                 estimates = (scene.replace(**_middle(boxes[i])),  # the nearer first
                              scene.replace(**_middle(ranges)))
-                ok[i] = task.scene_proven(box_params(scene, boxes[i]), estimates)
+                ok[i] = task.scene_proven(box_params(scene, boxes[i]), estimates, dt)
     return ok
 
 
@@ -202,13 +202,14 @@ def _boxes_proven(task: Task, scene: Scene, dt: float, boxes: Sequence[Box],
 MAX_PIECES = 4096
 
 
-def unstable_rest_proven(p: Params, estimates: Sequence[Scene]) -> bool:
-    """Whether, for every scene of the box ``p``, the nearest unstable rest position φ_b > 0
-    of :func:`roller_gym.task.unstable_rest_positions` exists and the roller rests there
+def unstable_rest_enclosure(p: Params, estimates: Sequence[Scene]) -> Interval | None:
+    """An interval Φ [rad] that holds φ_b of every scene of the box ``p``, where it is proven
+    that for every such scene the nearest unstable rest position φ_b > 0 of
+    :func:`roller_gym.task.unstable_rest_positions` exists and the roller rests there
     (N > 0, |F| <= μN at φ = φ_b, φ' = 0, τ = 0), as :meth:`BalanceTask.default_target`
-    requires. Shown on intervals, with Φ = [a, b] an interval around the estimate of φ_b
-    over the box (from the rest position of each scene of ``estimates`` in turn, refined by
-    Newton's method at the box's corners):
+    requires; None where it is not proven. Shown on intervals, with Φ = [a, b] around the
+    estimate of φ_b over the box (from the rest position of each scene of ``estimates`` in
+    turn, refined by Newton's method at the box's corners):
 
     * dV/dφ(a) > 0 > dV/dφ(b) and d²V/dφ² < 0 on Φ: exactly one rest position in Φ, and it
       is unstable (d²V/dφ² < 0, as the rule asks);
@@ -224,36 +225,41 @@ def unstable_rest_proven(p: Params, estimates: Sequence[Scene]) -> bool:
 
     The mirror image −φ_b counts as well and is not needed: the rule takes the positive one.
     Where the rule gives φ_b = 0 instead (no unstable rest position > 0, an unstable one at
-    0), :func:`_unstable_bottom_proven` shows that; on the floor, where the unstable rest
-    position is at the window's edge (φ = −π), :func:`_floor_top_proven`.
+    0), :func:`_unstable_bottom_proven` shows that (Φ = [0, 0]); on the floor, where the
+    unstable rest position is at the window's edge (φ = −π), :func:`_floor_top_proven`
+    (Φ holds π).
     A box where any of this fails is not proven (split, or refused where that does not end).
     """
     for scene in estimates:
         nearest = float(nearest_unstable_rests(scene.r, scene.kappa, scene.e)[0])
-        if nearest > 0 and _unstable_rest_proven_near(p, nearest):  # (False for NaN)
-            return True
+        near = _unstable_rest_near(p, nearest) if nearest > 0 else None  # (None for NaN)
+        if near is not None:
+            return near
         if not math.isnan(nearest):
             continue
         estimate = unstable_rest_positions(scene)  # the rule's other cases
         if estimate == (0.0,) and _unstable_bottom_proven(p):
-            return True
+            return Interval(0.0)
         if estimate and estimate[0] < 0 and _floor_top_proven(p):
-            return True
-    return False
+            return FLOOR_TOP
+    return None
 
 
 def _floor_top_proven(p: Params) -> bool:
     """The rule on the floor (κ = 0), whose window is φ in [−π, π): dV/dφ = m g e sin φ
     vanishes at 0 (stable: d²V/dφ² = m g e > 0) and at −π (unstable), and at no unstable
-    point of (0, π) (shown as in :func:`unstable_rest_proven`; by symmetry none in
+    point of (0, π) (shown as in :func:`unstable_rest_enclosure`; by symmetry none in
     (−π, 0) either), so the rule takes φ_b = |−π| = π, the mass center above the axle,
     where the roller is checked to rest."""
     m, r, kappa, e, g = p.m, p.r, p.kappa, p.e, p.g
     if not (kappa.lo == kappa.hi == 0.0
             and equations.d2potential(Interval(0.0), m, r, kappa, e, g).lo > 0):
         return False
-    top = Interval(math.pi, np.nextafter(math.pi, 4.0))  # encloses π
-    return _nearer_excluded(p, math.pi * (1.0 - 1e-9)) and _rests(p, top)
+    return _nearer_excluded(p, math.pi * (1.0 - 1e-9)) and _rests(p, FLOOR_TOP)
+
+
+#: An interval [rad] that holds π.
+FLOOR_TOP = Interval(math.pi, float(np.nextafter(math.pi, 4.0)))
 
 
 def _window(p: Params) -> tuple[Interval, float]:
@@ -270,7 +276,7 @@ def _window(p: Params) -> tuple[Interval, float]:
 def _unstable_bottom_proven(p: Params) -> bool:
     """The rule's other case: φ_b = 0 (the rule then takes the unstable rest position at
     φ = 0, as on top of a drum with the mass center high): d²V/dφ² < 0 at 0 and no
-    unstable rest position in (0, the window's end] (as in :func:`unstable_rest_proven`);
+    unstable rest position in (0, the window's end] (as in :func:`unstable_rest_enclosure`);
     the roller rests at 0 (N = m g, F = 0) and is checked as well."""
     m, r, kappa, e, g = p.m, p.r, p.kappa, p.e, p.g
     zero = Interval(0.0)
@@ -284,7 +290,7 @@ def _unstable_bottom_proven(p: Params) -> bool:
 def _rests(p: Params, phi: Interval) -> bool:
     """N > 0 and μN − |F| >= 0 at rest under τ = 0 at every φ of ``phi``, for every scene
     of the box; m and g at their least values (the margins do not depend on them, see
-    :func:`unstable_rest_proven`)."""
+    :func:`unstable_rest_enclosure`)."""
     m, g = Interval(p.m.lo), Interval(p.g.lo)
     acc = equations.accel(phi, 0.0, 0.0, m, p.r, p.kappa, p.e, p.k, g, p.c)
     normal, friction = equations.contact_forces(phi, 0.0, acc, m, p.r, p.kappa, p.e, g)
@@ -292,23 +298,23 @@ def _rests(p: Params, phi: Interval) -> bool:
     return bool(liftoff.lo > 0 and slip.lo >= 0)
 
 
-def _unstable_rest_proven_near(p: Params, estimate: float) -> bool:
+def _unstable_rest_near(p: Params, estimate: float) -> Interval | None:
     phi = _roots_at_corners(p, estimate)
     if phi is None:
-        return False
+        return None
     m, r, kappa, e, g = p.m, p.r, p.kappa, p.e, p.g
     spread = float(phi.max() - phi.min())
     for pad in (0.5 * spread, 2.0 * spread):
         pad += 1e-9 * max(1.0, float(phi.max()))
         a, b = float(phi.min()) - pad, float(phi.max()) + pad
         if a <= 0:
-            return False
+            return None
         if (equations.dpotential(Interval(a), m, r, kappa, e, g).lo > 0
                 and equations.dpotential(Interval(b), m, r, kappa, e, g).hi < 0
                 and equations.d2potential(Interval(a, b), m, r, kappa, e, g).hi < 0):
             break
     else:
-        return False
+        return None
     big = Interval(b)
     rate, _ = _window(p)
     if rate.hi == 0.0:  # the floor: |φ| < π
@@ -316,7 +322,8 @@ def _unstable_rest_proven_near(p: Params, estimate: float) -> bool:
     else:  # |ψ| < π and |φ| < MAX_TURNS turns
         inside = (big.hi < MAX_TURNS * math.pi * (1.0 - 2e-9)
                   and (big * rate).hi < math.pi * (1.0 - 2e-9))
-    return inside and _nearer_excluded(p, a) and _rests(p, Interval(a, b))
+    whole = Interval(a, b)
+    return whole if inside and _nearer_excluded(p, a) and _rests(p, whole) else None
 
 
 def _roots_at_corners(p: Params, start: float) -> np.ndarray | None:
@@ -340,7 +347,7 @@ def _roots_at_corners(p: Params, start: float) -> np.ndarray | None:
 
 def _nearer_excluded(p: Params, a: float) -> bool:
     """No unstable rest position in (0, a] for any scene of the box (see
-    :func:`unstable_rest_proven`), by bisecting pieces of it."""
+    :func:`unstable_rest_enclosure`), by bisecting pieces of it."""
     m, r, kappa, e, g = p.m, p.r, p.kappa, p.e, p.g
     edges = np.linspace(0.0, a, 33)
     lo, hi = edges[:-1], edges[1:]
@@ -413,9 +420,8 @@ def _check_ranges_cached(task_class: type[Task], max_torque: float,
     def fails(values: Mapping[str, float]) -> str | None:
         return problem(task, scene.replace(**values), dt)
 
-    if ((type(task).check_scene is not Task.check_scene
-         and type(task).scene_proven is Task.scene_proven)
-            or type(task).pump_time is not Task.pump_time):  # (no bound of it over a box)
+    if (type(task).scene_proven is Task.scene_proven
+            and not task.scene_proven(None, (), dt)):  # (a condition with no proof of it)
         return (f"randomize={shown(ranges)} cannot be used with {task.name}: the task has its own "
                 "condition on the scene (check_scene, pump_time) and no proof of it over a "
                 "range of scenes (scene_proven), so that every scene of the range can pose it "

@@ -273,13 +273,15 @@ class Task:
     def check_scene(self, scene: Scene) -> None:
         """Raise ValueError if the task cannot be posed in ``scene`` (default: any scene)."""
 
-    def scene_proven(self, params: Any, estimates: Sequence[Scene]) -> bool:
-        """Whether :meth:`check_scene` is proven to pass in every scene of a box of them
-        (``params``: :class:`roller_gym.feasibility.Params`, intervals; ``estimates``: scenes
-        of the box to start estimates from, e.g. its midpoint). A task without a condition:
-        True; one with a condition and no proof of it: False (a randomized range is then
-        refused)."""
-        return type(self).check_scene is Task.check_scene
+    def scene_proven(self, params: Any, estimates: Sequence[Scene], dt: float) -> bool:
+        """Whether :meth:`check_scene` and the :meth:`pump_time` condition of
+        :meth:`infeasible` (with the control step ``dt`` [s]) are proven to pass in every
+        scene of a box of them (``params``: :class:`roller_gym.feasibility.Params`,
+        intervals; ``estimates``: scenes of the box to start estimates from, e.g. its
+        midpoint). A task without either: True; one with a condition and no proof of it:
+        False (a randomized range is then refused)."""
+        return (type(self).check_scene is Task.check_scene
+                and type(self).pump_time is Task.pump_time)
 
     #: The share of an episode (max_episode_steps·dt) in which the most power the torque can
     #: put in must bring the target's energy, for a task with a :meth:`pump_time`.
@@ -289,8 +291,8 @@ class Task:
         """For a task whose target needs energy pumped in (a swing, a swing-up): (the energy
         [J] to bring, the fastest speed ω [rad/s] on the way, the least time [s] the torque
         needs for it, energy / (max_torque·ω)) in the scalar ``scene``; None (the default)
-        for the others. No bound of it over a range of scenes is written yet, so a task
-        with one takes no ``randomize`` range (:mod:`roller_gym.feasibility`)."""
+        for the others. A task with one proves it over a range of scenes in its
+        :meth:`scene_proven`, or takes no ``randomize`` range (:mod:`roller_gym.feasibility`)."""
         return None
 
     def infeasible(self, scene: Scene, dt: float | None = None) -> str | None:

@@ -394,3 +394,55 @@ def test_a_range_up_to_float64s_top_is_split_without_overflow():
         assert low < middle < high and math.isfinite(middle)
         halves = _share((low, middle), (low, high)) + _share((middle, high), (low, high))
         assert halves == pytest.approx(1.0, rel=1e-12)
+
+
+def test_the_swing_ups_pump_time_is_proven_over_a_range_up_to_where_it_fails():
+    """The energy success needs and the swing-up's fastest speed scale as m and m⁰, so the
+    least pump time of RollerBalanceWeak (max_torque 0.03 N·m) grows as m: a range of m
+    holds up to m* = (a quarter of the episode) / (the time at m = 1). A range within it is
+    proven (each scene drawn from it passes the scalar check too); one past it is refused at
+    a scene the scalar check refuses, its feasible part ending just below m*."""
+    env_id, torque = roller_gym.TASKS["RollerBalanceWeak"].env_id(), 0.03
+    env = gym.make(env_id, max_torque=torque).unwrapped
+    task, scene, dt = env.task, env.scene, env.config.dt
+    limit = task.PUMP_SHARE * task.max_episode_steps * dt
+    m_star = limit / task.pump_time(scene)[2] * scene.m
+    assert 1.2 < m_star < 1.6  # (the range below straddles it)
+    gym.make(env_id, max_torque=torque, randomize={"m": (0.5, 0.98 * m_star)})
+    for m in np.random.default_rng(5).uniform(0.5, 0.98 * m_star, 20):
+        assert task.infeasible(scene.replace(m=float(m)), dt) is None
+    with pytest.raises(ValueError, match=r"at m = 1\.6 max_torque=0\.03 N·m is too weak") as info:
+        gym.make(env_id, max_torque=torque, randomize={"m": (0.5, 1.6)})
+    assert task.infeasible(scene.replace(m=1.6), dt) is not None
+    part = re.search(r"feasible part of the range: \[([^,]+), ([^\]]+)\]", str(info.value))
+    assert float(part[1]) == 0.5 and 0.99 * m_star < float(part[2]) <= m_star
+
+
+@pytest.mark.parametrize("scene", [roller_gym.preset("balance"), roller_gym.preset("floor"),
+                                   Scene(R=-0.5, e=0.03)])  # (a drum: φ_b > 0, e > e*)
+def test_the_upper_end_of_the_potential_over_a_box_holds_every_scenes_target_energy(scene):
+    """Balance's pump-time and damping proofs rest on an upper end of V(φ_b) over a box (the
+    sinc has no enclosure at ψ = 0, so it is bounded by its range instead): it is at least
+    V(φ_b) of every scene drawn from the box, φ_b found by the scalar rule, and within a
+    factor 2 of the largest on boxes up to a tenth wide (a bound as loose as
+    m g (2|R − r| + 2e) failed ranges of R)."""
+    from roller_gym.balance import _potential_upper
+
+    rng = np.random.default_rng(11)
+    for _ in range(4):
+        box = {"m": (0.8, 1.0 + rng.uniform(0, 0.5)), "e": (0.95 * scene.e, scene.e),
+               "k": (0.09, 0.1 + rng.uniform(0, 0.03))}
+        if math.isfinite(scene.R):
+            box["R"] = tuple(sorted((scene.R, scene.R * (1.0 + rng.uniform(0.01, 0.1)))))
+        p = feasibility.box_params(scene, box)
+        middle = scene.replace(**{n: 0.5 * (a + b) for n, (a, b) in box.items()})
+        with np.errstate(all="ignore"):
+            phi = feasibility.unstable_rest_enclosure(p, [middle])
+            upper = _potential_upper(p, phi)
+        energies = []
+        for _ in range(30):
+            drawn = scene.replace(**{n: float(rng.uniform(a, b)) for n, (a, b) in box.items()})
+            phi_b = abs(unstable_rest_positions(drawn)[0])
+            assert phi.lo <= phi_b <= phi.hi
+            energies.append(float(roller_gym.physics.energy(drawn, phi_b, 0.0)))
+        assert max(energies) <= upper <= 2.0 * max(energies)

@@ -973,17 +973,27 @@ def test_balance_refuses_damping_the_swing_up_cannot_outrun(env_id, damping):
     allowed = 0.001  # below the check's bound for both tasks (0.00975 and 0.00244)
     gym.make(env_id, scene=preset("balance").replace(damping=allowed))
     assert peak_share(allowed) >= 1.0
+    # a range up to nearly the check's bound is proven too (a bound of V(φ_b) as loose as
+    # m g (2|R − r| + 2e) refused Balance's (0, 0.009) as not proven)
+    task = gym.make(env_id).unwrapped.task
+    balance = preset("balance")
+    bound = (task.damping_share * task.max_torque
+             / task.swing_up_speed(balance, task.default_target(balance)))
+    gym.make(env_id, randomize={"damping": (0.0, 0.9 * bound)})
 
 
 @pytest.mark.parametrize(("env_id", "kwargs"), [
     ("roller_gym/RollerSwing-v1", {"max_torque": 1e-3}),
-    ("roller_gym/RollerSwing-v1", {"dt": 1e-3})])
+    ("roller_gym/RollerSwing-v1", {"dt": 1e-3}),
+    ("roller_gym/RollerBalance-v2", {"max_torque": 1e-4}),
+    ("roller_gym/RollerBalanceWeak-v0", {"max_torque": 0.02})])
 def test_a_target_the_torque_cannot_reach_within_the_episode_is_refused(env_id, kwargs):
     """A torque too weak (or an episode too short, dt 1e-3: 0.4 s) to bring the target's
-    energy was accepted: no policy could succeed (the bang-bang pump, τ = max_torque·sgn φ',
-    the most power the torque puts in, reached 0.06 J of E* >= 0.5 J). Refused by
-    name; a simulation of that pump here confirms the target's energy out of reach over the
-    400 steps, and the defaults are accepted."""
+    energy was accepted: no policy could succeed (on the swing, the bang-bang pump,
+    τ = max_torque·sgn φ', the most power the torque puts in, reached 0.06 J of E* >= 0.5 J;
+    on BalanceWeak at 0.02 N·m, 0.81 of what success needs). Refused by name; a simulation
+    of that pump here confirms the target's energy out of reach over the episode, and the
+    defaults are accepted."""
     with pytest.raises(ValueError, match=r"max_torque=.* N·m is too weak for .* needs .* s to "
                                          r"bring the target's .* J, more than 0\.25 of the "
                                          r"episode"):
