@@ -51,20 +51,21 @@ TRAIN_ARGS ?=
 # the page rendered from every task file there.
 RESULTS_OUT ?= docs/results
 RESULTS_PAGE ?= docs/RESULTS.md
-# One seed's ($$0) trainings of one task ($$1), each of ALGOS afresh, into
+# One training ($$0: the algorithm, $$1: the seed, $$2: the task) afresh, into
 # runs/results/<task>/seed<S>/<algo>.
-TRAIN_SEED = for algo in $(ALGOS); do dir=runs/results/$${1\#*/}/seed$$0; rm -rf $$dir/$$algo; \
-	$(RG) train --algo $$algo --env $$1 --seed $$0 --log-folder $$dir \
-	--verbose 0 --checkpoints 0 $(TRAIN_ARGS) || exit 1; done
+TRAIN_ONE = dir=runs/results/$${2\#*/}/seed$$1; rm -rf $$dir/$$0; \
+	$(RG) train --algo $$0 --env $$2 --seed $$1 --log-folder $$dir \
+	--verbose 0 --checkpoints 0 $(TRAIN_ARGS)
 # A round in pieces, each well inside two hours on two cores: `make results-train TASKS=<task>
 # ALGOS=sac SEEDS="0 1 2"`, … (each piece adds its wall time to runs/results/<task>/wall_s),
 # then `make results-evaluate TASKS=<task>` over every run there. `make results` does both, afresh.
 # One algorithm retrained on its own: `make results-train results-evaluate TASKS=<task> ALGOS=td3
 # RESULTS_ARGS=--keep-stored` keeps the other algorithms' runs from the task's stored file.
 RESULTS_ARGS ?=
-results-train: $(STAMP)  ## train ALGOS x SEEDS on each of TASKS (two processes), keeping other runs
+results-train: $(STAMP)  ## train ALGOS x SEEDS on each of TASKS (two at a time, in ALGOS' order), keeping other runs
 	for env in $(TASKS); do runs=runs/results/$${env#*/}; mkdir -p $$runs; start=$$(date +%s); \
-	printf '%s\n' $(SEEDS) | xargs -P 2 -I SEED sh -c '$(TRAIN_SEED)' SEED $$env || exit 1; \
+	for algo in $(ALGOS); do for seed in $(SEEDS); do echo $$algo $$seed $$env; done; done \
+	| xargs -P 2 -L 1 sh -c '$(TRAIN_ONE)' || exit 1; \
 	echo $$(( $$(date +%s) - start )) >> $$runs/wall_s; done
 results-evaluate: $(STAMP)  ## evaluate every run of each of TASKS, write its task file and the page
 	for env in $(TASKS); do runs=runs/results/$${env#*/}; \
