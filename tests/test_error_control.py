@@ -9,6 +9,7 @@ reference, the error and the random states are those of ``integrator_cases``.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 import warnings
@@ -41,6 +42,7 @@ def _independent_rhs(m, r, R, e, k, g, c, tau):
     return f
 
 
+@functools.cache  # (about half a minute each: every test of a worker shares it)
 def _with_references(seed: int):
     """500 control steps of the adversarial sample drawn from ``seed`` and their references,
     DOP853 at rtol = atol = 1e-13 and 1e-12 on the independent right-hand side, in groups of
@@ -110,6 +112,29 @@ def test_tol_met_never_claims_a_step_twice_over_on_a_fresh_sample(method):
         claimed = checked & out.tol_met
         assert (err[claimed] <= 2 * tol).all(), (tol, np.flatnonzero(claimed & (err > 2 * tol)))
         assert np.mean(~out.tol_met[checked]) <= 0.02, (tol, np.flatnonzero(checked & ~out.tol_met))
+
+
+@pytest.mark.parametrize(("method", "tols"), [("midpoint", (1e-4,)), ("euler", (1e-3,))])
+def test_fixed_schemes_claim_tol_met_only_where_their_check_confirms_it(method, tols):
+    """euler and midpoint took tol_met from their prediction of the substeps alone, which
+    undercounts on stiff scenes: midpoint claimed it on a step 37 tol off (g = 1e6). Their
+    Richardson check (the same step in half as many substeps) now confirms it: on the fresh
+    sample, no step that reports tol_met is more than 2 tol off, and on that step the
+    estimate is within 10 % of the error against a taylor step at tol 1e-12."""
+    scene, phi, w, tau, ref, uncertainty = _with_references(FRESH_SEED)
+    for tol in tols:
+        out = step(scene, phi, w, tau, DT, integrator=method, tolerance=tol)
+        err = np.maximum(np.abs(out.phi - ref[0]), np.abs(out.phi_dot - ref[1]))
+        claimed = (uncertainty <= tol / 10) & out.tol_met
+        assert claimed.sum() >= 100, claimed.sum()
+        assert (err[claimed] <= 2 * tol).all(), (tol, np.flatnonzero(claimed & (err > 2 * tol)))
+    stiff = (Scene(g=1e6), 0.38126140102427764, 4.791366408038581, 0.887782526004016, DT)
+    if method == "midpoint":
+        out = step(*stiff, integrator=method, tolerance=1e-4)
+        exact = step(*stiff, integrator="taylor", tolerance=1e-12)
+        err = max(abs(out.phi - exact.phi), abs(out.phi_dot - exact.phi_dot))
+        assert err > 10 * 1e-4 and not out.tol_met
+        assert out.error_estimate == pytest.approx(err, rel=0.1)
 
 
 #: Steps through a spike of φ'' (J_I near zero, passed at speed: φ' reached about 5,000 rad/s
