@@ -33,6 +33,9 @@ __all__ = ["DEFAULT_DT", "DEFAULT_TOLERANCE", "EnvConfig", "Settings", "resolve_
 DEFAULT_DT = 0.05
 #: The integrator's target state error per control step (φ in rad, φ' in rad/s).
 DEFAULT_TOLERANCE = 1e-8
+#: The tightest tolerance an environment takes (the physics' steppers take any, and flag what
+#: they cannot verify).
+TOLERANCE_MIN = 1e-12
 _SCENE_FIELDS = tuple(f.name for f in fields(Scene))
 
 
@@ -71,10 +74,13 @@ class Settings:
     dt: float = field(default=DEFAULT_DT, metadata=_doc(
         "the control step [s]; the torque is constant over it."))
     max_torque: float | None = field(default=None, metadata=_doc(
-        "the torque [N·m] an action of ±1 applies; default: the task's."))
+        "the torque [N·m] an action of ±1 applies; default: the task's. A task that must pump "
+        "energy (RollerBalance, RollerBalanceWeak, RollerSwing) refuses a torque whose most "
+        "power, max_torque·ω at the fastest speed on the way, would need more than a quarter "
+        "of the episode to bring the energy success needs."))
     tolerance: float = field(default=DEFAULT_TOLERANCE, metadata=_doc(
-        "the integrator's target state error per control step (φ [rad], φ' [rad/s]); it "
-        "sets the number of substeps."))
+        "the integrator's target state error per control step (φ [rad], φ' [rad/s]), >= 1e-12 "
+        "(float64 cannot verify a tighter one); it sets the number of substeps."))
     integrator: str = field(default=DEFAULT_INTEGRATOR, metadata=_doc(
         "``\"taylor\"`` (the series of the motion to degree 18, its substeps chosen from "
         "its own error estimate; the default and the fastest), ``\"rk8\"`` and ``\"rk4\"`` "
@@ -85,7 +91,8 @@ class Settings:
     substeps: int | None = field(default=None, metadata=_doc(
         "a fixed number of substeps per control step instead of the automatic rule; "
         "``info[\"tol_met\"]`` then says whether they met the tolerance by the scheme's error "
-        "estimate (euler, midpoint: by their prediction of the substeps it needs)."))
+        "estimate (euler, midpoint: by Richardson's estimate, the same step in half as many "
+        "substeps)."))
     randomize: Mapping[str, tuple[float, float]] | None = field(default=None, metadata=_doc(
         "``{field: (low, high)}``: Scene fields drawn uniformly at each reset (domain "
         "randomization), e.g. ``{\"m\": (0.8, 1.2), \"e\": (0.03, 0.05)}``. At "
@@ -197,6 +204,13 @@ class EnvConfig:
         scene = resolve_scene(scene, task.default_scene)
         dt = validation.real("dt", dt, positive=True, unit="s")
         tolerance = validation.real("tolerance", tolerance, positive=True)
+        if tolerance < TOLERANCE_MIN:
+            raise ValueError(
+                f"tolerance={shown(tolerance)} is not allowed: it must be >= "
+                f"{TOLERANCE_MIN:g} (float64's rounding of the state, about 2.2e-16 of |φ| per "
+                "operation, keeps a step from verifying a tighter one: at 1e-14 half the "
+                "steps, at 1e-15 nearly all report tol_met=False); for tighter steps use "
+                "roller_gym.physics.Stepper, which flags them")
         integrator = validation.choice("integrator", integrator, tuple(INTEGRATORS))
         if substeps is not None:
             substeps = validation.count("substeps", substeps, high=MAX_SUBSTEPS)

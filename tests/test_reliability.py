@@ -1008,3 +1008,28 @@ def test_a_target_the_torque_cannot_reach_within_the_episode_is_refused(env_id, 
         result = step(scene, phi, phi_dot, tau * (1.0 if phi_dot >= 0 else -1.0), dt)
         phi, phi_dot, peak = result.phi, result.phi_dot, max(peak, result.energy)
     assert peak < needed
+
+
+@pytest.mark.parametrize("tolerance", [5e-324, 1e-15, 1e-13])
+def test_a_tolerance_float64_cannot_verify_is_refused(tolerance):
+    """tolerance=5e-324 was accepted, and then every step reported tol_met=False (at 1e-14
+    about half the steps, at 1e-13 one in a hundred). The environments refuse tolerances
+    below TOLERANCE_MIN by name, single and vector; at TOLERANCE_MIN every step of a
+    seeded episode of each task under random torques verifies it."""
+    from roller_gym.config import TOLERANCE_MIN
+
+    for make in (lambda: gym.make("roller_gym/RollerStabilize-v2", tolerance=tolerance),
+                 lambda: gym.make_vec("roller_gym/RollerBalance-v2", num_envs=2,
+                                      tolerance=tolerance)):
+        with pytest.raises(ValueError, match=r"tolerance=\S+ is not allowed: it must be >= "
+                                             r"1e-12 \(float64's rounding"):
+            make()
+    rng = np.random.default_rng(3)
+    for env_id in [task.env_id() for task in roller_gym.TASKS.values()]:
+        env = gym.make(env_id, tolerance=TOLERANCE_MIN)
+        env.reset(seed=1)
+        for _ in range(100):
+            *_, terminated, truncated, info = env.step(rng.uniform(-1, 1, 1).astype(np.float32))
+            assert info["tol_met"], env_id
+            if terminated or truncated:
+                break
