@@ -362,8 +362,9 @@ def from_env_fns(env_fns: list[Any], **vec_env_kwargs: Any) -> VecEnv:
     take (``"dop853"``). Like ``DummyVecEnv`` it takes no other keyword arguments.
 
     Raises:
-        ValueError: ``env_fns`` is not a non-empty list of functions making environments, or
-            ``vec_env_kwargs`` are given.
+        ValueError: ``env_fns`` is not a non-empty list of functions making environments of
+            one observation space and one action space (SB3 stacks their observations and
+            hands each the same actions), or ``vec_env_kwargs`` are given.
     """
     if not isinstance(env_fns, list | tuple) or not env_fns:
         raise ValueError(f"env_fns={shown(env_fns)} must be a non-empty list of functions that "
@@ -379,6 +380,13 @@ def from_env_fns(env_fns: list[Any], **vec_env_kwargs: Any) -> VecEnv:
             raise ValueError(f"env_fns[{i}]={shown(fn)} must be a function that makes an "
                              f"environment (it {got})")
         probes.append(_probe(env))
+        for name, space, first_space in zip(("observation", "action"), probes[i][6],
+                                            probes[0][6], strict=True):
+            if space != first_space:
+                raise ValueError(f"env_fns[{i}]={shown(fn)} makes an environment whose {name} "
+                                 f"space {space} differs from env_fns[0]'s, {first_space}: the "
+                                 "environments of one vector env must share their observation "
+                                 "and action spaces")
     first = probes[0]
     native = (all(_same(p[:3], first[:3]) and p[3] <= _PLAIN_WRAPPERS for p in probes)
               and first[0] is not None and first[0].startswith("roller_gym/")
@@ -396,8 +404,8 @@ def from_env_fns(env_fns: list[Any], **vec_env_kwargs: Any) -> VecEnv:
 
 def _probe(env: gym.Env) -> tuple:
     """What decides the batch for one made environment (closed after): its ID, keyword
-    arguments, time limit and wrappers' names, the Monitor folder's batch file and the
-    probe's own Monitor file."""
+    arguments, time limit and wrappers' names, the Monitor folder's batch file, the
+    probe's own Monitor file and its (observation, action) spaces."""
     wrappers, inner, monitor, probe_file = set(), env, None, None
     while isinstance(inner, gym.Wrapper):
         wrappers.add(type(inner).__name__)
@@ -407,10 +415,12 @@ def _probe(env: gym.Env) -> tuple:
             monitor = str(probe_file.parent / "batch")
         inner = inner.env
     spec = env.spec  # the outermost: it carries make()'s max_episode_steps
+    spaces = env.observation_space, env.action_space  # the outermost's, as SB3 reads them
     env.close()
     if spec is None:
-        return None, {}, None, wrappers, monitor, probe_file
-    return spec.id, dict(spec.kwargs), spec.max_episode_steps, wrappers, monitor, probe_file
+        return None, {}, None, wrappers, monitor, probe_file, spaces
+    return (spec.id, dict(spec.kwargs), spec.max_episode_steps, wrappers, monitor, probe_file,
+            spaces)
 
 
 def _same(a: Any, b: Any) -> bool:

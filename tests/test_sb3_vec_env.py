@@ -295,13 +295,15 @@ def test_bad_actions_and_no_environments_are_refused_naming_them():
 def test_from_env_fns_batches_only_environments_made_alike():
     """Environments that differ (another task, another dt, no time limit) were all made as
     the first one; now they go to DummyVecEnv, which makes each as asked. Bad functions and
-    keyword arguments are refused by name (they failed in SB3 or were dropped)."""
+    keyword arguments are refused by name (they failed in SB3 or were dropped), and so are
+    environments of other spaces (they went to DummyVecEnv, whose reset then failed)."""
     same = from_env_fns([lambda: gymnasium.make(IDS[0]), lambda: gymnasium.make(IDS[0])])
     assert isinstance(same, RollerVecEnv)
     scaled = from_env_fns([lambda: gymnasium.make(IDS[0]), lambda: gymnasium.wrappers.
                            TransformReward(gymnasium.make(IDS[0]), lambda r: 100 * r)])
     assert isinstance(scaled, DummyVecEnv)  # (the second one's wrapper was dropped)
-    for fns in ([lambda: gymnasium.make(IDS[0]), lambda: gymnasium.make(IDS[1])],
+    balance = "roller_gym/RollerBalance-v2"  # another task of the same spaces
+    for fns in ([lambda: gymnasium.make(IDS[0]), lambda: gymnasium.make(balance)],
                 [lambda: gymnasium.make(IDS[0], dt=0.05), lambda: gymnasium.make(IDS[0], dt=0.1)],
                 [lambda: gymnasium.make(IDS[0], max_episode_steps=-1)]):
         venv = from_env_fns(fns)
@@ -310,7 +312,14 @@ def test_from_env_fns_batches_only_environments_made_alike():
             fn().spec.kwargs.get("dt") for fn in fns]
     for bad, message in (((lambda: gymnasium.make(IDS[0])), r"must be a non-empty list"),
                          ([None], r"env_fns\[0\]=None must be a function .*not callable"),
-                         ([lambda: 5], r"env_fns\[0\]=.* \(it made 5\)")):
+                         ([lambda: 5], r"env_fns\[0\]=.* \(it made 5\)"),
+                         ([lambda: gymnasium.make(IDS[0]), lambda: gymnasium.make(
+                             "roller_gym/RollerHold-v2")], r"env_fns\[1\]=.* makes an environment "
+                          r"whose observation space Box\(.*\(9,\).*\) differs from env_fns\[0\]'s, "
+                          r"Box\(.*\(5,\).*\)"),
+                         ([lambda: gymnasium.make(IDS[0]), lambda: gymnasium.wrappers.RescaleAction(
+                             gymnasium.make(IDS[0]), np.float32(0), np.float32(2))],
+                          r"env_fns\[1\]=.* whose action space Box\(0\.0, 2\.0, .*\) differs")):
         with pytest.raises(ValueError, match=message):
             from_env_fns(bad)
     with pytest.raises(ValueError, match=r"takes no keyword arguments \(got foo\)"):
