@@ -219,12 +219,12 @@ def _spaces() -> tuple[Any, Any]:
     return (spaces.Box(-1.0, 1.0, (3,), np.float32), spaces.Box(-1.0, 1.0, (1,), np.float32))
 
 
-def _built(what: str, build: Callable[[], Any]) -> Any:
-    """``build()``; any error it raises as a ValueError saying what failed to build."""
+def _built(what: str, build: Callable[[], Any], doing: str = "building") -> Any:
+    """``build()``; any error it raises as a ValueError saying what failed in ``doing`` it."""
     try:
         return build()
     except Exception as error:
-        raise ValueError(f"building {what} raised {type(error).__name__}: {error}") from None
+        raise ValueError(f"{doing} {what} raised {type(error).__name__}: {error}") from None
 
 
 def _policy_kwargs(value: Any, given: Given) -> bool:
@@ -319,7 +319,9 @@ NORMALIZE_RULES: dict[str, tuple[Callable[[Any], bool], str]] = {
 
 def _wrapper(key: str) -> Callable[[Any, Given], bool]:
     """Whether rl-zoo3 finds the wrapper(s) named by ``value`` and, with a task, they wrap
-    its environment (an ``env_wrapper``) or a one-environment DummyVecEnv of it."""
+    its environment (an ``env_wrapper``) or a one-environment DummyVecEnv of it, and the
+    wrapped environment resets and takes a step (the action halfway between its bounds):
+    a wrapper's own arguments (a reward function that is not one) fail only there."""
     def check(value: Any, given: Given) -> bool:
         from rl_zoo3.utils import get_wrapper_class
 
@@ -335,14 +337,23 @@ def _wrapper(key: str) -> Callable[[Any, Given], bool]:
         else:
             env = _built("the wrapped vector environment",
                          lambda: wrap(DummyVecEnv([lambda: gym.make(given.env_id)])))
-        spaces = env.observation_space, env.action_space
-        env.close()
-        if not all(isinstance(s, gym.spaces.Box) for s in spaces) or not (
-                np.all(np.isfinite(spaces[1].low)) and np.all(np.isfinite(spaces[1].high))
-                and spaces[0].shape and np.prod(spaces[0].shape) > 0):
-            raise ValueError(f"the wrapped environment's spaces are {spaces[0]} and {spaces[1]}; "
-                             "the algorithms take non-empty vectors, and actions with finite "
-                             "bounds")
+        try:
+            spaces = env.observation_space, env.action_space
+            if not all(isinstance(s, gym.spaces.Box) for s in spaces) or not (
+                    np.all(np.isfinite(spaces[1].low)) and np.all(np.isfinite(spaces[1].high))
+                    and spaces[0].shape and np.prod(spaces[0].shape) > 0):
+                raise ValueError(f"the wrapped environment's spaces are {spaces[0]} and "
+                                 f"{spaces[1]}; the algorithms take non-empty vectors, and "
+                                 "actions with finite bounds")
+            action = ((spaces[1].low + spaces[1].high) / 2).astype(spaces[1].dtype)
+            if key == "env_wrapper":
+                _built("the wrapped environment", lambda: (env.reset(seed=0), env.step(action)),
+                       doing="stepping")
+            else:
+                _built("the wrapped vector environment",
+                       lambda: (env.reset(), env.step(action[None])), doing="stepping")
+        finally:
+            env.close()
         return True
     return check
 

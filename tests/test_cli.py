@@ -606,6 +606,13 @@ def test_train_rllib_refuses_env_kwargs_the_env_refuses_before_ray_starts(item, 
              "replay_buffer_kwargs:dict(handle_timeout_termination=False)"),
      "--hyperparams: buffer_size:1 with n_envs:1 and optimize_memory_usage:True is not "
      "allowed: .*needs buffer_size >= 2 x n_envs"),
+    # (a TypeError at the first step of training)
+    ("sac", "env_wrapper:[{'gymnasium.wrappers.TransformReward': {'func': 'x'}}]",
+     "env_wrapper:.* is not allowed: .*stepping the wrapped environment raised TypeError"),
+    ("ppo", "vec_env_wrapper:{'stable_baselines3.common.vec_env.VecNormalize': "
+            "{'clip_obs': 'x'}}",
+     "vec_env_wrapper:.* is not allowed: .*stepping the wrapped vector environment raised "
+     "TypeError"),
 ])
 def test_train_refuses_hyperparams_before_rl_zoo3_starts(algo, item, message, tmp_path,
                                                           monkeypatch):
