@@ -99,12 +99,14 @@ def check_together(algo: str, hp: dict[str, Any], observation_size: int) -> None
     """The checks of the hyperparameters that will train (the file's, then ``--hyperparams``)
     taken together: PPO's samples (a rollout and a minibatch of at least 2), episodic
     training on one environment, and the memory of the buffers (``observation_size``
-    numbers per observation, before frame_stack).
+    numbers per observation, before frame_stack) and of the environments with their share
+    of the buffers.
 
     Raises:
         SystemExit: naming ``--hyperparams``, the values and what is allowed.
     """
     from roller_gym.physics.integrators.layout import check_memory
+    from roller_gym.vector_env import BYTES_PER_ENV
 
     n_envs, stack = int(hp.get("n_envs", 1)), int(hp.get("frame_stack", 1))
     if algo == "ppo":
@@ -125,11 +127,17 @@ def check_together(algo: str, hp: dict[str, Any], observation_size: int) -> None
                              "optimize_memory_usage:True is not allowed: that buffer keeps "
                              "each environment's next observation in the next slot, so it "
                              "needs buffer_size >= 2 x n_envs")
+        entries = max(entries // n_envs, 1) * n_envs  # SB3's slots: buffer_size // n_envs x n_envs
     # float32 observations (twice: the next ones too), actions, rewards and flags per entry
     size = 4 * (2 * observation_size * stack + 4)
     try:
         check_memory("--hyperparams buffer_size (or n_steps x n_envs)", entries, size)
         check_memory("--hyperparams batch_size", batch, 2 * size)
+        # each environment with its share of the buffers. An environment of training's native
+        # batch (from_env_fns, reset and stepped under VecNormalize) measured 4.0-4.2 kB at
+        # tracemalloc's peak (1,024 and 4,096 of them), 4.2-5.6 kB of peak RSS (4,096-16,384):
+        # BYTES_PER_ENV, no more. A DummyVecEnv's (wrapped environments, dop853) takes 59 kB.
+        check_memory("--hyperparams n_envs", n_envs, BYTES_PER_ENV + entries // n_envs * size)
     except ValueError as error:
         raise SystemExit(str(error)) from None
 

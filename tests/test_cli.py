@@ -606,13 +606,16 @@ def test_train_rllib_refuses_env_kwargs_the_env_refuses_before_ray_starts(item, 
              "replay_buffer_kwargs:dict(handle_timeout_termination=False)"),
      "--hyperparams: buffer_size:1 with n_envs:1 and optimize_memory_usage:True is not "
      "allowed: .*needs buffer_size >= 2 x n_envs"),
-    # (a TypeError at the first step of training)
+    # (a TypeError at the first step of training; the OOM killer minutes in, with no message)
     ("sac", "env_wrapper:[{'gymnasium.wrappers.TransformReward': {'func': 'x'}}]",
      "env_wrapper:.* is not allowed: .*stepping the wrapped environment raised TypeError"),
     ("ppo", "vec_env_wrapper:{'stable_baselines3.common.vec_env.VecNormalize': "
             "{'clip_obs': 'x'}}",
      "vec_env_wrapper:.* is not allowed: .*stepping the wrapped vector environment raised "
      "TypeError"),
+    ("sac", "n_envs:100000000", "--hyperparams n_envs=100000000 is too many: their arrays "
+                                "need about"),
+    ("td3", "n_envs:100000000", "--hyperparams n_envs=100000000 is too many"),
 ])
 def test_train_refuses_hyperparams_before_rl_zoo3_starts(algo, item, message, tmp_path,
                                                           monkeypatch):
@@ -654,6 +657,20 @@ def test_train_takes_the_forms_of_rl_zoo3s_own_files(algo, item):
     if item == "optimize_memory_usage:True":
         items.append("replay_buffer_kwargs:dict(handle_timeout_termination=False)")
     assert train.checked_hyperparams(algo, items, "roller_gym/RollerStabilize-v2")
+
+
+@pytest.mark.parametrize("algo", ["sac", "td3", "ppo"])
+def test_train_takes_as_many_environments_as_the_machine_holds(algo):
+    """n_envs is checked against the memory of its environments with their share of the
+    buffers; the shipped files' counts and 1,024 environments pass that check."""
+    import roller_gym
+    from roller_gym.agents.hyperparams import hyperparams
+    from roller_gym.scripts import train
+
+    for env_id in roller_gym.ENV_IDS:
+        hp = hyperparams(algo, env_id)
+        for n_envs in (hp.get("n_envs", 1), 1024):
+            train.check_together(algo, {**hp, "n_envs": n_envs}, train._observation_size(env_id))
 
 
 @NEEDS_RL_ZOO3
