@@ -21,6 +21,7 @@ import gymnasium as gym
 import numpy as np
 from roller_gym.agents.observation import decode_observation
 from roller_gym.physics import Scene, energy, holding_torque, linearize
+from roller_gym.physics.scene import shown
 from roller_gym.task import Task, wrap_rate
 from scipy.linalg import expm, solve_discrete_are
 
@@ -166,8 +167,20 @@ class LQR(Controller):
             M[:2, :2], M[:2, 2:] = A, B
             E = expm(M * self.dt)
             Ad, Bd = E[:2, :2], E[:2, 2:]
-            P = solve_discrete_are(Ad, Bd, self.Q, self.R)
-            K = np.linalg.solve(self.R + Bd.T @ P @ Bd, Bd.T @ P @ Ad)
+            try:
+                P = solve_discrete_are(Ad, Bd, self.Q, self.R)
+                K = np.linalg.solve(self.R + Bd.T @ P @ Bd, Bd.T @ P @ Ad)
+            except (np.linalg.LinAlgError, ValueError) as error:
+                raise ValueError(
+                    f"LQR: no gains for {shown(self.scene)} about phi*={key:g} rad with "
+                    f"dt={self.dt:g} s (scipy: {error}); its linearized motion, A = "
+                    f"{np.array2string(A.ravel(), precision=3)} (row by row), B = "
+                    f"{np.array2string(B.ravel(), precision=3)} per N·m, is too far from the "
+                    "weights' scales for the Riccati equation (a torque of next to no "
+                    "effect, or a motion far faster than dt)") from None
+            if not (np.all(np.isfinite(K)) and np.all(np.isfinite(P))):
+                raise ValueError(f"LQR: the gains for {shown(self.scene)} about phi*={key:g} "
+                                 f"rad are not finite: K={K}")
             self._cache[key] = (tau_star, K, P)
         return self._cache[key]
 

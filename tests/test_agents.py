@@ -129,6 +129,20 @@ def test_lqr_holds_the_target_with_the_holding_torque_and_pushes_back_when_off_i
     assert list(policy._cache) == [pytest.approx(target, abs=policy.gain_resolution)]
 
 
+@pytest.mark.parametrize("scene", [Scene(m=1e80, R=0.5, e=0.04),
+                                   Scene(r=1e40, R=float("inf"), e=4e39, k=1e40)])
+def test_lqr_says_which_scene_it_has_no_gains_for(scene):
+    """Scenes where the torque has next to no effect (B ~ 1e-79 per N·m) ended in scipy's
+    LinAlgError from the Riccati solver; the LQR now names the scene and its linearization."""
+    from roller_gym.stabilize import StabilizeTask
+
+    lqr = LQR(StabilizeTask(), scene, max_torque=1.0, dt=0.05)
+    with pytest.raises(ValueError, match=r"LQR: no gains for Scene\(.*about phi\*=0 rad with "
+                                         r"dt=0\.05 s \(scipy: .*B = "):
+        lqr.gains(0.0)
+    assert LQR(StabilizeTask(), Scene(), max_torque=1.0, dt=0.05).gains(0.0)[1].shape == (1, 2)
+
+
 def test_energy_swing_up_balances_in_every_episode():
     env = gym.make("roller_gym/RollerBalance-v2")
     policy = EnergySwingUp.from_env(env, **CLASSICAL["roller_gym/RollerBalance-v2"])
