@@ -55,8 +55,9 @@ At rest near the bottom: φ and φ' uniform in ±0.1 (rad, rad/s).
 Checked at construction (and proven over ``randomize`` ranges): the unstable rest position
 exists and the roller rolls there at rest; the swing-up outruns the damping: c·ω <= 0.5
 max_torque at ω = sqrt(2 V(φ_b) / J_I(0)), the bottom speed of a swing that reaches φ_b;
-and the torque can pump the energy success needs within a quarter of the episode, even at
-its most power, max_torque·ω.
+the torque can pump the energy success needs within a quarter of the episode, even at
+its most power, max_torque·ω; and the swing that reaches φ_b can roll all the way up: at each
+point of it some torque within the limit keeps N > 0 and |F| <= μN.
 
 ## Version History
 
@@ -76,6 +77,7 @@ from typing import Any
 
 import numpy as np
 from roller_gym import feasibility
+from roller_gym.intervals import Interval
 from roller_gym.physics import Scene, contact, energy, equations
 from roller_gym.physics.analysis import nearest_unstable_rests
 from roller_gym.physics.scene import shown
@@ -116,6 +118,15 @@ class BalanceTask(Task):
                 f"{self.damping_share:g} of max_torque={self.max_torque:g} N·m: the swing-up "
                 f"cannot reach the unstable rest position; use damping <= "
                 f"{self.damping_share * self.max_torque / speed:.3g} or a larger max_torque")
+        where = self.orbit_stuck(scene, phi_b)
+        if where is not None:
+            phi, phi_dot = where
+            raise ValueError(
+                f"the swing that reaches the unstable rest position phi_b={phi_b:.4g} rad of "
+                f"{shown(scene)} cannot roll on its way up: at phi={phi:.4g} rad, "
+                f"phi'={phi_dot:.4g} rad/s no torque within ±max_torque={self.max_torque:g} "
+                f"N·m keeps N > 0 and |F| <= mu N (mu={scene.mu:g}), so the roller slips or "
+                "lifts off before the top; use a smaller e or a larger mu")
 
     @staticmethod
     def swing_up_speed(scene: Scene, phi_b: float) -> float:
@@ -125,6 +136,43 @@ class BalanceTask(Task):
         m, r, kappa, e, k, _, _ = scene.params
         return math.sqrt(2.0 * float(energy(scene, phi_b, 0.0))
                          / float(equations.inertia(0.0, m, r, kappa, e, k)))
+
+    #: The points of φ in [0, φ_b] at which :meth:`orbit_stuck` examines the swing.
+    orbit_points = 129
+    #: The most pieces of [0, φ_b] a box's proof of the swing examines.
+    orbit_pieces = 1024
+
+    def orbit_stuck(self, scene: Scene, phi_b: float) -> tuple[float, float] | None:
+        """A state (φ [rad], φ' [rad/s]) of the swing that reaches φ_b (energy V(φ_b), either
+        way round) at which no torque within ±max_torque keeps the roller rolling (N > 0,
+        |F| <= μN), or None where some torque does at each of :attr:`orbit_points` points
+        of [0, φ_b]. N and F are affine in τ, so the torques that roll are an interval,
+        found exactly."""
+        m, r, kappa, e, k, g, c = scene.params
+        phi = np.linspace(0.0, phi_b, self.orbit_points)
+        level = float(energy(scene, phi_b, 0.0))
+        speed = np.sqrt(np.maximum(2.0 * (level - equations.potential(phi, m, r, kappa, e, g))
+                                   / equations.inertia(phi, m, r, kappa, e, k), 0.0))
+        for phi_dot in (speed, -speed):
+            low = np.full(phi.shape, -self.max_torque)
+            high = np.full(phi.shape, self.max_torque)
+            forces = [equations.contact_forces(phi, phi_dot, equations.accel(
+                phi, phi_dot, tau, m, r, kappa, e, k, g, c), m, r, kappa, e, g)
+                for tau in (0.0, 1.0)]
+            (n0, f0), (n1, f1) = forces
+            # N > 0, μN − F >= 0, μN + F >= 0: a + b τ >= 0 for each (a, b)
+            for a, b in ((n0, n1 - n0), (scene.mu * n0 - f0, scene.mu * (n1 - n0) - (f1 - f0)),
+                         (scene.mu * n0 + f0, scene.mu * (n1 - n0) + (f1 - f0))):
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    bound = -a / b
+                low = np.where(b > 0, np.maximum(low, bound), low)
+                high = np.where(b < 0, np.minimum(high, bound), high)
+                high = np.where((b == 0) & (a < 0), -np.inf, high)
+            stuck = ~(low <= high)
+            if stuck.any():
+                i = int(np.flatnonzero(stuck)[0])
+                return float(phi[i]), float(phi_dot[i])
+        return None
 
     def pump_time(self, scene: Scene) -> tuple[float, float, float]:
         """(the least energy [J] a start must gain to succeed: from the most a start has,
@@ -164,14 +212,58 @@ class BalanceTask(Task):
         if phi is None:
             return False
         p = params
-        height = _potential_upper(p, phi)
+        top = potential_enclosure(p, phi)
+        height = max(float(np.max(top.hi)), 0.0)
         least = equations.inertia(0.0 * phi, p.m, p.r, p.kappa, p.e, p.k)
         if not (math.isfinite(height) and least.lo > 0):
             return False
         speed = math.sqrt(2.0 * height / least.lo)
         pump = math.sqrt(0.5 * height * least.hi) / self.max_torque
         return bool(p.c.hi * speed <= self.damping_share * self.max_torque
-                    and pump <= self.PUMP_SHARE * self.max_episode_steps * dt)
+                    and pump <= self.PUMP_SHARE * self.max_episode_steps * dt
+                    and self._orbit_proven(p, phi))
+
+    def _orbit_proven(self, p: Any, phi: Interval) -> bool:
+        """:meth:`orbit_stuck` proven None over the box ``p`` (``phi``: an interval holding
+        φ_b): [0, phi's upper end] is covered by pieces on each of which, with φ'
+        either way and |φ'| in the enclosure of sqrt(2 (V(φ_b) − V(φ)) / J_I(φ)), one
+        torque of 0, ±max_torque/2, ±max_torque keeps N > 0 and μN − |F| >= 0 (some torque
+        rolls there, as the scalar check finds exactly). Evaluated per unit mass (m scales
+        out of the motion but for τ/m and c/m), so m's range is counted once; pieces that
+        fail are halved, up to
+        :attr:`orbit_pieces` pieces (then the box is not proven, and the proof splits it)."""
+        per_mass = Interval(1.0) / p.m  # the motion and the margins depend on τ/m and c/m
+        p = p._replace(m=Interval(1.0), c=p.c * per_mass)  # only: m scales out of the rest
+        top = potential_enclosure(p, phi)  # V(φ_b) per unit mass
+        torques = [share * self.max_torque * per_mass for share in (0.0, -1.0, 1.0, -0.5, 0.5)]
+        edges = np.linspace(0.0, float(phi.hi), 129)
+        lo, hi = edges[:-1], edges[1:]
+        examined = 0
+        while lo.size:
+            examined += lo.size
+            if examined > self.orbit_pieces:
+                return False
+            piece = Interval(lo, hi)
+            squared = (2.0 * (top - potential_enclosure(p, piece))
+                       / equations.inertia(piece, p.m, p.r, p.kappa, p.e, p.k))
+            beyond = squared.hi < 0  # no scene's swing comes here
+            speed = Interval(np.maximum(squared.lo, 0.0), np.maximum(squared.hi, 0.0)).sqrt()
+            ok = np.ones(lo.shape, bool)
+            for sign in (1.0, -1.0):
+                phi_dot = sign * speed
+                rolls = np.zeros(lo.shape, bool)
+                for tau in torques:
+                    acc = equations.accel(piece, phi_dot, tau, p.m, p.r, p.kappa, p.e, p.k,
+                                          p.g, p.c)
+                    normal, friction = equations.contact_forces(piece, phi_dot, acc, p.m, p.r,
+                                                                p.kappa, p.e, p.g)
+                    lift, slip = equations.margins(normal, friction, p.m, p.g, p.mu)
+                    rolls |= (lift.lo > 0) & (slip.lo >= 0)
+                ok &= rolls
+            ok |= beyond
+            half = 0.5 * (lo + hi)
+            lo, hi = np.concatenate([lo[~ok], half[~ok]]), np.concatenate([half[~ok], hi[~ok]])
+        return True
 
     start_rule = "near rest at the bottom, |φ| <= 0.1 rad and |φ'| <= 0.1 rad/s"
     start_speed = 0.1
@@ -191,21 +283,18 @@ class BalanceTask(Task):
         return 2.0 * w * u_phi - w, 2.0 * w * u_dot - w
 
 
-def _potential_upper(p: Any, phi: Any) -> float:
-    """An upper end [J], >= 0, of V (:func:`equations.potential`) over the box ``p`` and
-    φ in the interval ``phi`` inside the search window (|ψ| < π): V = m g [A sinc(ψ/2) +
-    2 e sin²(φ/2)] with A = r φ sin(ψ/2), where A >= 0 in a cylinder (the first term is
-    then at most A, sinc <= 1) and A <= 0 on a drum (at most A's upper end times the least
-    sinc, sinc(max |ψ|/2) > 0, as sinc falls on [0, π/2]). (The sinc itself has no
-    enclosure on intervals at ψ = 0.)"""
+def potential_enclosure(p: Any, phi: Any) -> Interval:
+    """V [J] (:func:`equations.potential`) on intervals, over the box ``p`` and φ in the
+    interval ``phi`` (elementwise) inside the search window (|ψ| < π): V = m g [A sinc(ψ/2)
+    + 2 e sin²(φ/2)] with A = r φ sin(ψ/2) and sinc(ψ/2) in [sinc(max |ψ|/2), 1] (sinc
+    falls on [0, π/2]; the equations' own sinc has no enclosure on intervals at ψ = 0)."""
     _, psi, _ = equations.shape_factors(phi, p.r, p.kappa)
-    rolled = float(np.max((p.r * phi * np.sin(0.5 * psi)).hi))
-    if rolled < 0:
-        x = 0.5 * float(np.max(np.maximum(np.abs(psi.lo), np.abs(psi.hi))))
-        rolled *= (math.sin(x) / x if x > 0 else 1.0) * (1.0 - 1e-12)  # (rounded down)
+    x = 0.5 * np.maximum(np.abs(psi.lo), np.abs(psi.hi))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        least = np.where(x > 0, np.sin(x) / x, 1.0) * (1.0 - 1e-12)  # (rounded down)
     half = np.sin(0.5 * phi)
-    upper = (p.m * p.g * (rolled + 2.0 * p.e * half * half)).hi
-    return max(float(np.max(upper)), 0.0)
+    rolled = p.r * phi * np.sin(0.5 * psi) * Interval(least, 1.0)
+    return p.m * p.g * (rolled + 2.0 * p.e * half * half)
 
 
 def unstable_rest_targets(scene: Scene) -> np.ndarray:

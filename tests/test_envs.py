@@ -306,7 +306,7 @@ def test_substeps_argument_is_the_number_of_fixed_substeps(integrator, n):
 def test_randomize_draws_scenes_within_the_ranges(env_id):
     if not randomizable(env_id):
         pytest.skip("takes no randomize range (env_cases.randomizable): refused")
-    ranges = {"m": (0.8, 1.2), "e": (0.06, 0.09)} if balances(env_id) else {
+    ranges = {"m": (0.8, 1.2), "e": (0.06, 0.084)} if balances(env_id) else {
         "m": (0.8, 1.2), "e": (0.03, 0.05)}
     env = gym.make(env_id, randomize=ranges)
     base = preset(DOCUMENTED[env_id]["scene"])

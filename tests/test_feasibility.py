@@ -220,8 +220,8 @@ def test_a_narrow_infeasible_pocket_between_scan_points_is_refused():
     [(STABILIZE, {"randomize": {"m": (0.8, 1.2), "e": (0.03, 0.05)}}),
      (HOLD, {"scene": "floor", "max_torque": 0.8,
              "randomize": {"m": (0.8, 1.2), "e": (0.03, 0.05)}}),
-     (BALANCE, {"randomize": {"R": (0.7, 1.5), "m": (0.8, 1.2)}}),
-     (BALANCE, {"randomize": {"e": (0.06, 0.1), "mu": (0.6, 1.0)}}),
+     (BALANCE, {"randomize": {"R": (0.9, 1.5), "m": (0.8, 1.2)}}),
+     (BALANCE, {"randomize": {"e": (0.06, 0.08), "mu": (0.8, 1.0)}}),
      (BALANCE, {"scene": "floor", "randomize": {"e": (0.03, 0.05), "k": (0.05, 0.15)}})],
 )
 def test_feasible_ranges_construct_and_every_sub_environment_starts(env_id, kwargs):
@@ -352,7 +352,7 @@ def test_balance_targets_of_randomized_scenes_are_a_batch_computation(monkeypatc
     search = roller_gym.rest.equilibria
     monkeypatch.setattr(roller_gym.rest, "equilibria",
                         lambda *a, **k: calls.append(a) or search(*a, **k))
-    for ranges in ({"m": (0.8, 1.2), "mu": (0.6, 1.0)}, {"R": (0.85, 1.5), "e": (0.07, 0.09)}):
+    for ranges in ({"m": (0.8, 1.2), "mu": (0.7, 1.0)}, {"R": (0.9, 1.5), "e": (0.07, 0.084)}):
         vec = gym.make_vec(BALANCE, num_envs=128, randomize=ranges)
         calls.clear()
         _, info = vec.reset(seed=7)
@@ -426,7 +426,7 @@ def test_the_upper_end_of_the_potential_over_a_box_holds_every_scenes_target_ene
     V(φ_b) of every scene drawn from the box, φ_b found by the scalar rule, and within a
     factor 2 of the largest on boxes up to a tenth wide (a bound as loose as
     m g (2|R − r| + 2e) failed ranges of R)."""
-    from roller_gym.balance import _potential_upper
+    from roller_gym.balance import potential_enclosure
 
     rng = np.random.default_rng(11)
     for _ in range(4):
@@ -438,7 +438,7 @@ def test_the_upper_end_of_the_potential_over_a_box_holds_every_scenes_target_ene
         middle = scene.replace(**{n: 0.5 * (a + b) for n, (a, b) in box.items()})
         with np.errstate(all="ignore"):
             phi = feasibility.unstable_rest_enclosure(p, [middle])
-            upper = _potential_upper(p, phi)
+            upper = max(float(np.max(potential_enclosure(p, phi).hi)), 0.0)
         energies = []
         for _ in range(30):
             drawn = scene.replace(**{n: float(rng.uniform(a, b)) for n, (a, b) in box.items()})
@@ -446,3 +446,51 @@ def test_the_upper_end_of_the_potential_over_a_box_holds_every_scenes_target_ene
             assert phi.lo <= phi_b <= phi.hi
             energies.append(float(roller_gym.physics.energy(drawn, phi_b, 0.0)))
         assert max(energies) <= upper <= 2.0 * max(energies)
+
+
+def test_balance_refuses_a_swing_up_that_cannot_roll_and_proves_ranges_that_can():
+    """RollerBalance took e from 0.09 to 0.2 m at R = 1 m (and randomize e in (0.08, 0.2) as
+    proven), where the swing that reaches φ_b slips on its way up under every torque within
+    the limit (the informed swing-up slipped in every episode). Here the least over the
+    swing of the best margin, min(N/(m g), (μN − |F|)/(m g)) at the best of 81 torques in
+    ±max_torque, is computed independently of the check's exact interval of torques: it is
+    negative where the scene is refused, positive where it is taken; a range across the
+    limit is refused naming e, one below it is proven."""
+    from roller_gym.balance import BalanceTask
+    from roller_gym.physics import energy
+
+    task = BalanceTask()
+
+    def best_margin(scene):
+        phi_b = abs(unstable_rest_positions(scene)[0])
+        m, r, kappa, e, k, g, c = scene.params
+        phi = np.linspace(0.0, phi_b, 1001)
+        level = float(energy(scene, phi_b, 0.0))
+        speed = np.sqrt(np.maximum(2.0 * (level - equations.potential(phi, m, r, kappa, e, g))
+                                   / equations.inertia(phi, m, r, kappa, e, k), 0.0))
+        worst = np.inf
+        for phi_dot in (speed, -speed):
+            best = np.full(phi.shape, -np.inf)
+            for tau in np.linspace(-task.max_torque, task.max_torque, 81):
+                acc = equations.accel(phi, phi_dot, tau, m, r, kappa, e, k, g, c)
+                normal, friction = equations.contact_forces(phi, phi_dot, acc, m, r, kappa, e, g)
+                lift, slip = equations.margins(normal, friction, m, g, scene.mu)
+                best = np.maximum(best, np.minimum(lift, slip))
+            worst = min(worst, float(best.min()))
+        return worst
+
+    for e in (0.09, 0.1, 0.14):
+        scene = Scene(R=1.0, e=e)
+        assert best_margin(scene) < 0
+        with pytest.raises(ValueError, match=r"the swing that reaches the unstable rest position "
+                                             r".* cannot roll on its way up"):
+            gym.make(BALANCE, scene=scene)
+    for e in (0.08, 0.085):
+        assert best_margin(Scene(R=1.0, e=e)) > 0
+        gym.make(BALANCE, scene=Scene(R=1.0, e=e))
+    with pytest.raises(ValueError, match=r"randomize\['e'\]=\(0\.08, 0\.2\) cannot be used: "
+                                         r"at e = .* cannot roll on its way up"):
+        gym.make(BALANCE, randomize={"e": (0.08, 0.2)})
+    gym.make(BALANCE, randomize={"e": (0.07, 0.084)})  # proven
+    for e in np.random.default_rng(2).uniform(0.07, 0.084, 10):
+        assert best_margin(Scene(R=1.0, e=float(e))) > 0
