@@ -201,7 +201,7 @@ def measure(args: argparse.Namespace, env_id: str) -> dict[str, Any]:
         "format": results_page.FORMAT,
         "task": env_id,
         "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
-        "command": "roller-gym results " + " ".join(sys.argv[1:]),
+        "command": args.command,
         "machine": f"{platform.machine()}, {os.cpu_count()} CPU cores, {platform.platform()}",
         "versions": package_versions(("roller-gym", "gymnasium", "stable-baselines3",
                                       "rl_zoo3", "torch", "numpy")),
@@ -248,6 +248,9 @@ def keep_stored(record: dict[str, Any], stored: dict[str, Any], algos: list[str]
 
 def main(argv: list[str] | None = None) -> None:
     args = build_parser().parse_args(argv)
+    # what was run, for the task file (roller-gym's own main passes the arguments after
+    # the command; sys.argv then still holds the command's name)
+    args.command = "roller-gym results " + " ".join(sys.argv[1:] if argv is None else argv)
     import matplotlib  # the extra's packages: missing, say so before evaluating
     from roller_gym.agents import stats  # noqa: F401 (rliable)
 

@@ -320,3 +320,22 @@ def test_a_broken_task_file_is_refused_naming_it_before_any_evaluation(tmp_path,
     with pytest.raises(SystemExit, match=r"RollerHold-v2\.json: " + message):
         results.main(["--runs", str(tmp_path / "nothing"), "--env", TASK, "--keep-stored",
                       "--out", str(tmp_path), "--report", str(tmp_path / "R.md")])
+
+
+def test_a_task_file_records_the_command_as_it_was_typed(tmp_path, monkeypatch):
+    """Through ``roller-gym results …`` the task file's command read "roller-gym results
+    results …": the subcommand's name was taken from sys.argv as well."""
+    from roller_gym.scripts import cli, results
+
+    seen = []
+
+    def measure(args, env_id):
+        seen.append(args.command)
+        raise SystemExit(0)
+
+    monkeypatch.setattr(results, "measure", measure)
+    monkeypatch.setattr("sys.argv", ["roller-gym", "results", "--env", TASK,
+                                     "--out", str(tmp_path)])
+    with pytest.raises(SystemExit):
+        cli.main()
+    assert seen == [f"roller-gym results --env {TASK} --out {tmp_path}"]
