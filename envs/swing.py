@@ -59,7 +59,8 @@ Checked at construction, each scene of a vector env too: every target swing has 
 (E* > 0), rolls all the way within the success band under any torque of the limit
 (N > 0, |F| <= 0.9 μN), the pump outruns the damping (c·ω <= 0.5 max_torque at the
 swing's fastest speed ω), and the torque can bring the largest target's energy within a
-quarter of the episode (E / (max_torque·ω) <= 0.25 · 400 · dt). No ``randomize`` range is
+quarter of the episode (E / (max_torque·ω) <= 0.25 · 400 · dt), and the control step resolves
+the swing (ω0·dt < π, ω0 its small oscillations' angular frequency). No ``randomize`` range is
 accepted: these are checked per scene, and no proof over a range of scenes covers them yet.
 
 ## Episode end
@@ -151,6 +152,25 @@ class SwingTask(Task):
     def success(s, k):
         """The energy within energy_band of the target swing's, relative to it."""
         return np.abs(s.energy / s.target_energy - 1.0) <= k.energy_band
+
+    def infeasible(self, scene: Scene, dt: float | None = None) -> str | None:
+        """:meth:`Task.infeasible`, and with the control step ``dt`` [s] the swing resolved:
+        its small oscillations' angular frequency ω0 = sqrt(V''(0) / J_I(0)) [rad/s] gives
+        at least two control steps per period, ω0·dt < π (a torque held over a step acts in
+        phase with fewer than that only by aliasing: the energy pump fails there)."""
+        reason = super().infeasible(scene, dt)
+        if reason is not None or dt is None:
+            return reason
+        m, r, kappa, e, k, g, _ = scene.params
+        omega = math.sqrt(max(float(equations.d2potential(0.0, m, r, kappa, e, g)), 0.0)
+                          / float(equations.inertia(0.0, m, r, kappa, e, k)))
+        if not omega * dt < math.pi:
+            return (f"dt={dt:g} s is too long for the swing of {shown(scene)}: its small "
+                    f"oscillations have ω0 = {omega:.4g} rad/s, so ω0·dt = {omega * dt:.3g} >= "
+                    "π, fewer than two control steps per period, and a torque held over a "
+                    f"step cannot act in phase with the swing; use dt < π/ω0 = "
+                    f"{math.pi / omega:.3g} s or a looser fit (a larger R)")
+        return None
 
     def check_scene(self, scene: Scene) -> None:
         """The scene poses every target swing drawn (checked on a grid of amplitudes on both

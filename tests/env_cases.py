@@ -48,11 +48,12 @@ def balances(env_id: str) -> bool:
 def posable(env_id: str, scene: str) -> bool:
     """Whether the task can be posed on the preset ``scene``: a balancing task needs an
     unstable rest position that rolls (not the floor's or the drum's); a swing, target
-    swings that roll (not the preset "rim_mass"'s, which lift off); the others any preset (a
-    swing on the drum, in the well its eccentric mass makes at the top)."""
+    swings that roll (not the preset "rim_mass"'s, which lift off) and a swing the control
+    step resolves (not "tight_fit"'s, 1.5 steps per period at the default dt); the others
+    any preset (a swing on the drum, in the well its eccentric mass makes at the top)."""
     if balances(env_id):
         return scene not in ("floor", "drum")
-    return not ("RollerSwing" in env_id and scene == "rim_mass")
+    return not ("RollerSwing" in env_id and scene in ("rim_mass", "tight_fit"))
 
 
 def randomizable(env_id: str) -> bool:

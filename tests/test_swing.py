@@ -105,3 +105,25 @@ def test_ppo_learns_to_pump_through_the_native_batch():
     after = mean_return(model)
     assert after > 3.0 * before and after > 0.3, (before, after)
     assert roller_gym.ENV_IDS.count(ID) == 1
+
+
+@pytest.mark.parametrize("scene", [roller_gym.preset("tight_fit"),
+                                   roller_gym.Scene(R=0.1 * (1 + 1e-6))])
+def test_a_swing_the_control_step_cannot_resolve_is_refused(scene):
+    """RollerSwing took a nearly tight fit, R = r(1 + 1e-6), where the swing makes some 70
+    oscillations per control step and the energy pump never gained energy. A swing needs
+    two control steps per period at least: ω0·dt < π, with ω0 the small oscillations'
+    angular frequency, here from PHYSICS.md's linearized equation,
+    (k² + (r − e)²) φ'' + g (r²/(R − r) + e) φ = 0. Refused just past that dt, by name,
+    and accepted just below it."""
+    omega = math.sqrt(scene.g * (scene.r ** 2 / (scene.R - scene.r) + scene.e)
+                      / (scene.k ** 2 + (scene.r - scene.e) ** 2))
+    with pytest.raises(ValueError, match=r"dt=0\.05 s is too long for the swing of .* "
+                                         r"ω0·dt = .* >= π"):
+        gym.make(ID, scene=scene)
+    with pytest.raises(ValueError, match=r"is too long for the swing"):
+        gym.make(ID, scene=scene, dt=1.01 * math.pi / omega)
+    try:
+        gym.make(ID, scene=scene, dt=0.99 * math.pi / omega)
+    except ValueError as error:  # refused, but for another reason than the control step
+        assert "too long for the swing" not in str(error)
