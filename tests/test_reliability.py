@@ -838,11 +838,12 @@ def test_a_dt_too_long_for_the_tasks_own_start_speeds_is_refused_at_construction
     (up to 1 rad/s) turned 1e6 rad in a step: every episode failed its first step. The
     construction counts the task's start speed; a task starting at rest is not limited by
     it; and what is accepted steps finitely from its drawn starts."""
-    big = Scene(r=1e7, R=5e7, e=4e6, k=1e7)
-    with pytest.raises(ValueError, match=r"dt=4000000\.0 s is too long .* starts up to 1 rad/s"):
-        gym.make("roller_gym/RollerStabilize-v2", scene=big, dt=4e6)
-    # starts at rest (with a torque that can pump the large scene's swing in its episode)
-    gym.make("roller_gym/RollerSwing-v1", scene=big, dt=4e6, max_torque=1e6)
+    big = Scene(r=1e10, R=5e10, e=4e9, k=1e10)  # (the swing's period: 2.9e5 s)
+    with pytest.raises(ValueError, match=r"dt=100000\.0 s is too long .* starts up to 1 rad/s"):
+        gym.make("roller_gym/RollerStabilize-v2", scene=big, dt=1e5)
+    # starts at rest (with a torque that can pump the large scene's swing in its episode, and
+    # a dt that samples the swing at least twice a period)
+    gym.make("roller_gym/RollerSwing-v1", scene=big, dt=1e5, max_torque=1e9)
     for env_id in roller_gym.ENV_IDS:
         task = gym.make(env_id).unwrapped.task
         grid = np.linspace(0.0, 1.0, 11)[None]
