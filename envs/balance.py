@@ -81,6 +81,7 @@ from roller_gym.intervals import Interval
 from roller_gym.physics import Scene, contact, energy, equations
 from roller_gym.physics.analysis import nearest_unstable_rests
 from roller_gym.physics.scene import shown
+from roller_gym.rest import orbit_speed
 from roller_gym.task import Task, register, unstable_rest_positions
 
 __all__ = ["BalanceTask"]
@@ -133,9 +134,7 @@ class BalanceTask(Task):
         """ω = sqrt(2 V(φ_b) / J_I(0)) [rad/s]: the speed at the bottom of a swing that
         reaches φ_b, the fastest |φ'| of any motion with energy up to V(φ_b) (V >= 0 and
         J_I >= J_I(0) between the bottom and ±φ_b)."""
-        m, r, kappa, e, k, _, _ = scene.params
-        return math.sqrt(2.0 * float(energy(scene, phi_b, 0.0))
-                         / float(equations.inertia(0.0, m, r, kappa, e, k)))
+        return float(orbit_speed(scene, 0.0, float(energy(scene, phi_b, 0.0))))
 
     #: The points of φ in [0, φ_b] at which :meth:`orbit_stuck` examines the swing.
     orbit_points = 129
@@ -150,9 +149,7 @@ class BalanceTask(Task):
         found exactly."""
         m, r, kappa, e, k, g, c = scene.params
         phi = np.linspace(0.0, phi_b, self.orbit_points)
-        level = float(energy(scene, phi_b, 0.0))
-        speed = np.sqrt(np.maximum(2.0 * (level - equations.potential(phi, m, r, kappa, e, g))
-                                   / equations.inertia(phi, m, r, kappa, e, k), 0.0))
+        speed = orbit_speed(scene, phi, float(energy(scene, phi_b, 0.0)))
         for phi_dot in (speed, -speed):
             low = np.full(phi.shape, -self.max_torque)
             high = np.full(phi.shape, self.max_torque)
@@ -253,12 +250,7 @@ class BalanceTask(Task):
                 phi_dot = sign * speed
                 rolls = np.zeros(lo.shape, bool)
                 for tau in torques:
-                    acc = equations.accel(piece, phi_dot, tau, p.m, p.r, p.kappa, p.e, p.k,
-                                          p.g, p.c)
-                    normal, friction = equations.contact_forces(piece, phi_dot, acc, p.m, p.r,
-                                                                p.kappa, p.e, p.g)
-                    lift, slip = equations.margins(normal, friction, p.m, p.g, p.mu)
-                    rolls |= (lift.lo > 0) & (slip.lo >= 0)
+                    rolls |= feasibility.rolls_proven(p, piece, phi_dot, tau)
                 ok &= rolls
             ok |= beyond
             half = 0.5 * (lo + hi)

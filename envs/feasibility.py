@@ -32,7 +32,7 @@ import functools
 import itertools
 import math
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from roller_gym import validation
@@ -43,7 +43,7 @@ from roller_gym.physics.scene import shown
 from roller_gym.task import Task, unstable_rest_positions
 
 __all__ = ["MAX_BOXES", "Params", "box_params", "check_ranges", "problem",
-           "unstable_rest_enclosure"]
+           "rolls_proven", "unstable_rest_enclosure"]
 
 #: The most boxes the branch and bound examines before it refuses a range as not proven.
 MAX_BOXES = 4000
@@ -291,11 +291,17 @@ def _rests(p: Params, phi: Interval) -> bool:
     """N > 0 and μN − |F| >= 0 at rest under τ = 0 at every φ of ``phi``, for every scene
     of the box; m and g at their least values (the margins do not depend on them, see
     :func:`unstable_rest_enclosure`)."""
-    m, g = Interval(p.m.lo), Interval(p.g.lo)
-    acc = equations.accel(phi, 0.0, 0.0, m, p.r, p.kappa, p.e, p.k, g, p.c)
-    normal, friction = equations.contact_forces(phi, 0.0, acc, m, p.r, p.kappa, p.e, g)
-    liftoff, slip = equations.margins(normal, friction, m, g, p.mu)
-    return bool(liftoff.lo > 0 and slip.lo >= 0)
+    return bool(rolls_proven(p._replace(m=Interval(p.m.lo), g=Interval(p.g.lo)), phi, 0.0,
+                             0.0).all())
+
+
+def rolls_proven(p: Params, phi: Any, phi_dot: Any, tau: Any) -> np.ndarray:
+    """Elementwise: N > 0 and μN − |F| >= 0 at every state of the intervals (or numbers)
+    φ [rad], φ' [rad/s] under the torque τ [N·m], for every scene of the box ``p``."""
+    acc = equations.accel(phi, phi_dot, tau, p.m, p.r, p.kappa, p.e, p.k, p.g, p.c)
+    normal, friction = equations.contact_forces(phi, phi_dot, acc, p.m, p.r, p.kappa, p.e, p.g)
+    liftoff, slip = equations.margins(normal, friction, p.m, p.g, p.mu)
+    return np.asarray((liftoff.lo > 0) & (slip.lo >= 0))
 
 
 def _unstable_rest_near(p: Params, estimate: float) -> Interval | None:

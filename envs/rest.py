@@ -28,6 +28,7 @@ __all__ = [
     "hold_range",
     "hold_ranges",
     "last_within",
+    "orbit_speed",
     "per_scene",
     "psi_rate",
     "reach",
@@ -305,3 +306,12 @@ def last_within(exceeds, below: np.ndarray, above: np.ndarray, halvings: int = 6
         higher = exceeds(middle)
         below, above = np.where(higher, below, middle), np.where(higher, middle, above)
     return below
+
+
+def orbit_speed(scene: Scene, phi: np.ndarray, level: np.ndarray) -> np.ndarray:
+    """|φ'| [rad/s] of the unforced motion of energy ``level`` [J] of the scalar ``scene`` at
+    each φ [rad] of ``phi`` (broadcast together): sqrt(2 (level − V(φ)) / J_I(φ)), 0 where V
+    is above the level (the motion does not come there)."""
+    m, r, kappa, e, k, g, _ = scene.params
+    return np.sqrt(np.maximum(2.0 * (level - equations.potential(phi, m, r, kappa, e, g))
+                              / equations.inertia(phi, m, r, kappa, e, k), 0.0))

@@ -95,10 +95,10 @@ import math
 
 import numpy as np
 from roller_gym import rewards
-from roller_gym.physics import Scene, energy, equations
+from roller_gym.physics import Scene, energy, equations, small_oscillation_frequency
 from roller_gym.physics.integrators import SCENE_FIELDS, scene_arrays
 from roller_gym.physics.scene import shown
-from roller_gym.rest import barrier_energy, last_within
+from roller_gym.rest import barrier_energy, last_within, orbit_speed
 from roller_gym.task import Task, hold_ranges, objective, per_scene, reach, register
 
 __all__ = ["SwingTask"]
@@ -161,9 +161,10 @@ class SwingTask(Task):
         reason = super().infeasible(scene, dt)
         if reason is not None or dt is None:
             return reason
-        m, r, kappa, e, k, g, _ = scene.params
-        omega = math.sqrt(max(float(equations.d2potential(0.0, m, r, kappa, e, g)), 0.0)
-                          / float(equations.inertia(0.0, m, r, kappa, e, k)))
+        try:
+            omega = float(small_oscillation_frequency(scene))
+        except ValueError:  # no oscillation about the bottom (d²V/dφ² <= 0): none to resolve
+            return None
         if not omega * dt < math.pi:
             return (f"dt={dt:g} s is too long for the swing of {shown(scene)}: its small "
                     f"oscillations have ω0 = {omega:.4g} rad/s, so ω0·dt = {omega * dt:.3g} >= "
@@ -231,9 +232,7 @@ class SwingTask(Task):
         level = np.asarray(energy(scene, top, 0.0)) * np.array([1.0, 1.0 + self.energy_band]
                                                                )[None, :, None]
         phi = top * np.linspace(-1.0, 1.0, 129)[None, None, :]
-        potential = equations.potential(phi, m, r, kappa, e, g)
-        inertia = equations.inertia(phi, m, r, kappa, e, k)
-        speed = np.sqrt(np.maximum(2.0 * (level - potential) / inertia, 0.0))
+        speed = orbit_speed(scene, phi, level)
         lift, slip = math.inf, math.inf
         for phi_dot in (speed, -speed):
             for tau in (-self.max_torque, 0.0, self.max_torque):
