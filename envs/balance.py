@@ -257,10 +257,11 @@ class BalanceTask(Task):
             lo, hi = np.concatenate([lo[~ok], half[~ok]]), np.concatenate([half[~ok], hi[~ok]])
         return True
 
-    start_rule = "near rest at the bottom, |φ| <= 0.1 rad and |φ'| <= 0.1 rad/s"
-    start_speed = 0.1
     #: The start's φ [rad] and φ' [rad/s] lie within ± this.
     start_width = 0.1
+    start_rule = (f"near rest at the bottom, |φ| <= {start_width} rad and |φ'| <= "
+                  f"{start_width} rad/s")
+    start_speed = start_width
 
     def sample_targets(self, u: np.ndarray, scene: Scene) -> np.ndarray:
         """φ_b of each roller: :func:`unstable_rest_targets`. (The scenes of a range were
