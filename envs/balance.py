@@ -77,6 +77,7 @@ from typing import Any
 
 import numpy as np
 from roller_gym import feasibility
+from roller_gym.bounds import potential_enclosure
 from roller_gym.intervals import Interval
 from roller_gym.physics import Scene, contact, energy, equations
 from roller_gym.physics.analysis import nearest_unstable_rests
@@ -170,6 +171,11 @@ class BalanceTask(Task):
                 i = int(np.flatnonzero(stuck)[0])
                 return float(phi[i]), float(phi_dot[i])
         return None
+
+    def least_times(self, p: Any, farthest: Any) -> dict[str, Any]:
+        """None of the default's: the start lies near the bottom and the target's energy is
+        bounded by :meth:`pump_time`."""
+        return {}
 
     def pump_time(self, scene: Scene) -> tuple[float, float, float]:
         """(the least energy [J] a start must gain to succeed: from the most a start has,
@@ -274,20 +280,6 @@ class BalanceTask(Task):
         """Near rest at the bottom: φ [rad] and φ' [rad/s] uniform in ±start_width."""
         w = self.start_width
         return 2.0 * w * u_phi - w, 2.0 * w * u_dot - w
-
-
-def potential_enclosure(p: Any, phi: Any) -> Interval:
-    """V [J] (:func:`equations.potential`) on intervals, over the box ``p`` and φ in the
-    interval ``phi`` (elementwise) inside the search window (|ψ| < π): V = m g [A sinc(ψ/2)
-    + 2 e sin²(φ/2)] with A = r φ sin(ψ/2) and sinc(ψ/2) in [sinc(max |ψ|/2), 1] (sinc
-    falls on [0, π/2]; the equations' own sinc has no enclosure on intervals at ψ = 0)."""
-    _, psi, _ = equations.shape_factors(phi, p.r, p.kappa)
-    x = 0.5 * np.maximum(np.abs(psi.lo), np.abs(psi.hi))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        least = np.where(x > 0, np.sin(x) / x, 1.0) * (1.0 - 1e-12)  # (rounded down)
-    half = np.sin(0.5 * phi)
-    rolled = p.r * phi * np.sin(0.5 * psi) * Interval(least, 1.0)
-    return p.m * p.g * (rolled + 2.0 * p.e * half * half)
 
 
 def unstable_rest_targets(scene: Scene) -> np.ndarray:

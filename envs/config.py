@@ -77,7 +77,14 @@ class Settings:
         "the torque [N·m] an action of ±1 applies; default: the task's. A task that must pump "
         "energy (RollerBalance, RollerBalanceWeak, RollerSwing) refuses a torque whose most "
         "power, max_torque·ω at the fastest speed on the way, would need more than a quarter "
-        "of the episode to bring the energy success needs."))
+        "of the episode to bring the energy success needs. The others (RollerStabilize, "
+        "RollerHold, RollerTrack, RollerHoldRandomized) refuse a torque, scene or ``dt`` with "
+        "which bringing the roller from the farthest start to rest at the bottom takes, at the "
+        "least, more than half the episode (RollerTrack: a quarter), by the bounds of "
+        ":func:`roller_gym.bounds.least_times` (its energy taken out, the way rolled at the "
+        "speeds its energy, its lift-off and the damping allow); RollerStabilize also refuses "
+        "damping that might bring the roller to rest there with no torque within the "
+        "episode."))
     tolerance: float = field(default=DEFAULT_TOLERANCE, metadata=_doc(
         "the integrator's target state error per control step (φ [rad], φ' [rad/s]), >= 1e-12 "
         "(float64 cannot verify a tighter one); it sets the number of substeps."))

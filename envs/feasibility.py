@@ -22,7 +22,11 @@ What is proven on a box B (the conditions of :func:`problem`, in exact arithmeti
    monotone in each field (Balance: constants; the others: (π/3)(2u − 1)/|q| with
    |q| = |rκ/(1 − rκ)| monotone in r and in R on either side of R = 0, which a range cannot
    cross).
-3. The task's own condition (:meth:`Task.scene_proven`): none for Stabilize and Hold; for
+3. The target within reach (:func:`roller_gym.bounds.reach_proven`): the least times of
+   :func:`roller_gym.bounds.least_times` from the farthest start (an interval from the
+   farthest candidate of 2. proven to roll to the farthest candidate) within the task's share
+   of the episode, and for Stabilize the unaided time past it.
+4. The task's own condition (:meth:`Task.scene_proven`): none for Stabilize and Hold; for
    Balance, :func:`unstable_rest_enclosure`.
 """
 
@@ -32,10 +36,11 @@ import functools
 import itertools
 import math
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 from roller_gym import validation
+from roller_gym.bounds import Params, box_params, reach_proven
 from roller_gym.intervals import Interval
 from roller_gym.physics import Scene, equations
 from roller_gym.physics.analysis import MAX_TURNS, nearest_unstable_rests
@@ -60,30 +65,6 @@ MAX_FINE = 16
 SCAN_POINTS = 33
 
 Box = dict[str, tuple[float, float]]
-
-
-class Params(NamedTuple):
-    """A box of scenes as intervals: the equations' ``m, r, kappa, e, k, g, c`` and μ."""
-
-    m: Interval
-    r: Interval
-    kappa: Interval
-    e: Interval
-    k: Interval
-    g: Interval
-    c: Interval
-    mu: Interval
-
-
-def box_params(scene: Scene, box: Mapping[str, tuple[float, float]]) -> Params:
-    """The intervals of a box: each field of ``box`` over its (low, high), the others at
-    ``scene``'s values; κ = 1/R enclosed on intervals (exactly ``scene.kappa`` if R is fixed)."""
-    def field(name: str) -> Interval:
-        return Interval(*box[name]) if name in box else Interval(float(getattr(scene, name)))
-
-    kappa = 1.0 / field("R") if "R" in box else Interval(float(scene.kappa))
-    return Params(field("m"), field("r"), kappa, field("e"), field("k"), field("g"),
-                  field("damping"), field("mu"))
 
 
 def problem(task: Task, scene: Scene, dt: float) -> str | None:
@@ -160,8 +141,11 @@ def _corners(scene: Scene, boxes: Sequence[Box]) -> Scene:
     return scene.replace(**{n: values[:, i] for i, n in enumerate(names)})
 
 
-def _starts_proven(task: Task, scene: Scene, boxes: Sequence[Box], p: Params) -> np.ndarray:
-    """Whether, for each box, one start candidate rolls in all its scenes."""
+def _starts_proven(task: Task, scene: Scene, boxes: Sequence[Box],
+                   p: Params) -> tuple[np.ndarray, Interval]:
+    """Whether, for each box, one start candidate rolls in all its scenes; and an interval
+    holding each box's :meth:`Task.farthest_start`: from the farthest candidate proven to
+    roll to the farthest candidate."""
     n = len(boxes)
     phi, phi_dot = task.fallback_candidates(_corners(scene, boxes) if boxes[0] else scene)
     phi, phi_dot = (Interval.hull(x.reshape(n, -1, x.shape[-1]), axis=1)
@@ -178,7 +162,9 @@ def _starts_proven(task: Task, scene: Scene, boxes: Sequence[Box], p: Params) ->
         for normal, friction in task.start_contacts(phi, phi_dot, m, p.r, p.kappa, p.e, p.k,
                                                     g, p.c):
             ok &= (normal.lo > 0) & (abs(friction).hi <= (p.mu * normal).lo)
-    return ok.any(axis=1)
+    size = abs(phi)
+    return ok.any(axis=1), Interval(np.max(np.where(ok, size.lo, 0.0), axis=1),
+                                    np.max(size.hi, axis=1))
 
 
 def _boxes_proven(task: Task, scene: Scene, dt: float, boxes: Sequence[Box],
@@ -187,8 +173,9 @@ def _boxes_proven(task: Task, scene: Scene, dt: float, boxes: Sequence[Box],
     then the task's own (:meth:`Task.scene_proven`) box by box where it has one."""
     with np.errstate(all="ignore"):  # infinities and NaN prove nothing (see intervals)
         p = _boxes_params(scene, boxes)
-        ok = (_integrable_proven(p, dt, task.max_torque, task.start_speed)
-              & _starts_proven(task, scene, boxes, p))
+        starts, farthest = _starts_proven(task, scene, boxes, p)
+        ok = (_integrable_proven(p, dt, task.max_torque, task.start_speed) & starts
+              & reach_proven(task, p, dt, farthest))
         if type(task).scene_proven is not Task.scene_proven:
             for i in np.flatnonzero(ok):
                 estimates = (scene.replace(**_middle(boxes[i])),  # the nearer first

@@ -54,6 +54,12 @@ target is φ* [rad]).
 * Truncated: 200 steps.
 * ``info["is_success"]``: |ε| <= 0.05 rad and |φ'| <= 0.1 rad/s.
 
+## Arguments
+
+As RollerStabilize's; refused: settings with which bringing the roller from the farthest
+start to rest at the bottom, near which the targets lie, takes more than half the
+episode at the least (:func:`roller_gym.bounds.least_times`).
+
 ## Version History
 
 * v0: the first version.

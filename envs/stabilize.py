@@ -53,7 +53,10 @@ redrawn until the roller rolls there.
 
 ``gymnasium.make("roller_gym/RollerStabilize-v2", scene=..., dt=..., max_torque=..., tolerance=...,
 integrator=..., substeps=..., randomize=..., render_mode=...)``: see
-:class:`roller_gym.roller_env.RollerEnv`.
+:class:`roller_gym.roller_env.RollerEnv`. Refused: settings with which bringing the roller
+from the farthest start to rest at the bottom takes more than half the episode at the least
+(:func:`roller_gym.bounds.least_times`), and damping that might do it with no torque within
+the episode (:func:`roller_gym.bounds.unaided_time`).
 
 ## Version History
 
@@ -67,7 +70,10 @@ integrator=..., substeps=..., randomize=..., render_mode=...)``: see
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
+from roller_gym import bounds
 from roller_gym.physics import Scene
 from roller_gym.task import Task, register
 
@@ -82,4 +88,9 @@ class StabilizeTask(Task):
 
     def sample_targets(self, u: np.ndarray, scene: Scene) -> np.ndarray:
         return np.zeros(np.shape(u))
+
+    def unaided_time(self, p: Any, farthest: Any) -> Any:
+        """The bottom is where the free motion comes to rest: the damping alone must take
+        longer than the episode (:func:`roller_gym.bounds.unaided_time`)."""
+        return bounds.unaided_time(p, farthest, self.success_band, self.success_speed)
 

@@ -92,6 +92,7 @@ tolerance=..., integrator=..., substeps=..., randomize=..., render_mode=...)``: 
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from roller_gym import rewards
@@ -264,6 +265,11 @@ class SwingTask(Task):
             tops.append(np.where(capped, last_within(over, np.zeros_like(side), top), hi)
                         if capped.any() else top)
         return tops[0], tops[1]
+
+    def least_times(self, p: Any, farthest: Any) -> dict[str, Any]:
+        """None of the default's: the start lies near the bottom and the target's energy is
+        bounded by :meth:`pump_time`."""
+        return {}
 
     def pump_time(self, scene: Scene) -> tuple[float, float, float]:
         """(1 − energy_band)·E* [J] of the largest target (the least energy that succeeds),

@@ -64,7 +64,7 @@ from collections.abc import Sequence
 from typing import Any, ClassVar
 
 import numpy as np
-from roller_gym import rewards
+from roller_gym import bounds, rewards
 from roller_gym.physics import Scene, equations, trig
 from roller_gym.physics.compiling import inlined
 from roller_gym.physics.integrators import contact_state, scene_arrays
@@ -265,6 +265,8 @@ class Task:
 
     # -- per episode (arrays of rollers; the uniforms come from the episode core) ------
     #: The start-state rule, as the error message states it when no start state is found.
+    #: ψ [rad] of the start range's edges: a start lies within ±start_angle of ψ.
+    start_angle: ClassVar[float] = math.radians(60.0)
     start_rule: ClassVar[str] = "ψ within ±60° (|φ| <= 64 turns) and |φ'| <= 1 rad/s"
     #: The largest |φ'| [rad/s] of a drawn start state: the construction refuses a dt too
     #: long to integrate a step from it (:func:`roller_gym.validation.check_integrable`).
@@ -299,9 +301,10 @@ class Task:
         """Why the task cannot be posed in the scalar ``scene``, or None if it can: the
         task's own condition (:meth:`check_scene`); with the control step ``dt`` [s], the
         target within reach of the torque in the episode (:meth:`pump_time` at most
-        PUMP_SHARE of max_episode_steps·dt); and a start state: one of the
-        :meth:`fallback_starts` must roll under every torque within the limit (the draw
-        falls back to it, so a start-state draw never fails where this holds)."""
+        PUMP_SHARE of max_episode_steps·dt, and :func:`roller_gym.bounds.too_slow`); and a
+        start state: one of the :meth:`fallback_starts` must roll under every torque within
+        the limit (the draw falls back to it, so a start-state draw never fails where this
+        holds)."""
         try:
             self.check_scene(scene)
         except ValueError as error:
@@ -317,11 +320,44 @@ class Task:
                     f"{speed:.3g} rad/s, needs {seconds:.3g} s to bring the target's "
                     f"{energy:.3g} J, more than {self.PUMP_SHARE:g} of the episode; use a "
                     "larger max_torque or a longer dt")
+        slow = bounds.too_slow(self, scene, dt) if dt is not None else None
+        if slow is not None:
+            return slow
         if self.fallback_start(scene) is None:
             return (f"no start state of {shown(scene)} rolls under torques up to "
                     f"{self.max_torque} N·m (the roller slips or lifts off at every state of "
                     f"{self.start_rule}); lower max_torque or raise mu")
         return None
+
+    #: The share of an episode within which each of :meth:`least_times` must fit.
+    reach_share: ClassVar[float] = 0.5
+
+    def least_times(self, p: Any, farthest: Any) -> dict[str, Any]:
+        """Lower bounds [s] of the time the task's target needs, as intervals over the box
+        of scenes ``p`` (:class:`roller_gym.bounds.Params`), by name
+        (:data:`roller_gym.bounds.LEAST_TIMES`): by default, from the farthest start (at rest
+        at |φ| = ``farthest`` [rad], an interval) to rest at the bottom, near which every
+        target of the tasks with this start range lies (:func:`roller_gym.bounds.
+        least_times`). Each must fit in :attr:`reach_share` of an episode. A task whose
+        start and target differ (a pump) returns {} and bounds its own time
+        (:meth:`pump_time`)."""
+        return bounds.least_times(p, self.max_torque, farthest, self.success_band,
+                                  self.success_speed)
+
+    def unaided_time(self, p: Any, farthest: Any) -> Any:
+        """For a task whose target is where the free motion comes to rest: a lower bound
+        [s] (an interval over ``p``) of the time the damping alone needs to bring the roller
+        there from the farthest start (as :meth:`least_times`), which must exceed the
+        episode (else no torque at all may succeed); None (the default) for the others."""
+        return None
+
+    def farthest_start(self, scene: Scene) -> float | None:
+        """|φ| [rad] of the farthest start at rest in the scalar ``scene``: of the grid of
+        :meth:`fallback_candidates`, the accepted one farthest from the bottom (None if none
+        is: :meth:`fallback_start` fails then)."""
+        phi, phi_dot = self.fallback_candidates(scene)
+        ok = self.start_accepted(phi, phi_dot, scene)[0]
+        return float(np.max(np.abs(phi[0][ok]))) if ok.any() else None
 
     def fallback_start(self, scene: Scene) -> tuple[float, float] | None:
         """The start state (φ [rad], φ' [rad/s]) the draw falls back to when none of its
@@ -368,7 +404,7 @@ class Task:
         to ±:attr:`start_speed`; φ within ±START_TURNS turns (on a nearly flat surface, R of
         thousands of r, ψ = ±60° lies further: float64's rounding of such a φ passes the
         tolerance)."""
-        limit = np.reshape(reach(scene, math.radians(60.0)), (-1, 1))
+        limit = np.reshape(reach(scene, self.start_angle), (-1, 1))
         return limit * (2.0 * u_phi - 1.0), self.start_speed * (2.0 * u_dot - 1.0)
 
     @property

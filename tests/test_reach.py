@@ -1,0 +1,142 @@
+"""The target within reach in an episode, and not reached with no torque: the least times of
+``roller_gym.bounds`` are lower bounds of what controllers achieve on the physics, their
+refusals name the settings, and a proven range holds scene by scene."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import roller_gym
+from roller_gym import Scene
+from roller_gym.bounds import box_params, too_slow
+from roller_gym.intervals import Interval
+from roller_gym.physics import Stepper, equations
+
+STABILIZE, HOLD, TRACK, RANDOMIZED = (roller_gym.TASKS[f"Roller{t}"].env_id() for t in (
+    "Stabilize", "Hold", "Track", "HoldRandomized"))
+
+
+def first_success(scene: Scene, phi: float, torque, seconds: float, dt: float = 0.01,
+                  band: float = 0.05, speed: float = 0.1) -> float | None:
+    """The first time [s] a roller started at rest at ``phi`` [rad] is within ``band`` of the
+    bottom and below ``speed``, driven by ``torque(φ, φ')`` on the physics at tol 1e-10
+    (None: not within ``seconds``, or it slipped or lifted off on the way)."""
+    stepper = Stepper(scene, integrator="taylor", dt=dt, tolerance=1e-10)
+    w, t = 0.0, 0.0
+    while t < seconds:
+        phi, w, *_, finite, _, _, _, lift, slip, _, _ = stepper.advance(
+            phi, w, float(torque(phi, w)))
+        t += dt
+        if not finite or lift <= 0 or slip < 0:
+            return None
+        if abs(phi) <= band and abs(w) <= speed:
+            return t
+    return None
+
+
+@pytest.mark.parametrize("kwargs", [{}, {"m": 5.0}, {"mu": 3.0}, {"m": 2.0, "mu": 2.0, "k": 0.2}],
+                         ids=["paper", "m=5", "mu=3", "heavier"])
+def test_the_least_times_are_below_what_the_fastest_brake_achieves(kwargs):
+    """Bang-bang braking, τ = −max_torque sign φ' (the most power the torque can take out),
+    from the farthest start: it comes to rest at the bottom no sooner than every least time
+    says (each a lower bound; the energy bound within 15× of it, so not vacuous)."""
+    task = roller_gym.TASKS["RollerStabilize"]()
+    scene = Scene(**kwargs)
+    far = task.farthest_start(scene)
+    tau = task.max_torque
+    reached = first_success(scene, far, lambda phi, w: -tau * np.sign(w if w else phi), 40.0)
+    assert reached is not None, kwargs
+    times = task.least_times(box_params(scene, {}), Interval(far))
+    for name, seconds in times.items():
+        assert float(seconds.lo) <= reached + 0.01, (name, float(seconds.lo), reached)
+    assert float(times["energy"].lo) > reached / 15
+
+
+@pytest.mark.parametrize("damping", [0.004, 0.01, 0.02, 0.05, 0.2])
+def test_the_unaided_time_is_below_the_free_motions_and_near_it(damping):
+    """With no torque the damping alone brings the roller to rest at the bottom from the
+    farthest start no sooner than the bound (J_min/2c) ln(E₀/E₁), and within 3× of it where
+    the roller swings (c up to 0.02)."""
+    task = roller_gym.TASKS["RollerStabilize"]()
+    scene = Scene(damping=damping)
+    far = task.farthest_start(scene)
+    settled = first_success(scene, far, lambda phi, w: 0.0, 60.0)
+    assert settled is not None
+    bound = task.unaided_time(box_params(scene, {}), Interval(far))
+    assert float(bound.lo) <= settled + 0.01
+    if damping <= 0.02:
+        assert float(bound.lo) > settled / 3
+
+
+def test_damping_that_settles_the_roller_unaided_is_refused_and_the_named_limit_holds():
+    """Damping 0.02–1.0 let zero torque succeed in every episode: refused, naming a limit (5 %
+    inside the bound's) that is accepted, as a range up to it, where 1.1× it is not; zero
+    torque from the farthest start takes longer than the episode at the limit (the
+    simulation, not the bound)."""
+    for damping in (0.02, 0.2, 1.0):
+        with pytest.raises(ValueError, match=r"damping=.*no torque at all.*use damping <="):
+            gym.make(STABILIZE, scene=Scene(damping=damping))
+    with pytest.raises(ValueError, match=r"use damping <= ([0-9.e-]+)") as info:
+        gym.make(STABILIZE, scene=Scene(damping=0.02))
+    limit = float(re.search(r"use damping <= ([0-9.e-]+)", str(info.value)).group(1))
+    gym.make(STABILIZE, scene=Scene(damping=limit))
+    with pytest.raises(ValueError, match="no torque at all"):
+        gym.make(STABILIZE, scene=Scene(damping=1.1 * limit))
+    task = roller_gym.TASKS["RollerStabilize"]()
+    scene = Scene(damping=limit)
+    assert first_success(scene, task.farthest_start(scene), lambda phi, w: 0.0, 10.0) is None
+    gym.make(STABILIZE, randomize={"damping": (0.0, limit)})
+    with pytest.raises(ValueError, match="feasible part of the range"):
+        gym.make(STABILIZE, randomize={"damping": (0.05, 0.2)})
+
+
+@pytest.mark.parametrize("env_id", [STABILIZE, HOLD, TRACK, RANDOMIZED])
+@pytest.mark.parametrize("kwargs", [
+    {"dt": 1e-6}, {"max_torque": 1e-6}, {"scene": Scene(R=1e6)}, {"scene": Scene(R=1e300)},
+    {"scene": Scene(R=-1e300)}, {"scene": Scene(e=10.0)}, {"scene": Scene(k=1e3)},
+    {"scene": Scene(g=1e6)}, {"scene": Scene(damping=100.0)}, {"randomize": {"R": (0.3, 1e300)}},
+    {"randomize": {"e": (0.0, 1.0)}}, {"randomize": {"k": (0.01, 10.0)}}],
+    ids=lambda kw: ",".join(f"{k}={v}" for k, v in kw.items())[:40])
+def test_a_target_out_of_reach_in_the_episode_is_refused(env_id, kwargs):
+    """The settings an adversarial review found accepted though the task's own controller
+    succeeded in none of 5–8 episodes: the farthest start is out of reach in the episode.
+    Refused at construction (single and vector), the message saying what takes the time."""
+    for make in (lambda: gym.make(env_id, **kwargs),
+                 lambda: gym.make_vec(env_id, num_envs=2, **kwargs)):
+        with pytest.raises(ValueError, match=r"cannot be solved in|no torque at all"):
+            make()
+
+
+def test_the_lift_off_speed_at_the_eccentric_masss_top_is_the_physics():
+    """Where θ = π (the eccentric mass over the center) N/m = g cos ψ + (r²κ/s − e) φ'²
+    whatever φ'': the contact forces of the physics vanish at φ'² = g cos ψ/(e − r²κ/s),
+    the speed the lifted-travel bound takes (with cos ψ <= 1)."""
+    for scene in (Scene(R=1e6), Scene(R=3.0, e=0.06), Scene(R=math.inf)):
+        m, r, kappa, e, _, g, _ = scene.params
+        s = 1.0 - r * kappa
+        phi = math.pi * s * 7  # θ = 7π
+        psi = r * kappa * phi / s
+        w = math.sqrt(g * math.cos(psi) / (e - r * r * kappa / s))
+        for phi_ddot in (-3.0, 0.0, 5.0):
+            normal, _ = equations.contact_forces(phi, w, phi_ddot, m, r, kappa, e, g)
+            assert abs(normal) < 1e-9 * m * g
+
+
+def test_a_proven_range_holds_scene_by_scene():
+    """Ranges the proof accepts (the hard tier's default, four fields of plain domain
+    randomization, damping below the limit): every one of 300 drawn scenes passes the
+    scalar check."""
+    rng = np.random.default_rng(0)
+    for env_id, ranges in ((RANDOMIZED, None),
+                           (STABILIZE, {"R": (0.4, 1.0), "e": (0.04, 0.09), "k": (0.05, 0.2),
+                                        "m": (0.5, 2.0)}),
+                           (STABILIZE, {"damping": (0.0, 0.004)})):
+        env = gym.make(env_id, **({} if ranges is None else {"randomize": ranges})).unwrapped
+        task, ranges = env.task, env.config.randomize
+        for _ in range(100):
+            scene = env.config.scene.replace(**{f: rng.uniform(*ranges[f]) for f in ranges})
+            assert too_slow(task, scene, env.config.dt) is None, scene
