@@ -20,7 +20,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from roller_gym.agents.observation import decode_observation
-from roller_gym.physics import Scene, energy, holding_torque, linearize
+from roller_gym.physics import Scene, energy, equations, holding_torque, linearize
 from roller_gym.physics.scene import shown
 from roller_gym.task import Task, wrap_rate
 from scipy.linalg import expm, solve_discrete_are
@@ -288,32 +288,46 @@ class EnergyPump(Controller):
     energy of a swing that turns back at the observed amplitude φ*. Designed on the nominal
     scene, from the observation alone.
 
+    The gain is at least 1/(2 max_torque ω* dt), ω* = sqrt(2 E*/J_I(0)) the swing's fastest
+    speed: there a step of the torque the error asks for moves E by half the error, so the
+    pump closes in without overshooting. Below it, in scenes whose swings hold far less
+    than a joule (``tight_fit``: 1e-3 J), the pump stalls short of the success band.
+
     Args:
         task: the task (its observation carries the target).
         scene: the scalar scene.
         max_torque: the torque [N·m] of an action of ±1.
-        energy_gain: the pump's gain [1/J].
+        energy_gain: the pump's gain [1/J], where it exceeds the floor above.
+        dt: the control step [s] (for the floor).
     """
 
     def __init__(self, task: Task, scene: Scene, max_torque: float,
-                 energy_gain: float = 20.0) -> None:
+                 energy_gain: float = 20.0, dt: float = 0.05) -> None:
         self.task, self.scene, self.max_torque = task, scene, float(max_torque)
-        self.energy_gain = float(energy_gain)
+        self.energy_gain, self.dt = float(energy_gain), float(dt)
+        m, r, kappa, e, k, _, _ = scene.params
+        self._inertia = float(equations.inertia(0.0, m, r, kappa, e, k))  # J_I(0) [kg·m²]
 
     @classmethod
     def from_env(cls, env: gym.Env | Any, scene: Scene | None = None,
                  **kwargs: float) -> EnergyPump:
         """The pump for a RollerSwing environment (wrappers allowed)."""
-        scene, max_torque, _ = _task_settings(env, scene)
-        return cls(env.unwrapped.task, scene, max_torque, **kwargs)
+        scene, max_torque, dt = _task_settings(env, scene)
+        return cls(env.unwrapped.task, scene, max_torque, **{"dt": dt, **kwargs})
+
+    def gain(self, target_energy: np.ndarray) -> np.ndarray:
+        """The pump's gain [1/J] toward the target energy E* [J]."""
+        speed = np.sqrt(2.0 * np.maximum(target_energy, 0.0) / self._inertia)
+        step = 2.0 * self.max_torque * speed * self.dt  # [J] per unit push, doubled
+        return np.maximum(self.energy_gain, 1.0 / np.where(step > 0, step, np.inf))
 
     def act(self, observation: np.ndarray) -> np.ndarray:
         s = decode_observation(observation, self.scene, self.task)
         if s.target_phi is None:
             raise ValueError("EnergyPump needs observations that carry the target")
         target_energy = energy(self.scene, s.target_phi, 0.0)
-        push = np.clip(self.energy_gain * (target_energy - energy(self.scene, s.phi, s.phi_dot)),
-                       -1.0, 1.0)
+        error = target_energy - energy(self.scene, s.phi, s.phi_dot)
+        push = np.clip(self.gain(target_energy) * error, -1.0, 1.0)
         return (push * np.where(s.phi_dot >= 0.0, 1.0, -1.0))[:, None]
 
 
