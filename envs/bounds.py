@@ -111,16 +111,19 @@ def _damped_travel(distance, damping, drive, least, most):
         return np.maximum(distance, 0.0) * damping * np.sqrt(least / most) / drive
 
 
-def _lifted_travel(distance, period, g, lift, drive, least, most):
-    """The least time [s] to roll ``distance`` [rad] past points where the eccentric mass is
-    on top (θ = π, one each ``period`` = 2π|s| [rad] of φ): there N/m = g cos ψ + (r²κ/s −
-    e) φ'², so the roller passes them below ω² = g/``lift`` (lift = e − r²κ/s > 0) or
-    leaves the surface. Between two of them the kinetic energy grows by at most ``drive`` ·
-    period (τ + max |V'|), so |φ'| <= sqrt((J_max g/lift + 2 drive period)/J_min) after the
-    first, and the time is at least (distance − period) over that."""
+def _lifted_travel(distance, period, top, slope, inertia):
+    """The least time [s] to roll ``distance`` [rad] past the points where the eccentric
+    mass is on top (θ = π, one each ``period`` = 2π|s| [rad] of φ). There N/m = g cos ψ +
+    (r²κ/s − e) φ'², so the roller passes them below ω² = g/(e − r²κ/s) or leaves the
+    surface. ``x`` rad past one, its kinetic energy is at most ``top`` + ``slope`` x: top =
+    ½ J_max ω² + 2 m g e (and the eccentric mass's fall), slope = τ + m g r (the torque's work
+    and the fall along the wall, |dV₁/dφ| = m g r |sin ψ|). So a period takes at least
+    sqrt(2 J_min) period/(sqrt(top + slope period) + sqrt(top)), and the way past the first
+    point, at least distance − period, at least its share of that (the pace is slowest just
+    past a point)."""
     with np.errstate(all="ignore"):
-        top = np.sqrt((most * g / lift + 2.0 * drive * period) / least)
-        return np.where(lift > 0, np.maximum(distance - period, 0.0) / top, 0.0)
+        pace = np.sqrt(2.0 * inertia) / (np.sqrt(top + slope * period) + np.sqrt(top))
+        return np.where(np.isfinite(top), np.maximum(distance - period, 0.0) * pace, 0.0)
 
 
 def _levels(p: Params, farthest: Interval, band: float, speed: float):
@@ -174,10 +177,12 @@ def _least_times(p, max_torque, farthest, band, speed):
     drive = torque + p.m * p.g * (p.r + p.e)  # max |V'| <= m g (r + e)
     way = farthest - band
     s = 1.0 - p.r * p.kappa
-    lift = p.e - p.r * p.r * p.kappa / s
+    lift = p.e - p.r * p.r * p.kappa / s  # > 0: the roller lifts off a point fast enough
+    fall = 2.0 * p.m * p.g * p.e
+    top = Interval(np.where(lift.hi > 0, 0.5 * most.lo * p.g.lo / lift.hi + fall.lo, np.inf),
+                   np.where(lift.lo > 0, 0.5 * most.hi * p.g.hi / lift.lo + fall.hi, np.inf))
     return {"lifted travel": _monotone(_lifted_travel, (way, 1), (2.0 * math.pi * abs(s), -1),
-                                       (p.g, -1), (lift, 1), (drive, -1), (least, 1),
-                                       (most, -1)),
+                                       (top, -1), (torque + p.m * p.g * p.r, -1), (least, 1)),
             "energy": _monotone(_removal, (start, 1), (kept, -1), (torque, -1), (p.c, -1),
                                 (least, 1)),
             "travel": _monotone(_travel, (way, 1), (start, -1), (torque, -1), (least, 1)),
