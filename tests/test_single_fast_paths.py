@@ -1,0 +1,60 @@
+"""The single environment's fast paths against the general ones, bit for bit.
+
+Its info (a function written out for its keys, see ``roller_env._scalar_info``) against the
+vector environment's info arrays: the vector env builds its info another way (one array per
+key from the outcome's rows, ``episode.info_rows``) and its sub-environment i makes the
+episodes of a single env seeded ``seed + i``.
+"""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import roller_gym
+from roller_gym.episode import INFO_KEYS
+
+IDS = list(roller_gym.ENV_IDS)
+SCALAR = {float: np.float64, int: np.int64, bool: np.bool_}
+
+
+def check_info(info: dict, vec_info: dict, i: int, keys: tuple[str, ...]) -> None:
+    """A single env's info is a plain dict of ``keys`` in INFO_KEYS order, each value a NumPy
+    scalar of its key's type with the bits of sub-environment i's entry of the vector info."""
+    assert type(info) is dict and tuple(info) == keys
+    for key, value in info.items():
+        kind = SCALAR[INFO_KEYS[key][0]]
+        assert type(value) is kind, (key, type(value))
+        expected = np.asarray(vec_info[key][i], dtype=kind)
+        assert np.asarray(value).tobytes() == expected.tobytes(), (key, value, expected)
+
+
+@pytest.mark.parametrize("env_id", IDS)
+@pytest.mark.parametrize("info_keys", [None, ["energy", "substeps", "is_success"], []])
+def test_the_single_info_is_the_vector_info_with_numpy_types(env_id, info_keys):
+    """Eight seeds, random actions, episodes of 6 steps (resets included): each step's info
+    is a new dict, and one a caller changes changes nothing that comes after."""
+    n, seed = 8, 11
+    keys = tuple(INFO_KEYS) if info_keys is None else tuple(info_keys)
+    vec = gym.make_vec(env_id, num_envs=n, max_episode_steps=6, info_keys=info_keys)
+    singles = [gym.make(env_id, max_episode_steps=6, info_keys=info_keys) for _ in range(n)]
+    _, vec_info = vec.reset(seed=seed)
+    infos = [env.reset(seed=seed + i)[1] for i, env in enumerate(singles)]
+    done = np.zeros(n, bool)
+    seen = []
+    actions = np.random.default_rng(seed).uniform(-1, 1, (20, n, 1)).astype(np.float32)
+    for a in actions:
+        for i, info in enumerate(infos):
+            check_info(info, vec_info, i, keys)
+            info["phi"] = "changed by a caller"  # no later info sees it
+            seen.append(info)
+        _, _, terminated, truncated, vec_info = vec.step(a)
+        infos = []
+        for i, env in enumerate(singles):
+            if done[i]:  # next-step autoreset
+                infos.append(env.reset()[1])
+            else:
+                infos.append(env.step(a[i])[4])
+        done = terminated | truncated
+    assert len({id(info) for info in seen}) == len(seen)
+    vec.close()
