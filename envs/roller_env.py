@@ -54,6 +54,7 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         self._stepper = Stepper(cfg.scene, integrator=cfg.integrator, dt=cfg.dt,
                                 tolerance=cfg.tolerance, substeps=cfg.substeps or None)
         self._link()
+        self._terms_of: tuple[Scene, str] | None = None  # what the context's target terms are of
         self._set_scene(cfg.scene)
         self._set_target(self.task.default_target(self.scene), 0.0)
         self._steps = 0  # of this episode: its time is _steps · dt, as in the vector env
@@ -75,8 +76,11 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         self.target, self.target_rate = target, rate
         context = self._outcome.context
         context[C.target_phi, 0], context[C.target_phi_dot, 0] = target, rate
-        for name, value in episode.target_terms(self.scene, target).items():
-            context[getattr(C, name), 0] = value
+        terms_of = (self.scene, float(target).hex())  # the scene and the target's bits
+        if terms_of != self._terms_of:  # (a reset to the same target keeps its terms)
+            for name, value in episode.target_terms(self.scene, target).items():
+                context[getattr(C, name), 0] = value
+            self._terms_of = terms_of
         self.target_torque = float(context[C.target_torque, 0])
 
     # -- Gymnasium API -----------------------------------------------------------------
