@@ -240,8 +240,14 @@ def _draw_states(task: Any, scene: Scene, target: np.ndarray, seed: np.ndarray,
 
     Candidates are tried one at a time (round by round, CANDIDATES a round), each only where
     no earlier one was accepted: the same starts as trying a round's all at once, for a
-    fraction of the checks where most first candidates are accepted."""
+    fraction of the checks where most first candidates are accepted. One roller (a single
+    environment's reset) tries a round's all at once (:func:`_draw_one`): its calls cost
+    their fixed overheads, not their size."""
     n = len(seed)
+    if n == 1:
+        start = _draw_one(task, scene, seed, episode)
+        if start is not None:
+            return start
     phi, phi_dot = np.zeros(n), np.zeros(n)
     todo = np.arange(n)
     for candidate in range(ROUNDS * CANDIDATES):
@@ -268,6 +274,22 @@ def _draw_states(task: Any, scene: Scene, target: np.ndarray, seed: np.ndarray,
         f"candidates in {shown(take(scene, todo[:1], n))}: {task.start_rule}"
     )
 
+
+def _draw_one(task: Any, scene: Scene, seed: np.ndarray,
+              episode: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """:func:`_draw_states` of one roller, a round of candidates per call of the task's
+    candidates and checks (which are elementwise: candidate j of a round takes the same
+    draws and gets the same answer as alone); None where no candidate is accepted (the
+    general path then finds the fallback)."""
+    draws = _STATE_DRAW + np.arange(2 * CANDIDATES)  # a round's: (φ, φ') of each candidate
+    for first in range(0, ROUNDS * CANDIDATES, CANDIDATES):
+        u = uniform(seed[:, None], episode[:, None], draws + 2 * first)
+        c_phi, c_dot = task.start_candidates(u[:, 0::2], u[:, 1::2], scene)
+        ok = task.start_accepted(c_phi, c_dot, scene)[0]
+        if ok.any():
+            j = int(ok.argmax())  # the round's first accepted
+            return np.array([c_phi[0, j]], float), np.array([c_dot[0, j]], float)
+    return None
 
 
 @dataclass(frozen=True)
