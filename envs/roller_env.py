@@ -121,7 +121,8 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
                   and action.dtype.char in "fd")  # .item() a Python float (not a longdouble)
         a = action.item() if common else math.nan
         if math.isfinite(a):  # the common case, without the checks' cost
-            a = min(1.0, max(-1.0, a))
+            if not -1.0 <= a <= 1.0:  # clipped (as min and max would, at a tenth of the cost)
+                a = 1.0 if a > 1.0 else -1.0
         else:
             a = float(validation.actions(action, (1,))[0])
         tau = a * self.task.max_torque
