@@ -110,6 +110,7 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         self.phi, self.phi_dot, self.torque = float(start.phi[0]), float(start.phi_dot[0]), 0.0
         self._stepper.forget()  # a new episode does not continue the last one's substeps
         self._advance.start(self.phi, self.phi_dot)  # its outcome, by the step's own kernel
+        self._info.hold()  # the target's keys, the same at every step of the episode
         if self.render_mode == "human":
             self.render()
         return self._observation.copy(), self._info()
@@ -158,7 +159,9 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
         outcome = self._outcome
         self._observation = outcome.observation[0]
         self._info = _scalar_info(self.config.info_keys, outcome.table[:, 0],
-                                  outcome.flags[:, 0])
+                                  outcome.flags[:, 0],
+                                  held=() if self.task.moving_target else _TARGET_KEYS)
+        self._info.hold()  # (after unpickling: the episode's; before a reset: unread)
         self._advance = outcome.bind(self._stepper)  # a step: its outcome into these views
 
     def __getstate__(self) -> dict[str, Any]:
@@ -195,12 +198,19 @@ class _Whole(dict):
 _WHOLE = _Whole()
 
 
-def _scalar_info(keys: tuple[str, ...], table: np.ndarray,
-                 flags: np.ndarray) -> Callable[[], dict[str, Any]]:
+#: The info keys that follow from the episode's target and scene alone (the context's rows,
+#: passed on, and ψ* = qφ*): the same at every step of an episode whose target stands still.
+_TARGET_KEYS = ("target_phi", "target_psi", "target_phi_dot", "target_torque")
+
+
+def _scalar_info(keys: tuple[str, ...], table: np.ndarray, flags: np.ndarray,
+                 held: tuple[str, ...] = ()) -> Callable[[], dict[str, Any]]:
     """A function of no arguments that returns one roller's info of ``keys`` (in INFO_KEYS
     order) as it stands in its column of the outcome's ``table`` and ``flags`` (views): a new
     dict each call, the values NumPy scalars (``np.float64``, ``np.int64``, ``np.bool_``), so
-    that every value has a ``dtype``, as array-based clients (TorchRL) expect.
+    that every value has a ``dtype``, as array-based clients (TorchRL) expect. The keys of
+    ``held`` are read by its method ``hold()`` alone (the caller's promise: they keep their
+    values until it calls ``hold()`` again), into the dict that every call copies.
 
     Every step makes one, so the function is written out for ``keys``, one statement per key
     (``info["phi"] = table[1]``, ...), on a copy of a dict of those keys: a copy costs a
@@ -208,9 +218,17 @@ def _scalar_info(keys: tuple[str, ...], table: np.ndarray,
     about twice as much as the statements."""
     assert tuple(key for key in INFO_KEYS if key in keys) == tuple(keys), keys
     reads = {float: "table[{}]", int: "whole[table.item({})]", bool: "flags[{}]"}
-    lines = "".join(f"    info[{key!r}] = {reads[INFO_KEYS[key][0]].format(INFO_ROW[key])}\n"
-                    for key in keys)
+
+    def written(chosen: list[str]) -> str:
+        return "".join(f"    info[{key!r}] = {reads[INFO_KEYS[key][0]].format(INFO_ROW[key])}\n"
+                       for key in chosen)
+
     namespace = {"__name__": __name__, "template": dict.fromkeys(keys), "table": table,
                  "flags": flags, "whole": _WHOLE}
-    exec(f"def info():\n    info = template.copy()\n{lines}    return info\n", namespace)
-    return namespace["info"]
+    exec(f"def info():\n    info = template.copy()\n"
+         f"{written([key for key in keys if key not in held])}    return info\n"
+         f"def hold():\n    info = template\n{written([key for key in keys if key in held])}",
+         namespace)
+    info = namespace["info"]
+    info.hold = namespace["hold"]
+    return info

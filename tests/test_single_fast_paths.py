@@ -48,7 +48,8 @@ def test_the_single_info_is_the_vector_info_with_numpy_types(env_id, info_keys):
     for a in actions:
         for i, info in enumerate(infos):
             check_info(info, vec_info, i, keys)
-            info["phi"] = "changed by a caller"  # no later info sees it
+            # a caller's changes: no later info sees them
+            info.update(dict.fromkeys(info, "changed by a caller"), phi_ddot=0.0)
             seen.append(info)
         _, _, terminated, truncated, vec_info = vec.step(a)
         infos = []
