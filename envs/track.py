@@ -80,8 +80,10 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import numba
 import numpy as np
 from roller_gym.physics import Scene, trig
+from roller_gym.physics.compiling import inlined
 from roller_gym.physics.integrators import SCENE_FIELDS, scene_arrays
 from roller_gym.rest import HOLD_FRICTION_SHARE, HOLD_TORQUE_SHARE
 from roller_gym.task import Task, hold_range, hold_ranges, register
@@ -162,11 +164,26 @@ class TrackTask(Task):
         return scale
 
     def target_at(self, params: np.ndarray, t: Any) -> tuple[Any, Any]:
-        c, a1, w1, p1, a2, w2, p2 = (params[..., j] for j in range(7))
-        # trig's sines: the same bits for one roller and for a batch
-        (s1, c1), (s2, c2) = trig.sincos(w1 * t + p1), trig.sincos(w2 * t + p2)
-        return c + a1 * s1 + a2 * s2, a1 * w1 * c1 + a2 * w2 * c2
+        if params.ndim == 1 and isinstance(t, float):  # one roller's step: compiled, a call
+            return _target_one(params, t)
+        return _target(*(params[..., j] for j in range(7)), t)
 
     def default_target(self, scene: Scene) -> float:
         low, high = hold_range(scene, self.max_torque)
         return 0.5 * (low + high)
+
+
+@inlined
+def _target(c, a1, w1, p1, a2, w2, p2, t):
+    """(φ* [rad], φ*' [rad/s]) at time ``t`` [s] of the center ``c`` and the sinusoids
+    (amplitude [rad], frequency [rad/s], phase [rad]); trig's sines: the same bits for one
+    roller, for a batch and compiled."""
+    (s1, c1), (s2, c2) = trig.sincos(w1 * t + p1), trig.sincos(w2 * t + p2)
+    return c + a1 * s1 + a2 * s2, a1 * w1 * c1 + a2 * w2 * c2
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _target_one(params, t):
+    """:func:`_target` of one roller's ``params`` (7 numbers): as floats."""
+    return _target(params[0], params[1], params[2], params[3], params[4], params[5],
+                   params[6], t)

@@ -13,11 +13,13 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from typing import Any
 
+import numba
 import numpy as np
 from roller_gym import validation
 from roller_gym.episode.streams import uniform
 from roller_gym.physics import Scene, trig
 from roller_gym.physics import equations as eq
+from roller_gym.physics.compiling import inlined
 from roller_gym.physics.integrators import contact_state
 from roller_gym.physics.scene import finite_real, shown, whole_number
 
@@ -53,8 +55,23 @@ def target_terms(scene: Scene, target: Any) -> dict[str, Any]:
     [N·m], the torque that holds the roller at rest there, and ``target_energy`` E* = V(φ*)
     [J], the energy of resting there (V = 0 at φ = 0)."""
     m, r, kappa, e, _, g, _ = scene.params
-    return {"target_torque": eq.dpotential(target, m, r, kappa, e, g),
-            "target_energy": eq.potential(target, m, r, kappa, e, g)}
+    if isinstance(target, float) and scene.batch_size is None:  # one roller: compiled, a call
+        torque, energy = _target_terms_one(target, m, r, kappa, e, g)
+    else:
+        torque, energy = _target_terms(target, m, r, kappa, e, g)
+    return {"target_torque": torque, "target_energy": energy}
+
+
+@inlined
+def _target_terms(target, m, r, kappa, e, g):
+    """(τ* [N·m], E* [J]) of :func:`target_terms` (trig's sines: the same bits alone, in
+    arrays and compiled)."""
+    return eq.dpotential(target, m, r, kappa, e, g), eq.potential(target, m, r, kappa, e, g)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _target_terms_one(target, m, r, kappa, e, g):
+    return _target_terms(target, m, r, kappa, e, g)
 
 
 def put(scene: Scene, index: np.ndarray, rows: Scene, size: int) -> Scene:
