@@ -140,7 +140,7 @@ def _levels(p: Params, farthest: Interval, band: float, speed: float):
 
 #: The least times of :func:`least_times` by name: (what takes the time, what to change).
 LEAST_TIMES: dict[str, tuple[str, str]] = {
-    "energy": ("taking out the energy of a start at the farthest start (at most "
+    "energy": ("taking out the energy of the farthest start (at most "
                "max_torque·|φ'| + damping·φ'² a second)", "a larger max_torque or a scene "
                "with less energy at the start (smaller m, g, e or R)"),
     "travel": ("rolling from the farthest start to the bottom at the speeds its energy "
@@ -220,9 +220,9 @@ def too_slow(task: Any, scene: Scene, dt: float) -> str | None:
             what, remedy = LEAST_TIMES[name]
             return (f"{task.name} cannot be solved in {shown(scene)} with max_torque="
                     f"{task.max_torque:g} N·m in {length}: {what} takes at least "
-                    f"{least:.3g} s from the farthest start (at rest at |phi| = {far:.4g} "
-                    f"rad), more than {task.reach_share:g} of the episode; use {remedy}, "
-                    "or a longer dt")
+                    f"{least:.3g} s (the farthest start: at rest at |phi| = {far:.4g} rad), "
+                    f"more than {task.reach_share:g} of the episode; use {remedy}, or a "
+                    "longer dt")
     unaided = task.unaided_time(p, farthest)
     if unaided is not None and not float(np.min(unaided.lo)) > episode:
         least = float(np.min(unaided.lo))

@@ -61,8 +61,8 @@ followed within the torque limit and without slipping. On the default scene they
 ## Arguments
 
 As RollerStabilize's; refused: settings with which bringing the roller from the farthest
-start to rest at the bottom, near which the targets lie, takes more than a quarter of
-the episode at the least (:func:`roller_gym.bounds.least_times`).
+start to rest at the bottom, near which the targets lie, takes more than half the
+episode at the least (:func:`roller_gym.bounds.least_times`).
 
 ## Version History
 
@@ -104,9 +104,6 @@ class TrackTask(Task):
     #: center, then (amplitude [rad], frequency [rad/s], phase [rad]) of two sinusoids.
     target_size = 7
     position_margin = 1.0
-    #: Reaching the target may take at most this share of the episode: the rest is for
-    #: following it.
-    reach_share = 0.25
     #: The range of the sinusoids' frequencies [rad/s].
     frequencies = (0.2, 0.8)
 

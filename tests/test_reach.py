@@ -99,14 +99,22 @@ def test_damping_that_settles_the_roller_unaided_is_refused_and_the_named_limit_
     {"dt": 1e-6}, {"max_torque": 1e-6}, {"scene": Scene(R=1e6)}, {"scene": Scene(R=1e300)},
     {"scene": Scene(R=-1e300)}, {"scene": Scene(e=10.0)}, {"scene": Scene(k=1e3)},
     {"scene": Scene(g=1e6)}, {"scene": Scene(damping=100.0)}, {"randomize": {"R": (0.3, 1e300)}},
-    {"randomize": {"e": (0.0, 1.0)}}, {"randomize": {"k": (0.01, 10.0)}}],
+    {"randomize": {"e": (0.0, 2.0)}}, {"randomize": {"k": (0.01, 10.0)}}],
     ids=lambda kw: ",".join(f"{k}={v}" for k, v in kw.items())[:40])
 def test_a_target_out_of_reach_in_the_episode_is_refused(env_id, kwargs):
     """The settings an adversarial review found accepted though the task's own controller
     succeeded in none of 5–8 episodes: the farthest start is out of reach in the episode.
-    Refused at construction (single and vector), the message saying what takes the time."""
+    Refused at construction (single and vector), the message saying what takes the time.
+    RollerHoldRandomized draws R, e, k and m at every reset: a scene's values of those are
+    never stepped, and are accepted."""
+    drawn = roller_gym.TASKS["RollerHoldRandomized"].scene_ranges
+    changed = {f for f, v in kwargs.get("scene", Scene()).as_dict().items()
+               if v != getattr(Scene(), f)}
     for make in (lambda: gym.make(env_id, **kwargs),
                  lambda: gym.make_vec(env_id, num_envs=2, **kwargs)):
+        if env_id == RANDOMIZED and changed and changed <= set(drawn):
+            make().reset(seed=0)
+            continue
         with pytest.raises(ValueError, match=r"cannot be solved in|no torque at all"):
             make()
 
