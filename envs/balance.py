@@ -55,9 +55,10 @@ At rest near the bottom: φ and φ' uniform in ±0.1 (rad, rad/s).
 Checked at construction (and proven over ``randomize`` ranges): the unstable rest position
 exists and the roller rolls there at rest; the swing-up outruns the damping: c·ω <= 0.5
 max_torque at ω = sqrt(2 V(φ_b) / J_I(0)), the bottom speed of a swing that reaches φ_b;
-the torque can pump the energy success needs within a quarter of the episode, even at
-its most power, max_torque·ω; and the swing that reaches φ_b can roll all the way up: at each
-point of it some torque within the limit keeps N > 0 and |F| <= μN.
+the torque can pump the energy success needs within 0.3 of the episode, even at its
+most power, max_torque·|φ'| with |φ'| at the speed of the energy pumped so far
+(:func:`roller_gym.bounds.energy_time`); and the swing that reaches φ_b can roll all the
+way up: at each point of it some torque within the limit keeps N > 0 and |F| <= μN.
 
 ## Version History
 
@@ -77,7 +78,7 @@ from typing import Any
 
 import numpy as np
 from roller_gym import feasibility
-from roller_gym.bounds import potential_enclosure
+from roller_gym.bounds import energy_time, potential_enclosure
 from roller_gym.intervals import Interval
 from roller_gym.physics import Scene, contact, energy, equations
 from roller_gym.physics.analysis import nearest_unstable_rests
@@ -180,13 +181,16 @@ class BalanceTask(Task):
     def pump_time(self, scene: Scene) -> tuple[float, float, float]:
         """(the least energy [J] a start must gain to succeed: from the most a start has,
         E(±0.1 rad, ±0.1 rad/s), to V(φ_b − success_band); ω of :meth:`swing_up_speed`;
-        that energy / (max_torque·ω) [s]), since dE/dt <= τ φ' <= max_torque·ω."""
+        :func:`roller_gym.bounds.energy_time` between them [s], V >= 0 and J_I >= J_I(0) on
+        the way)."""
         phi_b = self.default_target(scene)
         speed = self.swing_up_speed(scene, phi_b)
         reached = float(energy(scene, max(phi_b - self.success_band, 0.0), 0.0))
         start = float(energy(scene, self.start_width, self.start_width))
-        needed = max(reached - start, 0.0)
-        return needed, speed, needed / (self.max_torque * speed) if speed > 0 else 0.0
+        m, r, kappa, e, k, _, _ = scene.params
+        least = float(equations.inertia(0.0, m, r, kappa, e, k))
+        seconds = float(energy_time(start, max(reached, start), self.max_torque, least))
+        return max(reached - start, 0.0), speed, seconds
 
     def default_target(self, scene: Scene) -> float:
         """φ_b > 0 [rad], the unstable rest position (its mirror −φ_b counts as well)."""
@@ -209,8 +213,8 @@ class BalanceTask(Task):
     def scene_proven(self, params: Any, estimates: Sequence[Scene], dt: float) -> bool:
         """:func:`roller_gym.feasibility.unstable_rest_enclosure` (Φ, holding φ_b), and with
         V(Φ) and J_I(0) on intervals over the box, the damping's condition (c·ω, ω <=
-        sqrt(2 V / J_I(0))) and the pump time (at most V(φ_b) / (max_torque·ω) =
-        sqrt(V J_I(0) / 2) / max_torque) bounded by their upper ends."""
+        sqrt(2 V / J_I(0))) and the pump time (:meth:`pump_time`'s, from the start energy's
+        lower end to the upper end of V(φ_b − success_band)) bounded by their upper ends."""
         phi = feasibility.unstable_rest_enclosure(params, estimates)
         if phi is None:
             return False
@@ -221,7 +225,13 @@ class BalanceTask(Task):
         if not (math.isfinite(height) and least.lo > 0):
             return False
         speed = math.sqrt(2.0 * height / least.lo)
-        pump = math.sqrt(0.5 * height * least.hi) / self.max_torque
+        w, band = self.start_width, self.success_band
+        reached = potential_enclosure(p, Interval(np.maximum(phi.lo - band, 0.0),
+                                                  np.maximum(phi.hi - band, 0.0)))
+        start = (potential_enclosure(p, Interval(w))
+                 + 0.5 * equations.inertia(Interval(w), p.m, p.r, p.kappa, p.e, p.k) * w * w)
+        gained = (max(float(np.min(start.lo)), 0.0), float(np.max(reached.hi)))
+        pump = float(energy_time(gained[0], max(gained), self.max_torque, least.hi))
         return bool(p.c.hi * speed <= self.damping_share * self.max_torque
                     and pump <= self.PUMP_SHARE * self.max_episode_steps * dt
                     and self._orbit_proven(p, phi))

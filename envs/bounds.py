@@ -18,9 +18,11 @@ import numpy as np
 from roller_gym.intervals import Interval
 from roller_gym.physics import Scene, equations
 from roller_gym.physics.scene import shown
+from roller_gym.rest import HOLD_FRICTION_SHARE, HOLD_POINTS, HOLD_TORQUE_SHARE, START_TURNS
 
-__all__ = ["LEAST_TIMES", "Params", "box_params", "least_times", "potential_enclosure",
-           "reach_proven", "too_slow", "unaided_time"]
+__all__ = ["LEAST_TIMES", "Params", "box_params", "energy_time", "held_unaided_time",
+           "holds_past", "least_times", "potential_enclosure", "reach_proven", "too_slow",
+           "unaided_time"]
 
 
 class Params(NamedTuple):
@@ -91,6 +93,15 @@ def _removal(start, goal, torque, damping, inertia):
         factor = np.where(x > 1e-12, np.log1p(x) / np.where(x > 0, x, 1.0), 1.0)
         # (no torque and no energy left to reach: the decay never gets there)
         return np.where(gap > 0, np.where(rate > 0, 2.0 * gap / rate * factor, np.inf), 0.0)
+
+
+def energy_time(start: Any, goal: Any, torque: float, inertia: Any) -> Any:
+    """The least time [s] to bring E − V_min from ``start`` to ``goal`` [J], either way,
+    with |τ| <= ``torque`` [N·m] (damping only slows a gain: left out): |dE/dt| <= τ|φ'| and
+    |φ'| <= sqrt(2 (E − V_min)/J_min), ``inertia`` = J_min [kg·m²], so sqrt(2 J_min)
+    |sqrt(goal) − sqrt(start)|/τ (:func:`_removal` without damping)."""
+    high, low = np.maximum(start, goal), np.minimum(start, goal)
+    return _removal(high, low, torque, 0.0, inertia)
 
 
 def _travel(distance, excess, torque, inertia):
@@ -203,6 +214,37 @@ def unaided_time(p: Params, farthest: Interval, band: float, speed: float) -> In
                     np.where(p.c.lo > 0, seconds.hi, np.inf))
 
 
+def holds_past(p: Params, torque_limit: float, friction_share: float,
+               band: float) -> np.ndarray:
+    """Whether, in every scene of each box of ``p``, the range of rest positions that can be
+    held (:func:`roller_gym.rest.hold_ranges`: |dV/dφ| <= ``torque_limit`` [N·m], and at
+    rest N > 0 and |F| <= ``friction_share``·μN, i.e. cos ψ > 0 and |sin ψ| <= share·μ
+    cos ψ) reaches past ``band`` [rad]: every position of [0, band + its grid's spacing]
+    holds (V' is odd and ψ = qφ, so the other side holds alike)."""
+    with np.errstate(all="ignore"):
+        q = abs(p.r * p.kappa / (1.0 - p.r * p.kappa))
+        floor = (p.kappa.lo == 0) & (p.kappa.hi == 0)  # (the floor's rate is 1)
+        reach = np.where(floor, np.pi, np.minimum(np.pi / q.lo, 2.0 * np.pi * START_TURNS))
+        phi = Interval(0.0, band + reach / (HOLD_POINTS - 1))
+        psi = p.r * p.kappa / (1.0 - p.r * p.kappa) * phi
+        # dV/dφ = m g (r sin ψ + e sin φ) (equations.dpotential), NumPy's sines on intervals
+        torque = abs(p.m * p.g * (p.r * np.sin(psi) + p.e * np.sin(phi)))
+        cos, sin = np.cos(psi), abs(np.sin(psi))
+        return ((torque.hi <= torque_limit) & (cos.lo > 0)
+                & (sin.hi <= friction_share * (p.mu * cos).lo))
+
+
+def held_unaided_time(p: Params, farthest: Interval, max_torque: float, band: float,
+                      speed: float) -> Interval:
+    """:func:`unaided_time` where every target a task holds (within
+    :func:`roller_gym.rest.hold_ranges`) may lie within ``band`` of the bottom, so that the
+    damping alone, bringing the roller to rest there, succeeds for each; inf where the held
+    range reaches past it (:func:`holds_past`)."""
+    seconds = unaided_time(p, farthest, band, speed)
+    wide = holds_past(p, HOLD_TORQUE_SHARE * max_torque, HOLD_FRICTION_SHARE, band)
+    return Interval(np.where(wide, np.inf, seconds.lo), np.where(wide, np.inf, seconds.hi))
+
+
 def too_slow(task: Any, scene: Scene, dt: float) -> str | None:
     """Why the target is out of reach within an episode of steps of ``dt`` [s] in the
     scalar ``scene`` for ``task`` (:meth:`Task.least_times` past :attr:`Task.reach_share`
@@ -227,11 +269,12 @@ def too_slow(task: Any, scene: Scene, dt: float) -> str | None:
     if unaided is not None and not float(np.min(unaided.lo)) > episode:
         least = float(np.min(unaided.lo))
         return (f"damping={scene.damping:g} N·m·s/rad of {shown(scene)} may bring the "
-                f"roller to rest at the target with no torque at all in {length}: its "
+                f"roller to rest at the bottom, a success for every target of {task.name} "
+                f"with max_torque={task.max_torque:g} N·m, with no torque at all in {length}: its "
                 f"energy decays at up to 2 damping/J_min, from the farthest start (at rest "
                 f"at |phi| = {far:.4g} rad) to the success band's in as little as "
                 f"{least:.3g} s; use damping <= {scene.damping * least / episode * 0.95:.3g}"
-                " (or 0), or a shorter dt")
+                " (or 0), or a shorter dt (or, holding a target, a larger max_torque)")
     return None
 
 

@@ -76,8 +76,8 @@ class Settings:
     max_torque: float | None = field(default=None, metadata=_doc(
         "the torque [N·m] an action of ±1 applies; default: the task's. A task that must pump "
         "energy (RollerBalance, RollerBalanceWeak, RollerSwing) refuses a torque whose most "
-        "power, max_torque·ω at the fastest speed on the way, would need more than a quarter "
-        "of the episode to bring the energy success needs. The others (RollerStabilize, "
+        "power, max_torque·|φ'| at the speed of the energy pumped so far, would need more "
+        "than 0.3 of the episode to bring the energy success needs. The others (RollerStabilize, "
         "RollerHold, RollerTrack, RollerHoldRandomized) refuse a torque, scene or ``dt`` with "
         "which bringing the roller from the farthest start to rest at the bottom takes, at the "
         "least, more than half the episode, by the bounds of "

@@ -145,7 +145,7 @@ def _starts_proven(task: Task, scene: Scene, boxes: Sequence[Box],
                    p: Params) -> tuple[np.ndarray, Interval]:
     """Whether, for each box, one start candidate rolls in all its scenes; and an interval
     holding each box's :meth:`Task.farthest_start`: from the farthest candidate proven to
-    roll to the farthest candidate."""
+    roll to the farthest one not proven to slip or lift off (under some torque) in all."""
     n = len(boxes)
     phi, phi_dot = task.fallback_candidates(_corners(scene, boxes) if boxes[0] else scene)
     phi, phi_dot = (Interval.hull(x.reshape(n, -1, x.shape[-1]), axis=1)
@@ -162,9 +162,13 @@ def _starts_proven(task: Task, scene: Scene, boxes: Sequence[Box],
         for normal, friction in task.start_contacts(phi, phi_dot, m, p.r, p.kappa, p.e, p.k,
                                                     g, p.c):
             ok &= (normal.lo > 0) & (abs(friction).hi <= (p.mu * normal).lo)
+    refused = np.zeros(np.shape(phi.lo), bool)
+    for normal, friction in task.start_contacts(phi, phi_dot, p.m, p.r, p.kappa, p.e, p.k,
+                                                p.g, p.c):
+        refused |= (normal.hi <= 0) | (abs(friction).lo > (p.mu * normal).hi)
     size = abs(phi)
     return ok.any(axis=1), Interval(np.max(np.where(ok, size.lo, 0.0), axis=1),
-                                    np.max(size.hi, axis=1))
+                                    np.max(np.where(refused, 0.0, size.hi), axis=1))
 
 
 def _boxes_proven(task: Task, scene: Scene, dt: float, boxes: Sequence[Box],

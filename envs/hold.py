@@ -76,7 +76,7 @@ import math
 from typing import Any
 
 import numpy as np
-from roller_gym import validation
+from roller_gym import bounds, validation
 from roller_gym.physics import Scene
 from roller_gym.physics.scene import shown
 from roller_gym.task import Task, angle_rate, hold_range, hold_ranges, register
@@ -96,6 +96,12 @@ class HoldTask(Task):
     def sample_targets(self, u: np.ndarray, scene: Scene) -> np.ndarray:
         low, high = hold_ranges(scene, self.max_torque)  # one compiled call for the batch
         return low + (high - low) * u
+
+    def unaided_time(self, p: Any, farthest: Any) -> Any:
+        """Where every target it holds lies within the success band of the bottom, the
+        damping alone succeeds: :func:`roller_gym.bounds.held_unaided_time`."""
+        return bounds.held_unaided_time(p, farthest, self.max_torque, self.success_band,
+                                        self.success_speed)
 
     def target_from_option(self, value: Any, scene: Scene) -> float:
         target = validation.real("options['target']", value, unit="rad")

@@ -60,6 +60,9 @@ def angle_rate(scene: Scene) -> float | np.ndarray:
 #: surface (R of hundreds of r and more), ψ = ±π lies further (see :func:`hold_ranges`).
 START_TURNS = 64
 
+#: The points of each side's grid :func:`hold_ranges` walks.
+HOLD_POINTS = 2001
+
 #: The share of max_torque a held rest position may need (:func:`hold_ranges`); the rest is
 #: left for moving, e.g. along RollerTrack's target.
 HOLD_TORQUE_SHARE = 0.8
@@ -128,7 +131,7 @@ def cached_per_scene(function):
 
 
 def hold_ranges(scene: Scene, max_torque: float, torque_share: float = HOLD_TORQUE_SHARE,
-                friction_share: float = HOLD_FRICTION_SHARE, points: int = 2001,
+                friction_share: float = HOLD_FRICTION_SHARE, points: int = HOLD_POINTS,
                 rising: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """The intervals [low, high] of rest positions φ [rad] around 0 that can be held at rest,
     one per roller of the batch ``scene`` (arrays of the batch's size; of 1 for a scalar
@@ -188,7 +191,7 @@ def reach(scene: Scene, angle: float = math.pi) -> float | np.ndarray:
 
 @cached_per_scene
 def hold_range(scene: Scene, max_torque: float, torque_share: float = HOLD_TORQUE_SHARE,
-               friction_share: float = HOLD_FRICTION_SHARE, points: int = 2001,
+               friction_share: float = HOLD_FRICTION_SHARE, points: int = HOLD_POINTS,
                rising: bool = False) -> tuple[float, float]:
     """The interval (low, high) of rest positions φ [rad] around 0 that can be held at rest
     in the scalar ``scene``: :func:`hold_ranges` of it (the same compiled walk), memoized."""

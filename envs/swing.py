@@ -58,8 +58,9 @@ target's energy, so that no start has the target swing's energy.
 Checked at construction, each scene of a vector env too: every target swing has energy
 (E* > 0), rolls all the way within the success band under any torque of the limit
 (N > 0, |F| <= 0.9 μN), the pump outruns the damping (c·ω <= 0.5 max_torque at the
-swing's fastest speed ω), and the torque can bring the largest target's energy within a
-quarter of the episode (E / (max_torque·ω) <= 0.25 · 400 · dt), and the control step resolves
+swing's fastest speed ω), and the torque can bring the largest target's energy within
+0.3 of the episode at its most power (:func:`roller_gym.bounds.energy_time` <= 0.3 · 400 ·
+dt), and the control step resolves
 the swing (ω0·dt < π, ω0 its small oscillations' angular frequency). No ``randomize`` range is
 accepted: these are checked per scene, and no proof over a range of scenes covers them yet.
 
@@ -96,6 +97,7 @@ from typing import Any
 
 import numpy as np
 from roller_gym import rewards
+from roller_gym.bounds import energy_time
 from roller_gym.physics import Scene, energy, equations, small_oscillation_frequency
 from roller_gym.physics.integrators import SCENE_FIELDS, scene_arrays
 from roller_gym.physics.scene import shown
@@ -273,14 +275,19 @@ class SwingTask(Task):
 
     def pump_time(self, scene: Scene) -> tuple[float, float, float]:
         """(1 − energy_band)·E* [J] of the largest target (the least energy that succeeds),
-        the fastest speed ω [rad/s] of its swing in the band (at the bottom), and that energy
-        / (max_torque·ω) [s]."""
+        the fastest speed ω [rad/s] of its swing in the band (at the bottom), and
+        :func:`roller_gym.bounds.energy_time` [s] to it from the most a start has (at rest at
+        :meth:`start_limits`; within the swing's well V >= 0 and J_I >= J_I(0))."""
         low, high = self.amplitude_ranges(scene)
         top = max(float(t[0]) * abs(float(side[0]))
                   for t, side in zip(self.top_shares(scene), (low, high), strict=True))
         speed = self.rolling_margins(scene, np.array([top]))[2]
         needed = (1.0 - self.energy_band) * float(energy(scene, top, 0.0))
-        return needed, speed, needed / (self.max_torque * speed)
+        start = float(energy(scene, float(self.start_limits(scene)[0]), 0.0))
+        m, r, kappa, e, k, _, _ = scene.params
+        least = float(equations.inertia(0.0, m, r, kappa, e, k))
+        return needed, speed, float(energy_time(start, max(needed, start), self.max_torque,
+                                                least))
 
     def amplitude_ranges(self, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
         """The ranges [low, high] [rad of φ] the amplitudes are shares of, one per roller: where

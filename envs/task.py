@@ -285,15 +285,18 @@ class Task:
         return (type(self).check_scene is Task.check_scene
                 and type(self).pump_time is Task.pump_time)
 
-    #: The share of an episode (max_episode_steps·dt) in which the most power the torque can
-    #: put in must bring the target's energy, for a task with a :meth:`pump_time`.
-    PUMP_SHARE: ClassVar[float] = 0.25
+    #: The share of an episode (max_episode_steps·dt) within which the least time of
+    #: :meth:`pump_time` must bring the target's energy. The full torque in phase with φ'
+    #: takes 2.3–2.8 times that least time on the tasks' scenes (``docs/MAINTAINERS.md``),
+    #: so there it needs at most about 0.85 of the episode.
+    PUMP_SHARE: ClassVar[float] = 0.3
 
     def pump_time(self, scene: Scene) -> tuple[float, float, float] | None:
         """For a task whose target needs energy pumped in (a swing, a swing-up): (the energy
         [J] to bring, the fastest speed ω [rad/s] on the way, the least time [s] the torque
-        needs for it, energy / (max_torque·ω)) in the scalar ``scene``; None (the default)
-        for the others. A task with one proves it over a range of scenes in its
+        needs for it, :func:`roller_gym.bounds.energy_time`: its power max_torque·|φ'| with
+        |φ'| at most that energy's speed, as the energy grows) in the scalar ``scene``; None
+        (the default) for the others. A task with one proves it over a range of scenes in its
         :meth:`scene_proven`, or takes no ``randomize`` range (:mod:`roller_gym.feasibility`)."""
         return None
 
@@ -315,8 +318,8 @@ class Task:
             energy, speed, seconds = pumped
             return (f"max_torque={self.max_torque:g} N·m is too weak for {shown(scene)} in "
                     f"episodes of {self.max_episode_steps} steps of dt={dt:g} s "
-                    f"({episode:.3g} s): even the most power it can put in, max_torque·ω = "
-                    f"{self.max_torque * speed:.3g} W at the target's fastest speed ω = "
+                    f"({episode:.3g} s): even the most power it can put in, max_torque·|φ'| "
+                    f"with |φ'| growing with the energy up to the target's fastest speed "
                     f"{speed:.3g} rad/s, needs {seconds:.3g} s to bring the target's "
                     f"{energy:.3g} J, more than {self.PUMP_SHARE:g} of the episode; use a "
                     "larger max_torque or a longer dt")

@@ -82,6 +82,7 @@ from typing import Any
 
 import numba
 import numpy as np
+from roller_gym import bounds
 from roller_gym.physics import Scene, trig
 from roller_gym.physics.compiling import inlined
 from roller_gym.physics.integrators import SCENE_FIELDS, scene_arrays
@@ -164,6 +165,12 @@ class TrackTask(Task):
         if params.ndim == 1 and isinstance(t, float):  # one roller's step: compiled, a call
             return _target_one(params, t)
         return _target(*(params[..., j] for j in range(7)), t)
+
+    def unaided_time(self, p: Any, farthest: Any) -> Any:
+        """Where every target it holds lies within the success band of the bottom, the
+        damping alone succeeds: :func:`roller_gym.bounds.held_unaided_time`."""
+        return bounds.held_unaided_time(p, farthest, self.max_torque, self.success_band,
+                                        self.success_speed)
 
     def default_target(self, scene: Scene) -> float:
         low, high = hold_range(scene, self.max_torque)
