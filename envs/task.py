@@ -338,8 +338,8 @@ class Task:
     def least_times(self, p: Any, farthest: Any) -> dict[str, Any]:
         """Lower bounds [s] of the time the task's target needs, as intervals over the box
         of scenes ``p`` (:class:`roller_gym.bounds.Params`), by name
-        (:data:`roller_gym.bounds.LEAST_TIMES`): by default, from the farthest start (at rest
-        at |φ| = ``farthest`` [rad], an interval) to rest at the bottom, near which every
+        (:data:`roller_gym.bounds.LEAST_TIMES`): by default, from a start at rest at |φ| =
+        ``farthest`` [rad] (intervals, elementwise) to rest at the bottom, near which every
         target of the tasks with this start range lies (:func:`roller_gym.bounds.
         least_times`). Each must fit in :attr:`reach_share` of an episode. A task whose
         start and target differ (a pump) returns {} and bounds its own time
@@ -354,13 +354,18 @@ class Task:
         episode (else no torque at all may succeed); None (the default) for the others."""
         return None
 
-    def farthest_start(self, scene: Scene) -> float | None:
-        """|φ| [rad] of the farthest start at rest in the scalar ``scene``: of the grid of
-        :meth:`fallback_candidates`, the accepted one farthest from the bottom (None if none
-        is: :meth:`fallback_start` fails then)."""
+    def accepted_starts(self, scene: Scene) -> np.ndarray:
+        """|φ| [rad] of the starts at rest in the scalar ``scene`` of the grid of
+        :meth:`fallback_candidates` that are accepted (empty if none is: :meth:`fallback_start`
+        fails then)."""
         phi, phi_dot = self.fallback_candidates(scene)
         ok = self.start_accepted(phi, phi_dot, scene)[0]
-        return float(np.max(np.abs(phi[0][ok]))) if ok.any() else None
+        return np.abs(phi[0][ok])
+
+    def farthest_start(self, scene: Scene) -> float | None:
+        """|φ| [rad] of the farthest of :meth:`accepted_starts` (None if there is none)."""
+        starts = self.accepted_starts(scene)
+        return float(np.max(starts)) if starts.size else None
 
     def fallback_start(self, scene: Scene) -> tuple[float, float] | None:
         """The start state (φ [rad], φ' [rad/s]) the draw falls back to when none of its

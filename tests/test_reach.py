@@ -151,18 +151,21 @@ def test_a_proven_range_holds_scene_by_scene():
 
 
 def test_holding_targets_within_the_band_of_the_bottom_with_damping_is_refused():
-    """With a torque so small that every target it holds lies within the success band of
-    the bottom, damping alone solved RollerHold and RollerTrack (zero torque: 9–10 of 10
-    episodes): refused where the damping may settle the roller in the episode, not with a
-    torque that holds targets past the band, nor without damping."""
+    """With a torque so small that the targets it holds lie within the success band of the
+    bottom (all of them, or one grid step short of all: ±0.0565 rad against 0.05), damping
+    alone solved RollerHold and RollerTrack (zero torque: 9–10 of 10 episodes): refused
+    where half the targets may lie within the band and the damping may settle the roller in
+    the episode; not with a torque that holds targets further out, nor without damping."""
     for env_id, kwargs in ((HOLD, {"scene": Scene(damping=0.05), "max_torque": 0.02}),
                            (HOLD, {"scene": Scene(damping=0.2), "max_torque": 0.002}),
                            (TRACK, {"scene": Scene(damping=0.2), "max_torque": 0.01}),
+                           (HOLD, {"scene": Scene(damping=0.1), "max_torque": 0.05}),
+                           (TRACK, {"scene": Scene(damping=0.1), "max_torque": 0.07}),
                            (HOLD, {"randomize": {"damping": (0.05, 0.2)}, "max_torque": 0.02})):
-        with pytest.raises(ValueError, match="a success for every target"):
+        with pytest.raises(ValueError, match="a success for"):
             gym.make(env_id, **kwargs)
         low, high = roller_gym.rest.hold_range(Scene(), kwargs["max_torque"])
-        assert max(-low, high) <= 0.05  # (every target within the band: the walk's own range)
+        assert max(-low, high) <= 0.1  # (half the targets within the band: the walk's range)
     for kwargs in ({"scene": Scene(damping=0.05), "max_torque": 0.1},
                    {"randomize": {"damping": (0.05, 0.2)}}):
         gym.make(HOLD, **kwargs)
@@ -186,3 +189,17 @@ def test_holds_past_implies_the_walks_range_reaches_past_the_band():
             assert high > 0.05 and -low > 0.05, (scene, torque)
         agreed += wide == (high > 0.05)
     assert agreed >= 270  # (and it seldom misses a range that does reach past)
+
+
+def test_every_accepted_start_is_bounded_not_only_the_farthest():
+    """On the ``drum`` the farthest accepted start (5.65 rad) lies past the potential's
+    barrier, below the bottom's energy, so its energy bound is 0 s; nearer starts carry
+    0.1–0.4 J, which max_torque = 3e-4 N·m takes minutes to take out (the LQR: 0 of 8).
+    The bounds are now taken at every accepted start: refused, naming the start."""
+    task = roller_gym.TASKS["RollerStabilize"](3e-4)
+    scene = roller_gym.preset("drum")
+    starts = task.accepted_starts(scene)
+    times = task.least_times(box_params(scene, {}), Interval(starts))["energy"].lo
+    assert times[np.argmax(starts)] == 0.0 and times.max() > 5.0
+    with pytest.raises(ValueError, match=r"the start at rest at \|phi\| = "):
+        gym.make(STABILIZE, scene="drum", max_torque=3e-4)
