@@ -77,8 +77,8 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-from roller_gym import feasibility
-from roller_gym.bounds import energy_time, potential_enclosure
+from roller_gym import bounds, feasibility
+from roller_gym.bounds import potential_enclosure
 from roller_gym.intervals import Interval
 from roller_gym.physics import Scene, contact, energy, equations
 from roller_gym.physics.analysis import nearest_unstable_rests
@@ -173,7 +173,7 @@ class BalanceTask(Task):
                 return float(phi[i]), float(phi_dot[i])
         return None
 
-    def least_times(self, p: Any, farthest: Any) -> dict[str, Any]:
+    def least_times(self, p: Any, start: Any) -> dict[str, Any]:
         """None of the default's: the start lies near the bottom and the target's energy is
         bounded by :meth:`pump_time`."""
         return {}
@@ -181,15 +181,12 @@ class BalanceTask(Task):
     def pump_time(self, scene: Scene) -> tuple[float, float, float]:
         """(the least energy [J] a start must gain to succeed: from the most a start has,
         E(±0.1 rad, ±0.1 rad/s), to V(φ_b − success_band); ω of :meth:`swing_up_speed`;
-        :func:`roller_gym.bounds.energy_time` between them [s], V >= 0 and J_I >= J_I(0) on
-        the way)."""
+        :func:`roller_gym.bounds.pump_time` between them [s])."""
         phi_b = self.default_target(scene)
         speed = self.swing_up_speed(scene, phi_b)
         reached = float(energy(scene, max(phi_b - self.success_band, 0.0), 0.0))
         start = float(energy(scene, self.start_width, self.start_width))
-        m, r, kappa, e, k, _, _ = scene.params
-        least = float(equations.inertia(0.0, m, r, kappa, e, k))
-        seconds = float(energy_time(start, max(reached, start), self.max_torque, least))
+        seconds = bounds.pump_time(scene, start, reached, self.max_torque)
         return max(reached - start, 0.0), speed, seconds
 
     def default_target(self, scene: Scene) -> float:
@@ -231,7 +228,7 @@ class BalanceTask(Task):
         start = (potential_enclosure(p, Interval(w))
                  + 0.5 * equations.inertia(Interval(w), p.m, p.r, p.kappa, p.e, p.k) * w * w)
         gained = (max(float(np.min(start.lo)), 0.0), float(np.max(reached.hi)))
-        pump = float(energy_time(gained[0], max(gained), self.max_torque, least.hi))
+        pump = float(bounds.energy_time(gained[0], max(gained), self.max_torque, least.hi))
         return bool(p.c.hi * speed <= self.damping_share * self.max_torque
                     and pump <= self.PUMP_SHARE * self.max_episode_steps * dt
                     and self._orbit_proven(p, phi))

@@ -18,10 +18,11 @@ import numpy as np
 from roller_gym.intervals import Interval
 from roller_gym.physics import Scene, equations
 from roller_gym.physics.scene import shown
-from roller_gym.rest import HOLD_FRICTION_SHARE, HOLD_POINTS, HOLD_TORQUE_SHARE, START_TURNS
+from roller_gym.rest import HOLD_FRICTION_SHARE, HOLD_POINTS, HOLD_TORQUE_SHARE, reach_at_rate
 
 __all__ = ["LEAST_TIMES", "Params", "box_params", "energy_time", "held_unaided_time",
-           "holds_past", "least_times", "potential_enclosure", "reach_proven", "too_slow",
+           "holds_past", "least_times", "potential_enclosure", "pump_time", "reach_proven",
+           "too_slow",
            "unaided_time"]
 
 
@@ -104,6 +105,15 @@ def energy_time(start: Any, goal: Any, torque: float, inertia: Any) -> Any:
     return _removal(high, low, torque, 0.0, inertia)
 
 
+def pump_time(scene: Scene, start: float, goal: float, torque: float) -> float:
+    """:func:`energy_time` [s] to pump the scalar ``scene``'s roller from the energy
+    ``start`` up to ``goal`` [J] (none where goal <= start), with V >= 0 and J_I >= J_I(0) on
+    the way (a swing about the bottom)."""
+    m, r, kappa, e, k, _, _ = scene.params
+    least = float(equations.inertia(0.0, m, r, kappa, e, k))
+    return float(energy_time(start, max(goal, start), torque, least))
+
+
 def _travel(distance, excess, torque, inertia):
     """The least time [s] to roll ``distance`` [rad] from rest with ``excess`` = V(start) −
     V_min [J]: the kinetic energy is at most excess + τ s after s rad (damping only takes),
@@ -137,56 +147,58 @@ def _lifted_travel(distance, period, top, slope, inertia):
         return np.where(np.isfinite(top), np.maximum(distance - period, 0.0) * pace, 0.0)
 
 
-def _levels(p: Params, farthest: Interval, band: float, speed: float):
-    """(V − V_min [J] at the farthest start, at rest at |φ| = ``farthest`` [rad]; V − V_min
-    [J] of the most energetic success state, |φ| <= ``band``, |φ'| <= ``speed``; J_min; J_max)
-    as intervals over the box."""
+def _levels(p: Params, start: Interval, band: float, speed: float):
+    """(V − V_min [J] at the start, at rest at |φ| = ``start`` [rad]; V − V_min [J] of the
+    most energetic success state, |φ| <= ``band``, |φ'| <= ``speed``; J_min; J_max) as
+    intervals over the box."""
     least = p.m * equations.inertia_per_mass(0.0, p.r, p.e, p.k)
     most = p.m * equations.inertia_per_mass(1.0, p.r, p.e, p.k)
     base = _potential_floor(p)
-    start = potential_enclosure(p, farthest) - base
+    energy = potential_enclosure(p, start) - base
     kept = potential_enclosure(p, Interval(-band, band)) - base + 0.5 * most * speed * speed
-    return start, kept, least, most
+    return energy, kept, least, most
 
 
 #: The least times of :func:`least_times` by name: (what takes the time, what to change).
 LEAST_TIMES: dict[str, tuple[str, str]] = {
-    "energy": ("taking out the energy of the farthest start (at most "
+    "energy": ("taking out the energy of the start (at most "
                "max_torque·|φ'| + damping·φ'² a second)", "a larger max_torque or a scene "
                "with less energy at the start (smaller m, g, e or R)"),
-    "travel": ("rolling from the farthest start to the bottom at the speeds its energy "
+    "travel": ("rolling from the start to the bottom at the speeds its energy "
                "allows", "a larger max_torque, or a scene with less inertia (smaller m, k, "
                "e) or a nearer start (smaller R)"),
-    "lifted travel": ("rolling from the farthest start to the bottom past the points "
+    "lifted travel": ("rolling from the start to the bottom past the points "
                       "where the eccentric mass is on top, below the speed at which it lifts "
                       "off there, sqrt(g/(e − r²κ/(1 − rκ)))", "a nearer start (smaller R) or "
                       "a smaller e"),
-    "damped travel": ("rolling from the farthest start to the bottom against the "
+    "damped travel": ("rolling from the start to the bottom against the "
                       "damping", "less damping or a larger max_torque"),
 }
 
 
-def least_times(p: Params, max_torque: float, farthest: Interval, band: float,
+def least_times(p: Params, max_torque: float, start: Interval, band: float,
                 speed: float) -> dict[str, Interval]:
-    """Lower bounds [s] of the time to bring the roller from the farthest start, at rest at
-    |φ| = ``farthest`` [rad] (an interval holding it in every scene of the box ``p``), to rest
-    at the bottom (|φ| <= ``band`` [rad], |φ'| <= ``speed`` [rad/s]) with |τ| <=
-    ``max_torque`` [N·m], as intervals over the box:
+    """Lower bounds [s] of the time to bring the roller from a start at rest at |φ| =
+    ``start`` [rad] (intervals, elementwise: each holding a start in every scene of the box
+    ``p``) to rest at the bottom (|φ| <= ``band`` [rad], |φ'| <= ``speed`` [rad/s]) with
+    |τ| <= ``max_torque`` [N·m], as intervals over the box:
 
+    * ``"lifted travel"``: the way rolled past the points it must pass below its lift-off
+      speed (:func:`_lifted_travel`);
     * ``"energy"``: its energy taken out, at most τ|φ'| + cφ'² a second (:func:`_removal`);
     * ``"travel"``: the way rolled at the speeds its energy allows (:func:`_travel`);
     * ``"damped travel"``: the way rolled at the speeds the damping allows
       (:func:`_damped_travel`).
     """
     with np.errstate(all="ignore"):  # (inf and NaN prove nothing: see intervals)
-        return _least_times(p, max_torque, farthest, band, speed)
+        return _least_times(p, max_torque, start, band, speed)
 
 
-def _least_times(p, max_torque, farthest, band, speed):
-    start, kept, least, most = _levels(p, farthest, band, speed)
+def _least_times(p, max_torque, at, band, speed):
+    start, kept, least, most = _levels(p, at, band, speed)
     torque = Interval(float(max_torque))
     drive = torque + p.m * p.g * (p.r + p.e)  # max |V'| <= m g (r + e)
-    way = farthest - band
+    way = at - band
     s = 1.0 - p.r * p.kappa
     lift = p.e - p.r * p.r * p.kappa / s  # > 0: the roller lifts off a point fast enough
     fall = 2.0 * p.m * p.g * p.e
@@ -224,7 +236,7 @@ def holds_past(p: Params, torque_limit: float, friction_share: float,
     with np.errstate(all="ignore"):
         q = abs(p.r * p.kappa / (1.0 - p.r * p.kappa))
         floor = (p.kappa.lo == 0) & (p.kappa.hi == 0)  # (the floor's rate is 1)
-        reach = np.where(floor, np.pi, np.minimum(np.pi / q.lo, 2.0 * np.pi * START_TURNS))
+        reach = np.where(floor, np.pi, reach_at_rate(q.lo, np.pi))
         phi = Interval(0.0, band + reach / (HOLD_POINTS - 1))
         psi = p.r * p.kappa / (1.0 - p.r * p.kappa) * phi
         # dV/dφ = m g (r sin ψ + e sin φ) (equations.dpotential), NumPy's sines on intervals
@@ -283,7 +295,7 @@ def too_slow(task: Any, scene: Scene, dt: float) -> str | None:
 
 def reach_proven(task: Any, p: Params, dt: float, farthest: Interval) -> np.ndarray:
     """Whether :func:`too_slow` is proven None for ``task`` over each box of ``p`` (arrays of
-    intervals; ``farthest``: intervals holding each box's :meth:`Task.farthest_start`): every
+    intervals; ``farthest``: intervals holding each box's farthest accepted start): every
     least time's upper end, over every start (|φ| in [0, farthest's upper end]), within
     :attr:`Task.reach_share` of the episode, and the unaided time's lower end past it."""
     episode = task.max_episode_steps * dt

@@ -79,7 +79,7 @@ class Settings:
         "power, max_torque·|φ'| at the speed of the energy pumped so far, would need more "
         "than 0.3 of the episode to bring the energy success needs. The others (RollerStabilize, "
         "RollerHold, RollerTrack, RollerHoldRandomized) refuse a torque, scene or ``dt`` with "
-        "which bringing the roller from the farthest start to rest at the bottom takes, at the "
+        "which bringing the roller from an accepted start to rest at the bottom takes, at the "
         "least, more than half the episode, by the bounds of "
         ":func:`roller_gym.bounds.least_times` (its energy taken out, the way rolled at the "
         "speeds its energy, its lift-off and the damping allow); RollerStabilize also refuses "

@@ -23,9 +23,9 @@ What is proven on a box B (the conditions of :func:`problem`, in exact arithmeti
    |q| = |rκ/(1 − rκ)| monotone in r and in R on either side of R = 0, which a range cannot
    cross).
 3. The target within reach (:func:`roller_gym.bounds.reach_proven`): the least times of
-   :func:`roller_gym.bounds.least_times` from the farthest start (an interval from the
-   farthest candidate of 2. proven to roll to the farthest candidate) within the task's share
-   of the episode, and for Stabilize the unaided time past it.
+   :func:`roller_gym.bounds.least_times` from every start (|φ| up to the farthest candidate
+   of 2. not proven to slip) within the task's share of the episode, and the unaided time
+   from the farthest start (from the farthest candidate proven to roll) past it.
 4. The task's own condition (:meth:`Task.scene_proven`): none for Stabilize and Hold; for
    Balance, :func:`unstable_rest_enclosure`.
 """
@@ -144,8 +144,9 @@ def _corners(scene: Scene, boxes: Sequence[Box]) -> Scene:
 def _starts_proven(task: Task, scene: Scene, boxes: Sequence[Box],
                    p: Params) -> tuple[np.ndarray, Interval]:
     """Whether, for each box, one start candidate rolls in all its scenes; and an interval
-    holding each box's :meth:`Task.farthest_start`: from the farthest candidate proven to
-    roll to the farthest one not proven to slip or lift off (under some torque) in all."""
+    holding each box's farthest of :meth:`Task.accepted_starts`: from the farthest candidate
+    proven to roll to the farthest one not proven to slip or lift off (under some torque) in
+    all."""
     n = len(boxes)
     phi, phi_dot = task.fallback_candidates(_corners(scene, boxes) if boxes[0] else scene)
     phi, phi_dot = (Interval.hull(x.reshape(n, -1, x.shape[-1]), axis=1)

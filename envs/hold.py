@@ -56,7 +56,7 @@ target is φ* [rad]).
 
 ## Arguments
 
-As RollerStabilize's; refused: settings with which bringing the roller from the farthest
+As RollerStabilize's; refused: settings with which bringing the roller from an accepted
 start to rest at the bottom, near which the targets lie, takes more than half the
 episode at the least (:func:`roller_gym.bounds.least_times`).
 
@@ -98,8 +98,8 @@ class HoldTask(Task):
         return low + (high - low) * u
 
     def unaided_time(self, p: Any, farthest: Any) -> Any:
-        """Where every target it holds lies within the success band of the bottom, the
-        damping alone succeeds: :func:`roller_gym.bounds.held_unaided_time`."""
+        """Where half the targets it holds or more may lie within the success band of the
+        bottom, the damping alone succeeds there: :func:`roller_gym.bounds.held_unaided_time`."""
         return bounds.held_unaided_time(p, farthest, self.max_torque, self.success_band,
                                         self.success_speed)
 

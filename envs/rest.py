@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+from typing import Any
 
 import numba
 import numpy as np
@@ -32,6 +33,7 @@ __all__ = [
     "per_scene",
     "psi_rate",
     "reach",
+    "reach_at_rate",
     "unstable_rest_positions",
     "wrap_rate",
 ]
@@ -185,8 +187,14 @@ def reach(scene: Scene, angle: float = math.pi) -> float | np.ndarray:
     """
     if not (finite_real(angle) and angle > 0):
         raise ValueError(f"angle={shown(angle)} [rad] must be a real number > 0")
-    with np.errstate(over="ignore"):  # angle/|q| overflows to inf for |R| near float64's top
-        return np.minimum(angle / np.abs(angle_rate(scene)), 2.0 * math.pi * START_TURNS)
+    return reach_at_rate(np.abs(angle_rate(scene)), angle)
+
+
+def reach_at_rate(rate: Any, angle: float) -> Any:
+    """:func:`reach` at the rate |q| = ``rate`` [-] (numbers or arrays): angle/rate [rad of
+    φ], at most :data:`START_TURNS` turns (inf, then the cap, where the rate is 0)."""
+    with np.errstate(over="ignore", divide="ignore"):  # inf for |R| near float64's top
+        return np.minimum(angle / rate, 2.0 * math.pi * START_TURNS)
 
 
 @cached_per_scene

@@ -54,7 +54,7 @@ redrawn until the roller rolls there.
 ``gymnasium.make("roller_gym/RollerStabilize-v2", scene=..., dt=..., max_torque=..., tolerance=...,
 integrator=..., substeps=..., randomize=..., render_mode=...)``: see
 :class:`roller_gym.roller_env.RollerEnv`. Refused: settings with which bringing the roller
-from the farthest start to rest at the bottom takes more than half the episode at the least
+from an accepted start to rest at the bottom takes more than half the episode at the least
 (:func:`roller_gym.bounds.least_times`), and damping that might do it with no torque within
 the episode (:func:`roller_gym.bounds.unaided_time`).
 

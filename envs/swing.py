@@ -97,7 +97,7 @@ from typing import Any
 
 import numpy as np
 from roller_gym import rewards
-from roller_gym.bounds import energy_time
+from roller_gym.bounds import pump_time
 from roller_gym.physics import Scene, energy, equations, small_oscillation_frequency
 from roller_gym.physics.integrators import SCENE_FIELDS, scene_arrays
 from roller_gym.physics.scene import shown
@@ -268,7 +268,7 @@ class SwingTask(Task):
                         if capped.any() else top)
         return tops[0], tops[1]
 
-    def least_times(self, p: Any, farthest: Any) -> dict[str, Any]:
+    def least_times(self, p: Any, start: Any) -> dict[str, Any]:
         """None of the default's: the start lies near the bottom and the target's energy is
         bounded by :meth:`pump_time`."""
         return {}
@@ -276,18 +276,15 @@ class SwingTask(Task):
     def pump_time(self, scene: Scene) -> tuple[float, float, float]:
         """(1 − energy_band)·E* [J] of the largest target (the least energy that succeeds),
         the fastest speed ω [rad/s] of its swing in the band (at the bottom), and
-        :func:`roller_gym.bounds.energy_time` [s] to it from the most a start has (at rest at
-        :meth:`start_limits`; within the swing's well V >= 0 and J_I >= J_I(0))."""
+        :func:`roller_gym.bounds.pump_time` [s] to it from the most a start has (at rest at
+        :meth:`start_limits`; within the swing's well V >= 0)."""
         low, high = self.amplitude_ranges(scene)
         top = max(float(t[0]) * abs(float(side[0]))
                   for t, side in zip(self.top_shares(scene), (low, high), strict=True))
         speed = self.rolling_margins(scene, np.array([top]))[2]
         needed = (1.0 - self.energy_band) * float(energy(scene, top, 0.0))
         start = float(energy(scene, float(self.start_limits(scene)[0]), 0.0))
-        m, r, kappa, e, k, _, _ = scene.params
-        least = float(equations.inertia(0.0, m, r, kappa, e, k))
-        return needed, speed, float(energy_time(start, max(needed, start), self.max_torque,
-                                                least))
+        return needed, speed, pump_time(scene, start, needed, self.max_torque)
 
     def amplitude_ranges(self, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
         """The ranges [low, high] [rad of φ] the amplitudes are shares of, one per roller: where

@@ -335,22 +335,23 @@ class Task:
     #: The share of an episode within which each of :meth:`least_times` must fit.
     reach_share: ClassVar[float] = 0.5
 
-    def least_times(self, p: Any, farthest: Any) -> dict[str, Any]:
+    def least_times(self, p: Any, start: Any) -> dict[str, Any]:
         """Lower bounds [s] of the time the task's target needs, as intervals over the box
         of scenes ``p`` (:class:`roller_gym.bounds.Params`), by name
         (:data:`roller_gym.bounds.LEAST_TIMES`): by default, from a start at rest at |φ| =
-        ``farthest`` [rad] (intervals, elementwise) to rest at the bottom, near which every
+        ``start`` [rad] (intervals, elementwise) to rest at the bottom, near which every
         target of the tasks with this start range lies (:func:`roller_gym.bounds.
         least_times`). Each must fit in :attr:`reach_share` of an episode. A task whose
         start and target differ (a pump) returns {} and bounds its own time
         (:meth:`pump_time`)."""
-        return bounds.least_times(p, self.max_torque, farthest, self.success_band,
+        return bounds.least_times(p, self.max_torque, start, self.success_band,
                                   self.success_speed)
 
     def unaided_time(self, p: Any, farthest: Any) -> Any:
         """For a task whose target is where the free motion comes to rest: a lower bound
         [s] (an interval over ``p``) of the time the damping alone needs to bring the roller
-        there from the farthest start (as :meth:`least_times`), which must exceed the
+        there from the farthest start (at rest at |φ| = ``farthest`` [rad], an interval; as
+        :meth:`least_times`), which must exceed the
         episode (else no torque at all may succeed); None (the default) for the others."""
         return None
 
@@ -361,11 +362,6 @@ class Task:
         phi, phi_dot = self.fallback_candidates(scene)
         ok = self.start_accepted(phi, phi_dot, scene)[0]
         return np.abs(phi[0][ok])
-
-    def farthest_start(self, scene: Scene) -> float | None:
-        """|φ| [rad] of the farthest of :meth:`accepted_starts` (None if there is none)."""
-        starts = self.accepted_starts(scene)
-        return float(np.max(starts)) if starts.size else None
 
     def fallback_start(self, scene: Scene) -> tuple[float, float] | None:
         """The start state (φ [rad], φ' [rad/s]) the draw falls back to when none of its
