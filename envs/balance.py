@@ -98,6 +98,7 @@ class BalanceTask(Task):
     max_episode_steps = 400
     reward_threshold = 343.5  # the swing-up's mean return on seeds 10000–10099 (361.6) − 5 %
     classical = "swing_up"
+    descends = False  # the target lies up where the energy is pumped
     symmetric_target = True
     position_margin = 3.0
     success_band = 0.1
@@ -172,11 +173,6 @@ class BalanceTask(Task):
                 i = int(np.flatnonzero(stuck)[0])
                 return float(phi[i]), float(phi_dot[i])
         return None
-
-    def least_times(self, p: Any, start: Any) -> dict[str, Any]:
-        """None of the default's: the start lies near the bottom and the target's energy is
-        bounded by :meth:`pump_time`."""
-        return {}
 
     def pump_time(self, scene: Scene) -> tuple[float, float, float]:
         """(the least energy [J] a start must gain to succeed: from the most a start has,

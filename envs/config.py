@@ -19,7 +19,7 @@ from dataclasses import MISSING, dataclass, field, fields
 from typing import Any, TypeVar
 
 import numpy as np
-from roller_gym import feasibility, validation
+from roller_gym import descent, feasibility, validation
 from roller_gym.episode import INFO_KEYS
 from roller_gym.physics import INTEGRATORS, Scene, preset
 from roller_gym.physics.integrators import DEFAULT_INTEGRATOR, MAX_SUBSTEPS
@@ -82,7 +82,9 @@ class Settings:
         "which bringing the roller from an accepted start to rest at the bottom takes, at the "
         "least, more than half the episode, by the bounds of "
         ":func:`roller_gym.bounds.least_times` (its energy taken out, the way rolled at the "
-        "speeds its energy, its lift-off and the damping allow); RollerStabilize also refuses "
+        "speeds its energy, its lift-off and the damping allow), and a fixed scene with a "
+        "start from which no torque can stop the roller before a point where it must slip or "
+        "lift off (:func:`roller_gym.descent.doomed`); RollerStabilize also refuses "
         "damping that might bring the roller to rest there with no torque within the "
         "episode."))
     tolerance: float = field(default=DEFAULT_TOLERANCE, metadata=_doc(
@@ -236,7 +238,7 @@ class EnvConfig:
                 if not ranges:  # (a range's proof covers every scene drawn, and only those:
                     # the base values of the fields it draws are never stepped)
                     validation.check_integrable(one, dt, task.max_torque, task.start_speed)
-                    reason = task.infeasible(one, dt)
+                    reason = descent.fixed_scene_problem(task, one, dt)
                     if reason is not None:
                         raise ValueError(reason)
             except ValueError as exc:

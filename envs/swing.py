@@ -93,7 +93,6 @@ tolerance=..., integrator=..., substeps=..., randomize=..., render_mode=...)``: 
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
 from roller_gym import rewards
@@ -114,6 +113,7 @@ class SwingTask(Task):
     observation = ("cos_psi", "sin_psi", "cos_phi", "sin_phi", "speed", "cos_psi_target",
                    "sin_psi_target", "cos_phi_target", "sin_phi_target")
     classical = "energy_pump"
+    descends = False  # the target lies up where the energy is pumped
     symmetric_target = True  # ±φ*: the swing turns back at both
     max_episode_steps = 400
     default_max_torque = 0.1
@@ -267,11 +267,6 @@ class SwingTask(Task):
             tops.append(np.where(capped, last_within(over, np.zeros_like(side), top), hi)
                         if capped.any() else top)
         return tops[0], tops[1]
-
-    def least_times(self, p: Any, start: Any) -> dict[str, Any]:
-        """None of the default's: the start lies near the bottom and the target's energy is
-        bounded by :meth:`pump_time`."""
-        return {}
 
     def pump_time(self, scene: Scene) -> tuple[float, float, float]:
         """(1 − energy_band)·E* [J] of the largest target (the least energy that succeeds),

@@ -332,6 +332,10 @@ class Task:
                     f"{self.start_rule}); lower max_torque or raise mu")
         return None
 
+    #: Whether every target lies near the bottom, so that the roller comes down from its
+    #: start: its :meth:`least_times` bound the way, and in a fixed scene no start may be
+    #: doomed to slip on it (:func:`roller_gym.descent.doomed`). False for a pump.
+    descends: ClassVar[bool] = True
     #: The share of an episode within which each of :meth:`least_times` must fit.
     reach_share: ClassVar[float] = 0.5
 
@@ -341,9 +345,11 @@ class Task:
         (:data:`roller_gym.bounds.LEAST_TIMES`): by default, from a start at rest at |φ| =
         ``start`` [rad] (intervals, elementwise) to rest at the bottom, near which every
         target of the tasks with this start range lies (:func:`roller_gym.bounds.
-        least_times`). Each must fit in :attr:`reach_share` of an episode. A task whose
-        start and target differ (a pump) returns {} and bounds its own time
+        least_times`). Each must fit in :attr:`reach_share` of an episode. A task that does
+        not :attr:`descend <descends>` (a pump) has none and bounds its own time
         (:meth:`pump_time`)."""
+        if not self.descends:
+            return {}
         return bounds.least_times(p, self.max_torque, start, self.success_band,
                                   self.success_speed)
 

@@ -62,7 +62,8 @@ followed within the torque limit and without slipping. On the default scene they
 
 As RollerStabilize's; refused: settings with which bringing the roller from an accepted
 start to rest at the bottom, near which the targets lie, takes more than half the
-episode at the least (:func:`roller_gym.bounds.least_times`).
+episode at the least (:func:`roller_gym.bounds.least_times`), and a fixed scene with a
+start doomed to slip or lift off on its way down (:func:`roller_gym.descent.doomed`).
 
 ## Version History
 

@@ -742,7 +742,7 @@ def test_every_held_target_needs_at_most_the_share_of_the_torque_it_promises(R):
     missed the e sin φ of the holding torque: targets needed up to 1.2× max_torque. Every
     drawn target's holding torque (the physics' own, independent of the range's walk) is
     now within max_torque, with the 0.8 share up to what the grid between points can miss."""
-    scene = Scene(R=R, e=0.08)
+    scene = Scene(R=R, e=0.07)  # (at e = 0.08 on R = 2 m a far start must slip: descent)
     env = gym.make("roller_gym/RollerHold-v2", scene=scene, dt=FLAT_DT).unwrapped
     torques = []
     for seed in range(100):

@@ -15,7 +15,7 @@ from typing import Any
 
 import numba
 import numpy as np
-from roller_gym import validation
+from roller_gym import descent, validation
 from roller_gym.episode.streams import uniform
 from roller_gym.physics import Scene, trig
 from roller_gym.physics import equations as eq
@@ -222,7 +222,7 @@ def start_episodes(
     task = config.task
     if options.get("scene") is not None:
         scene = config.resolve_option_scene(options["scene"])
-        reason = task.infeasible(scene, config.dt)
+        reason = descent.fixed_scene_problem(task, scene, config.dt)
         if reason is not None:
             raise ValueError(f"options['scene']: {reason}")
         validation.check_integrable(scene, config.dt, task.max_torque, task.start_speed)

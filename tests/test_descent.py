@@ -1,0 +1,125 @@
+"""Starts doomed to slip on their way down (roller_gym.descent): the least speed against the
+hardest braking simulated, the rolling set against a dense search, and the refusals."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from roller_gym import Scene, descent
+from roller_gym.physics import PRESETS, equations
+from roller_gym.task import get_task
+from scipy.integrate import solve_ivp
+
+#: (scene, max_torque [N·m]) where every policy fails from some start of RollerStabilize.
+DOOMED = [(PRESETS["rim_mass"], 0.5), (Scene(e=0.2), 0.5), (Scene(e=0.2, damping=0.01), 0.5),
+          (PRESETS["balance"], 0.5), (Scene(e=0.099, k=0.005), 0.5)]
+#: ... and where no start is doomed (the beam search of a review reached the target from
+#: rim_mass at 1 N·m).
+NOT_DOOMED = [(PRESETS["paper"], 0.5), (PRESETS["rim_mass"], 1.0), (Scene(e=0.09), 0.5),
+              (PRESETS["drum"], 0.5), (PRESETS["floor"], 0.5)]
+
+
+def _stabilize(max_torque):
+    return get_task("RollerStabilize", current=True)(max_torque)
+
+
+def _rolling_torque_exists(scene, phi, speed, max_torque, torques=801):
+    """Whether some torque in [−max_torque, max_torque] rolls at (φ, −speed): a dense search
+    straight on the contact forces."""
+    m, r, kappa, e, k, g, c = scene.params
+    tau = np.linspace(-max_torque, max_torque, torques)
+    a = equations.accel(phi, -speed, tau, m, r, kappa, e, k, g, c)
+    normal, friction = equations.contact_forces(phi, -speed, a, m, r, kappa, e, g)
+    return bool(np.any((normal > 0) & (np.abs(friction) <= scene.mu * normal)))
+
+
+def _braked_speed(scene, start, where, max_torque):
+    """|φ'| [rad/s] at |φ| = ``where`` of the roller released at rest at ``start`` under the
+    full torque against its motion (the most a torque can slow it), by a tight reference
+    integration."""
+    m, r, kappa, e, k, g, c = scene.params
+
+    def rhs(_, y):
+        return [y[1], equations.accel(y[0], y[1], max_torque, m, r, kappa, e, k, g, c)]
+
+    def arrive(_, y):
+        return y[0] - where
+
+    arrive.terminal = True
+    sol = solve_ivp(rhs, (0.0, 20.0), [start, 0.0], events=arrive, rtol=1e-11, atol=1e-12,
+                    method="DOP853")
+    assert sol.status == 1, "the braked roller never got there"
+    return abs(sol.y_events[0][0][1])
+
+
+@pytest.mark.parametrize(("scene", "max_torque"), DOOMED)
+def test_a_doomed_start_is_doomed_by_a_direct_search(scene, max_torque):
+    """The reported speed is below what the hardest braking leaves at that point, and at
+    that speed and above (up to the braked one) no torque rolls there."""
+    found = descent.doomed(_stabilize(max_torque), scene)
+    assert found is not None
+    start, where, least = found
+    braked = _braked_speed(scene, start, where, max_torque)
+    assert least <= braked * (1 + 1e-9)
+    for speed in np.linspace(least, max(braked, least) * 1.5, 25):
+        assert not _rolling_torque_exists(scene, where, speed, max_torque), speed
+
+
+@pytest.mark.parametrize(("scene", "max_torque"), NOT_DOOMED)
+def test_scenes_a_controller_solves_are_not_doomed(scene, max_torque):
+    assert descent.doomed(_stabilize(max_torque), scene) is None
+
+
+def _torques_at(A, B, C, x, low, high):
+    """The interval of u in [low, high] where every row A + B x + C u >= 0 holds at x, row
+    by row (empty: lower end > upper end)."""
+    lo, hi = low, high
+    for a, b, c in zip(A, B, C, strict=True):
+        if c > 0:
+            lo = max(lo, -(a + b * x) / c)
+        elif c < 0:
+            hi = min(hi, -(a + b * x) / c)
+        elif a + b * x < 0:
+            return 1.0, -1.0
+    return lo, hi
+
+
+def test_the_rolling_set_ends_where_no_torque_is_left():
+    """fastest_rolling's x, on random rows, against the torques left at each x, found row
+    by row: some at x, none a little past it (or it is unbounded, or empty at x = 0...)."""
+    rng = np.random.default_rng(7)
+    n = 400
+    A, B, C = (rng.normal(size=(3, n)) for _ in range(3))
+    most = descent.fastest_rolling(A, B, C, -1.0, 1.0)
+    seen = {"bounded": 0, "unbounded": 0, "empty": 0}
+    for i in range(n):
+        rows = A[:, i], B[:, i], C[:, i]
+        if most[i] == -np.inf:
+            seen["empty"] += 1
+            for x in np.linspace(0.0, 100.0, 1001):
+                lo, hi = _torques_at(*rows, x, -1.0, 1.0)
+                assert lo > hi + 1e-12, (i, x)
+        elif most[i] >= 1e30:
+            seen["unbounded"] += 1
+            lo, hi = _torques_at(*rows, 1e12, -1.0, 1.0)
+            assert lo <= hi + 1e-9, i
+        else:
+            seen["bounded"] += 1
+            lo, hi = _torques_at(*rows, most[i], -1.0, 1.0)
+            assert lo <= hi + 1e-9 * (1 + abs(most[i])), i
+            lo, hi = _torques_at(*rows, most[i] * (1 + 1e-6) + 1e-6, -1.0, 1.0)
+            assert lo > hi, i
+    assert min(seen.values()) >= 20, seen  # each case tried
+
+
+def test_a_doomed_scene_is_refused_at_construction_and_reset():
+    with pytest.raises(ValueError, match=r"max_torque=0.5 N·m: from the start at rest"):
+        gym.make("roller_gym/RollerStabilize-v2", scene="rim_mass")
+    with pytest.raises(ValueError, match=r"scene\[1\] \(sub-environment 1.*slips or lifts off"):
+        gym.make_vec("roller_gym/RollerHold-v2", num_envs=2, max_torque=0.5,
+                     scene=["paper", "rim_mass"])
+    env = gym.make("roller_gym/RollerTrack-v1", max_torque=0.5)
+    with pytest.raises(ValueError, match=r"options\['scene'\]: .*slips or lifts off"):
+        env.reset(seed=0, options={"scene": "rim_mass"})
+    env.reset(seed=0, options={"scene": "paper"})  # (the env still works)
+    # A pump's target lies up: no descent is asked of it.
+    gym.make("roller_gym/RollerBalance-v2")
