@@ -123,3 +123,15 @@ def test_a_doomed_scene_is_refused_at_construction_and_reset():
     env.reset(seed=0, options={"scene": "paper"})  # (the env still works)
     # A pump's target lies up: no descent is asked of it.
     gym.make("roller_gym/RollerBalance-v2")
+
+
+def test_hold_randomized_v1_holds_doomed_starts_in_its_ranges():
+    """What its docstring says: at R = 1 m, m = 1.6 kg, e = k = 0.07 m the braked roller
+    from the start the check names meets a state where no torque rolls."""
+    env = gym.make("roller_gym/RollerHoldRandomized-v1").unwrapped
+    scene = env.config.scene.replace(R=1.0, m=1.6, e=0.07, k=0.07)
+    low, high = env.config.randomize["R"]
+    assert low <= 1.0 <= high and env.config.randomize["m"][1] >= 1.6
+    start, where, least = descent.doomed(env.task, scene)
+    assert least <= _braked_speed(scene, start, where, env.task.max_torque) * (1 + 1e-9)
+    assert not _rolling_torque_exists(scene, where, least, env.task.max_torque)
