@@ -86,9 +86,10 @@ class RandomPolicy(Controller):
 def _task_settings(env: gym.Env | Any, scene: Scene | None = None
                    ) -> tuple[Scene, float, float]:
     """(scene, max_torque [N·m], dt [s]) of a (possibly wrapped) roller environment; the
-    scene its construction names (the nominal one), unless ``scene`` is given."""
+    scene its construction names (:attr:`~roller_gym.config.EnvConfig.nominal_scene`), unless
+    ``scene`` is given."""
     base = env.unwrapped
-    return (base.config.scene if scene is None else scene, float(base.task.max_torque),
+    return (base.config.nominal_scene if scene is None else scene, float(base.task.max_torque),
             float(base.config.dt))
 
 

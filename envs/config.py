@@ -251,6 +251,15 @@ class EnvConfig:
         return cls(task, scene, dt, tolerance, integrator, substeps or 0, ranges, render_mode,
                    info_keys)
 
+    @property
+    def nominal_scene(self) -> Scene:
+        """The scene the classical controller designs for and the target before the first
+        reset is shown in: :attr:`scene`, with each field ``randomize`` draws moved to the
+        middle of its range where its value lies outside (never stepped, so never checked)."""
+        moved = {name: 0.5 * (low + high) for name, (low, high) in self.randomize.items()
+                 if not low <= getattr(self.scene, name) <= high}
+        return self.scene.replace(**moved) if moved else self.scene
+
     def resolve_option_scene(self, value: Any) -> Scene:
         return resolve_scene(value, self.task.default_scene, "options['scene']")
 
