@@ -55,8 +55,8 @@ class RollerEnv(gym.Env[np.ndarray, np.ndarray]):
                                 tolerance=cfg.tolerance, substeps=cfg.substeps or None)
         self._link()
         self._terms_of: tuple[Scene, str] | None = None  # what the context's target terms are of
-        self._set_scene(cfg.nominal_scene)  # (until the first reset)
-        self._set_target(self.task.default_target(self.scene), 0.0)
+        self._set_scene(cfg.scene)
+        self._set_target(self.task.default_target(cfg.nominal_scene), 0.0)  # (until a reset)
         self._steps = 0  # of this episode: its time is _steps · dt, as in the vector env
         self._target_params = np.full(self.task.target_size, self.target)
         self.phi, self.phi_dot, self.torque = self.target, 0.0, 0.0
