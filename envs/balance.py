@@ -53,8 +53,9 @@ At rest near the bottom: φ and φ' uniform in ±0.1 (rad, rad/s).
 ## Scenes
 
 Checked at construction (and proven over ``randomize`` ranges): the unstable rest position
-exists and the roller rolls there at rest; the swing-up outruns the damping: c·ω <= 0.5
-max_torque at ω = sqrt(2 V(φ_b) / J_I(0)), the bottom speed of a swing that reaches φ_b;
+exists and the roller rolls there at rest; the swing-up outruns the damping: c times the
+mean |φ'| over φ in [0, φ_b] of the swing that reaches φ_b is at most 0.8 max_torque (the
+classical swing-up wins up to 0.79 of it and loses from 0.9);
 the torque can pump the energy success needs within 0.3 of the episode, even at its
 most power, max_torque·|φ'| with |φ'| at the speed of the energy pumped so far
 (:func:`roller_gym.bounds.energy_time`); and the swing that reaches φ_b can roll all the
@@ -83,7 +84,7 @@ from roller_gym.intervals import Interval
 from roller_gym.physics import Scene, contact, energy, equations
 from roller_gym.physics.analysis import nearest_unstable_rests
 from roller_gym.physics.scene import shown
-from roller_gym.rest import orbit_speed
+from roller_gym.rest import orbit_mean_speed, orbit_speed
 from roller_gym.task import Task, register, unstable_rest_positions
 
 __all__ = ["BalanceTask"]
@@ -104,24 +105,26 @@ class BalanceTask(Task):
     success_band = 0.1
     success_speed = 0.2
 
-    #: The damping's torque at the swing-up's fastest speed is at most this share of
-    #: max_torque, so that pumping at max_torque still gains energy there.
-    damping_share = 0.5
+    #: The damping's mean torque over the swing that reaches φ_b, c·mean|φ'|, is at most
+    #: this share of max_torque: the swing-up wins where it is 0.79 and 0.72 (Balance,
+    #: BalanceWeak) and loses where it is 0.905 (``docs/MAINTAINERS.md``).
+    damping_share = 0.8
 
     def check_scene(self, scene: Scene) -> None:
         """The unstable rest position exists and holds (:meth:`default_target`), and the
-        swing-up outruns the damping: c·ω <= damping_share·max_torque at ω [rad/s] of
-        :meth:`swing_up_speed`."""
+        swing-up outruns the damping: c·mean|φ'| <= damping_share·max_torque over the swing
+        that reaches φ_b (:func:`roller_gym.rest.orbit_mean_speed`)."""
         phi_b = self.default_target(scene)
         c = scene.damping
-        speed = self.swing_up_speed(scene, phi_b)
+        speed = orbit_mean_speed(scene, phi_b, float(energy(scene, phi_b, 0.0)))
         if c * speed > self.damping_share * self.max_torque:
             raise ValueError(
-                f"damping={c:g} N·m·s/rad of {shown(scene)} takes {c * speed:.3g} N·m at the "
-                f"swing-up's fastest speed ({speed:.3g} rad/s), more than "
-                f"{self.damping_share:g} of max_torque={self.max_torque:g} N·m: the swing-up "
-                f"cannot reach the unstable rest position; use damping <= "
-                f"{self.damping_share * self.max_torque / speed:.3g} or a larger max_torque")
+                f"damping={c:g} N·m·s/rad of {shown(scene)} takes {c * speed:.3g} N·m on "
+                f"average over the swing up to the unstable rest position (its mean speed "
+                f"{speed:.3g} rad/s), more than {self.damping_share:g} of max_torque="
+                f"{self.max_torque:g} N·m: the swing-up cannot reach the unstable rest "
+                f"position; use damping <= {self.damping_share * self.max_torque / speed:.3g} "
+                "or a larger max_torque")
         where = self.orbit_stuck(scene, phi_b)
         if where is not None:
             phi, phi_dot = where
@@ -205,9 +208,10 @@ class BalanceTask(Task):
 
     def scene_proven(self, params: Any, estimates: Sequence[Scene], dt: float) -> bool:
         """:func:`roller_gym.feasibility.unstable_rest_enclosure` (Φ, holding φ_b), and with
-        V(Φ) and J_I(0) on intervals over the box, the damping's condition (c·ω, ω <=
-        sqrt(2 V / J_I(0))) and the pump time (:meth:`pump_time`'s, from the start energy's
-        lower end to the upper end of V(φ_b − success_band)) bounded by their upper ends."""
+        V(Φ) and J_I(0) on intervals over the box, the damping's condition (c·mean|φ'|, the
+        mean bounded piece by piece: :meth:`_mean_speed_bound`) and the pump time
+        (:meth:`pump_time`'s, from the start energy's lower end to the upper end of
+        V(φ_b − success_band)) bounded by their upper ends."""
         phi = feasibility.unstable_rest_enclosure(params, estimates)
         if phi is None:
             return False
@@ -217,7 +221,6 @@ class BalanceTask(Task):
         least = equations.inertia(0.0 * phi, p.m, p.r, p.kappa, p.e, p.k)
         if not (math.isfinite(height) and least.lo > 0):
             return False
-        speed = math.sqrt(2.0 * height / least.lo)
         w, band = self.start_width, self.success_band
         reached = potential_enclosure(p, Interval(np.maximum(phi.lo - band, 0.0),
                                                   np.maximum(phi.hi - band, 0.0)))
@@ -225,9 +228,24 @@ class BalanceTask(Task):
                  + 0.5 * equations.inertia(Interval(w), p.m, p.r, p.kappa, p.e, p.k) * w * w)
         gained = (max(float(np.min(start.lo)), 0.0), float(np.max(reached.hi)))
         pump = float(bounds.energy_time(gained[0], max(gained), self.max_torque, least.hi))
-        return bool(p.c.hi * speed <= self.damping_share * self.max_torque
+        mean = self._mean_speed_bound(p, phi, top)
+        return bool(p.c.hi * mean <= self.damping_share * self.max_torque
                     and pump <= self.PUMP_SHARE * self.max_episode_steps * dt
                     and self._orbit_proven(p, phi))
+
+    @staticmethod
+    def _mean_speed_bound(p: Any, phi: Interval, top: Interval, pieces: int = 256) -> float:
+        """An upper bound [rad/s] of the mean |φ'| over [0, φ_b] of the swing that reaches
+        φ_b in every scene of the box ``p`` (φ_b in ``phi``, V(φ_b) in ``top``): the speed's
+        upper end on each of ``pieces`` pieces of [0, phi's upper end], summed over their
+        widths, over phi's lower end (or the largest of them, where that is less)."""
+        edges = np.linspace(0.0, float(phi.hi), pieces + 1)
+        piece = Interval(edges[:-1], edges[1:])
+        squared = (2.0 * (top - potential_enclosure(p, piece))
+                   / equations.inertia(piece, p.m, p.r, p.kappa, p.e, p.k))
+        fastest = np.sqrt(np.maximum(squared.hi, 0.0))
+        mean = np.sum(fastest * np.diff(edges)) / float(phi.lo) if phi.lo > 0 else np.inf
+        return float(min(mean, np.max(fastest))) * (1.0 + 1e-12)  # (a mean is at most the max)
 
     def _orbit_proven(self, p: Any, phi: Interval) -> bool:
         """:meth:`orbit_stuck` proven None over the box ``p`` (``phi``: an interval holding

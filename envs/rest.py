@@ -29,6 +29,7 @@ __all__ = [
     "hold_range",
     "hold_ranges",
     "last_within",
+    "orbit_mean_speed",
     "orbit_speed",
     "per_scene",
     "psi_rate",
@@ -326,3 +327,11 @@ def orbit_speed(scene: Scene, phi: np.ndarray, level: np.ndarray) -> np.ndarray:
     m, r, kappa, e, k, g, _ = scene.params
     return np.sqrt(np.maximum(2.0 * (level - equations.potential(phi, m, r, kappa, e, g))
                               / equations.inertia(phi, m, r, kappa, e, k), 0.0))
+
+
+def orbit_mean_speed(scene: Scene, top: float, level: float, points: int = 512) -> float:
+    """The mean of |φ'| [rad/s] over φ in [0, ``top``] [rad] of the unforced motion of energy
+    ``level`` [J] of the scalar ``scene`` (:func:`orbit_speed`), by the midpoint rule on
+    ``points`` pieces: with the damping c, the mean torque c·|φ'| it takes along the way."""
+    phi = (np.arange(points) + 0.5) * (top / points)
+    return float(np.mean(orbit_speed(scene, phi, level)))

@@ -57,12 +57,12 @@ target's energy, so that no start has the target swing's energy.
 
 Checked at construction, each scene of a vector env too: every target swing has energy
 (E* > 0), rolls all the way within the success band under any torque of the limit
-(N > 0, |F| <= 0.9 μN), the pump outruns the damping (c·ω <= 0.5 max_torque at the
-swing's fastest speed ω), and the torque can bring the largest target's energy within
-0.3 of the episode at its most power (:func:`roller_gym.bounds.energy_time` <= 0.3 · 400 ·
-dt), and the control step resolves
-the swing (ω0·dt < π, ω0 its small oscillations' angular frequency). No ``randomize`` range is
-accepted: these are checked per scene, and no proof over a range of scenes covers them yet.
+(N > 0, |F| <= 0.9 μN), the pump outruns the damping (c times the mean |φ'| over the
+largest target's swing at most 0.8 max_torque), the torque can bring the largest target's
+energy within 0.3 of the episode at its most power (:func:`roller_gym.bounds.energy_time`
+<= 0.3 · 400 · dt), and the control step resolves the swing (ω0·dt < π, ω0 its small
+oscillations' angular frequency). No ``randomize`` range is accepted: these are checked per
+scene, and no proof over a range of scenes covers them yet.
 
 ## Episode end
 
@@ -100,7 +100,7 @@ from roller_gym.bounds import pump_time
 from roller_gym.physics import Scene, energy, equations, small_oscillation_frequency
 from roller_gym.physics.integrators import SCENE_FIELDS, scene_arrays
 from roller_gym.physics.scene import shown
-from roller_gym.rest import barrier_energy, last_within, orbit_speed
+from roller_gym.rest import barrier_energy, last_within, orbit_mean_speed, orbit_speed
 from roller_gym.task import Task, hold_ranges, objective, per_scene, reach, register
 
 __all__ = ["SwingTask"]
@@ -129,9 +129,10 @@ class SwingTask(Task):
     amplitude_shares = (0.45, 0.85)
     #: A start's potential energy is at most this share of the smallest target's E*.
     start_energy_share = 0.5
-    #: The damping's torque at the target swing's fastest speed is at most this share of
-    #: max_torque, so that pumping at max_torque still gains energy there.
-    damping_share = 0.5
+    #: The damping's mean torque over the largest target's swing, c·mean|φ'|, is at most
+    #: this share of max_torque, as the swing-ups' (the energy pump wins 6 of 6 at 0.93 of
+    #: it on ``paper``, 4 of 6 at 1.1: ``docs/MAINTAINERS.md``).
+    damping_share = 0.8
     start_rule = ("at rest, ψ within ±5° (|φ| <= 64 turns) and the potential at most half the "
                   "smallest target's energy")
     start_speed = 0.0
@@ -182,8 +183,9 @@ class SwingTask(Task):
         the potential is flat, a concentric roller on the floor, or falls from the bottom
         on, a drum with its mass center too near the axle); the swing within the success
         band rolls all the way, N > 0 and |F| <= 0.9 μN under any torque of the limit
-        (:meth:`rolling_margins`); and the pump at max_torque outruns the damping at the
-        swing's fastest speed, c·ω <= damping_share·max_torque."""
+        (:meth:`rolling_margins`); and the pump at max_torque outruns the damping over the
+        largest target's swing, c·mean|φ'| <= damping_share·max_torque
+        (:func:`roller_gym.rest.orbit_mean_speed`)."""
         low, high = self.amplitude_ranges(scene)
         lo = self.amplitude_shares[0]
         tops = [float(t[0]) for t in self.top_shares(scene)]
@@ -209,21 +211,23 @@ class SwingTask(Task):
                 "e > r²|κ|/(1 + r|κ|) on a drum (κ = 1/R), or friction (mu > 0) inside a "
                 "cylinder"
             )
-        lift, slip, speed = self.rolling_margins(scene, amplitudes[::4])
+        lift, slip, _ = self.rolling_margins(scene, amplitudes[::4])
         if lift <= 0.0 or slip < 0.0:
             raise ValueError(
                 f"{shown(scene)} poses target swings that cannot roll: on the swing of the "
                 f"success band's energy, N/(m g) falls to {lift:.3g} (<= 0: lift-off) or "
                 f"(0.9 mu N − |F|)/(m g) to {slip:.3g} (< 0: slip); use more friction (mu), a "
                 "mass center nearer the axle (smaller e) or a smaller max_torque")
+        widest = float(np.max(np.abs(amplitudes)))
+        speed = orbit_mean_speed(scene, widest, float(energy(scene, widest, 0.0)))
         if scene.damping * speed > self.damping_share * self.max_torque:
             raise ValueError(
                 f"damping={scene.damping:g} N·m·s/rad of {shown(scene)} takes "
-                f"{scene.damping * speed:.3g} N·m at the target swing's fastest speed "
-                f"({speed:.3g} rad/s), more than {self.damping_share:g} of "
-                f"max_torque={self.max_torque:g} N·m: the pump cannot reach the target swing; "
-                f"use damping <= {self.damping_share * self.max_torque / speed:.3g} or a larger "
-                "max_torque")
+                f"{scene.damping * speed:.3g} N·m on average over the largest target swing "
+                f"(amplitude {widest:.4g} rad, mean speed {speed:.3g} rad/s), more than "
+                f"{self.damping_share:g} of max_torque={self.max_torque:g} N·m: the pump "
+                f"cannot reach the target swing; use damping <= "
+                f"{self.damping_share * self.max_torque / speed:.3g} or a larger max_torque")
 
     def rolling_margins(self, scene: Scene, amplitudes: np.ndarray) -> tuple[float, float, float]:
         """(least N/(m g), least (0.9 μN − |F|)/(m g), fastest |φ'| [rad/s]) over the swings
