@@ -20,11 +20,15 @@ from typing import Any
 import numpy as np
 from roller_gym.physics import Scene, equations
 from roller_gym.physics.scene import shown
+from roller_gym.rest import reach
 
 __all__ = ["doomed", "fastest_rolling", "fixed_scene_problem", "slips_on_descent"]
 
-#: Points of the scalar check's grid of |φ| from the bottom to the farthest accepted start.
+#: Points of the scalar check's grid of |φ| from the bottom to the farthest start (and as
+#: many on from there to ψ = π).
 GRID_POINTS = 2001
+#: Start candidates at rest, from the bottom to the start range's edge, that are checked.
+START_POINTS = 201
 #: x = φ'² [rad²/s²] taken as unbounded.
 _X_CAP = 1e30
 
@@ -74,45 +78,90 @@ def fastest_rolling(A: np.ndarray, B: np.ndarray, C: np.ndarray, low: float,
     return best
 
 
+def _starts(task: Any, scene: Scene) -> np.ndarray:
+    """|φ| [rad] of the starts at rest the draw may accept, beyond the success band: the
+    candidates of :data:`START_POINTS` uniforms from the bottom to the range's edge
+    (:meth:`Task.start_candidates`) that roll (:meth:`Task.start_accepted`)."""
+    u = np.linspace(0.5, 1.0, START_POINTS)[None, :]
+    phi, _ = task.start_candidates(u, np.full_like(u, 0.5), scene)
+    rolls = task.start_accepted(phi, np.zeros_like(phi), scene)[0]
+    starts = np.unique(np.abs(phi[0][rolls]))
+    return starts[starts > task.success_band]
+
+
+def _cell_inertia(phi: np.ndarray, m: float, r: float, kappa: float, e: float, k: float,
+                  inertia: np.ndarray) -> np.ndarray:
+    """A lower bound of J_I [kg·m²] on each cell between neighbouring points of ``phi``:
+    the smaller end, or its least m (k² + (r − e)²) where θ = φ/s passes a whole turn."""
+    turns = np.floor(phi / (2.0 * math.pi * (1.0 - r * kappa)))
+    return np.where(turns[1:] != turns[:-1], m * (k * k + (r - e) ** 2),
+                    np.minimum(inertia[:-1], inertia[1:]))
+
+
 def doomed(task: Any, scene: Scene) -> tuple[float, float, float] | None:
-    """The nearest of ``task``'s accepted starts (at rest, :meth:`Task.accepted_starts`) in
-    the scalar ``scene`` from which the roller must slip or lift off on its way down to the
-    success band, whatever the torque:
-    (its |φ| [rad], the |φ| [rad] where, the least speed [rad/s] there), or None. Checked on
-    a grid of :data:`GRID_POINTS` |φ| (and the starts)."""
-    starts = np.unique(task.accepted_starts(scene))
-    starts = starts[starts > task.success_band]
+    """The nearest start at rest the draw may accept (:data:`START_POINTS` candidates) in
+    the scalar ``scene`` from which the roller must slip or lift off whatever the torque:
+    (its |φ| [rad], the |φ| [rad] where, the least speed [rad/s] there), or None.
+
+    Two ways: on its way in to the success band, through each stretch where dV/d|φ| >
+    max_torque (it cannot stop there) from rest at the stretch's top; and, where gravity
+    pushes the start away harder than the torque holds (dV/d|φ| < −max_torque), on its way
+    out, as long as its least kinetic energy stays positive (it cannot stop, so cannot turn
+    back). Checked on a grid of :data:`GRID_POINTS` |φ| out to the starts and as many on
+    to ψ = π."""
+    starts = _starts(task, scene)
     if not starts.size:
         return None
-    torque = task.max_torque
+    torque, band = task.max_torque, task.success_band
     m, r, kappa, e, k, g, c = scene.params
-    phi = np.unique(np.concatenate([np.linspace(0.0, starts[-1], GRID_POINTS), starts]))
+    far = float(starts[-1])
+    phi = np.unique(np.concatenate([np.linspace(0.0, far, GRID_POINTS), starts, np.linspace(
+        far, float(max(reach(scene, math.pi), far)), GRID_POINTS)]))
     V = equations.potential(phi, m, r, kappa, e, g)
-    forced = equations.dpotential(phi, m, r, kappa, e, g) > torque
-    j_least = m * (k * k + (r - e) ** 2)  # J_I >= m (k² + (r − e)²)
-    fastest = math.sqrt(max(2.0 * (V.max() - V.min() + torque * phi[-1]) / j_least, 0.0))
-    most = fastest_rolling(*_rows(phi, m, r, kappa, e, k, g, scene.mu), -torque,
-                           torque + c * fastest)
-    # The next point at or above each where the roller could stop (an index past the end).
-    stops = np.where(~forced, np.arange(phi.size), phi.size)
-    stop_above = np.minimum.accumulate(stops[::-1])[::-1]
+    slope = equations.dpotential(phi, m, r, kappa, e, g)
     inertia = equations.inertia(phi, m, r, kappa, e, k)
+    cell_j = _cell_inertia(phi, m, r, kappa, e, k, inertia)
+    width = np.diff(phi)
+    # V on a cell is at least its smaller end less what its slope takes over half of it.
+    cell_v = np.minimum(V[:-1], V[1:]) - 0.5 * width * np.maximum(abs(slope[:-1]),
+                                                                  abs(slope[1:]))
+    rows = _rows(phi, m, r, kappa, e, k, g, scene.mu)
+    # u = τ − cφ' lies in [−T, T + c|φ'|] moving in and [−T − c|φ'|, T] moving out, with
+    # |φ'| at most the fastest at which anything rolls with u unbounded that way.
+    widest = [np.sqrt(np.maximum(fastest_rolling(*rows, *ends), 0.0))
+              for ends in ((-torque, _X_CAP), (-_X_CAP, torque))]
+    most_in = fastest_rolling(*rows, -torque, torque + c * widest[0])
+    most_out = fastest_rolling(*rows, -torque - c * widest[1], torque)
+    forced = slope > torque
+    stops = np.where(~forced, np.arange(phi.size), phi.size)
+    stop_above = np.minimum.accumulate(stops[::-1])[::-1]  # the next point that may stop
+
+    def spent(anchor: np.ndarray, cells: np.ndarray) -> np.ndarray:
+        """The damping's most work [J] on each cell of a run from rest at ``anchor``:
+        c·|φ'|max·Δφ, |φ'|max from the most energy the run can have there."""
+        reach_ = np.maximum(abs(phi[cells] - phi[anchor]), abs(phi[cells + 1] - phi[anchor]))
+        most = V[anchor] - cell_v[cells] + torque * reach_
+        return c * np.sqrt(np.maximum(2.0 * most / cell_j[cells], 0.0)) * width[cells]
+
     for s in np.searchsorted(phi, starts):
         i = np.arange(s + 1)
-        a = np.minimum(stop_above[i], s)  # where the descent through i began at rest
-        gained = V[a] - V[i]
-        worked = torque * (phi[a] - phi[i])
-        # The damping's work from a down to i, at most c·Σ φ'_max Δφ with φ'_max from the
-        # energy at each cell's lower end (V rises with |φ| where the roller is forced).
-        fast = np.sqrt(np.maximum(2.0 * (gained + worked) / j_least, 0.0))
-        cell = c * fast[:-1] * np.diff(phi[: s + 1])
-        below = np.concatenate([np.cumsum(cell[::-1])[::-1], [0.0]])  # Σ over cells >= i
-        spent = below - below[a]
-        least = 2.0 * (gained - worked - spent) / inertia[: s + 1]
-        dead = forced[: s + 1] & (phi[: s + 1] > task.success_band) & (least > most[: s + 1])
+        a = np.minimum(stop_above[i], s)  # where the way in through i began at rest
+        work = spent(a[:-1], i[:-1])
+        below = np.concatenate([np.cumsum(work[::-1])[::-1], [0.0]])  # Σ over cells >= i
+        least = 2.0 * (V[a] - V[i] - torque * (phi[a] - phi[i]) - (below - below[a])) / inertia[i]
+        dead = forced[i] & (phi[i] > band) & (least > most_in[i])
         if dead.any():
-            j = int(np.flatnonzero(dead)[-1])  # the first met on the way down
+            j = int(np.flatnonzero(dead)[-1])  # the first met on the way in
             return float(phi[s]), float(phi[j]), math.sqrt(max(least[j], 0.0))
+        if slope[s] < -torque:  # pushed out
+            j = np.arange(s + 1, phi.size)
+            energy = (V[s] - V[j] - torque * (phi[j] - phi[s])
+                      - np.cumsum(spent(np.full(j.size, s), j - 1)))
+            least = 2.0 * energy / inertia[j]
+            dead = np.cumprod(energy > 0.0).astype(bool) & (least > most_out[j])
+            if dead.any():
+                q = int(np.flatnonzero(dead)[0])
+                return float(phi[s]), float(phi[j[q]]), math.sqrt(max(least[q], 0.0))
     return None
 
 
@@ -126,9 +175,9 @@ def slips_on_descent(task: Any, scene: Scene) -> str | None:
     return (f"{task.name} cannot be solved from every start of {shown(scene)} with "
             f"max_torque={task.max_torque:g} N·m: from the start at rest at |phi| = "
             f"{start:.4g} rad no torque can stop the roller before |phi| = {where:.4g} rad "
-            f"(dV/dphi > max_torque there), where it passes at {speed:.3g} rad/s or more and "
-            "slips or lifts off under every torque; use a larger max_torque or mu, or a "
-            "smaller e")
+            f"(gravity outweighs max_torque on the way), where it passes at {speed:.3g} "
+            "rad/s or more and slips or lifts off under every torque; use a larger "
+            "max_torque or mu, or a smaller e")
 
 
 def fixed_scene_problem(task: Any, scene: Scene, dt: float) -> str | None:

@@ -49,12 +49,15 @@ def posable(env_id: str, scene: str) -> bool:
     """Whether the task can be posed on the preset ``scene``: a balancing task needs an
     unstable rest position that rolls (not the floor's or the drum's); a swing, target
     swings that roll (not the preset "rim_mass"'s, which lift off) and a swing the control
-    step resolves (not "tight_fit"'s, 1.5 steps per period at the default dt); RollerStabilize
-    (0.5 N·m) not "rim_mass", whose farthest starts must slip on the way down
-    (roller_gym.descent); the others any preset (a swing on the drum, in the well its
+    step resolves (not "tight_fit"'s, 1.5 steps per period at the default dt); the tasks
+    that bring the roller down not "drum", whose starts past the barrier are pushed off, nor
+    RollerStabilize (0.5 N·m) "rim_mass", whose farthest must slip on the way in (both
+    roller_gym.descent); the others any preset (a swing on the drum, in the well its
     eccentric mass makes at the top)."""
     if balances(env_id):
         return scene not in ("floor", "drum")
+    if "RollerSwing" not in env_id and scene == "drum":
+        return False
     if "RollerStabilize" in env_id and scene == "rim_mass":
         return False
     return not ("RollerSwing" in env_id and scene in ("rim_mass", "tight_fit"))

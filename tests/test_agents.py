@@ -30,7 +30,7 @@ def _wrapped_difference(a, b):
     ("roller_gym/RollerStabilize-v2", None),
     ("roller_gym/RollerHold-v2", None),
     ("roller_gym/RollerBalance-v2", None),
-    ("roller_gym/RollerStabilize-v2", "drum"),
+    ("roller_gym/RollerSwing-v1", "drum"),
     ("roller_gym/RollerHold-v2", "solid_disc"),
 ])
 def test_decode_recovers_the_state_the_env_reports(env_id, scene):
