@@ -117,3 +117,16 @@ def check_info_physics(env, info: dict, tau: float) -> None:
     assert info["normal_force"] == pytest.approx(ref["normal"], rel=1e-9, abs=1e-9 * weight)
     assert info["friction_force"] == pytest.approx(ref["friction"], rel=1e-9, abs=1e-9 * weight)
     assert info["energy"] == pytest.approx(ref["energy"], rel=1e-9, abs=1e-12)
+
+
+def controller_wins(env, controller, seeds=range(4)) -> int:
+    """In how many episodes (one per seed) ``controller`` ends with ``is_success``."""
+    wins = 0
+    for seed in seeds:
+        obs, info = env.reset(seed=seed)
+        done = False
+        while not done:
+            obs, _, terminated, truncated, info = env.step(controller.act(obs[None])[0])
+            done = terminated or truncated
+        wins += bool(info["is_success"])
+    return wins

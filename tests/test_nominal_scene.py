@@ -4,20 +4,9 @@ ranges replace."""
 
 import gymnasium as gym
 import pytest
+from env_cases import controller_wins
 from roller_gym import Scene
 from roller_gym.agents import controller_for
-
-
-def _wins(env, controller, seeds=range(4)):
-    wins = 0
-    for seed in seeds:
-        obs, info = env.reset(seed=seed)
-        done = False
-        while not done:
-            obs, _, terminated, truncated, info = env.step(controller.act(obs[None])[0])
-            done = terminated or truncated
-        wins += bool(info["is_success"])
-    return wins
 
 
 def test_the_controller_designs_for_the_ranges_not_a_base_value_they_replace():
@@ -25,8 +14,8 @@ def test_the_controller_designs_for_the_ranges_not_a_base_value_they_replace():
     it fails; controller_for designs for the middle of the range (m = 1 kg) and holds."""
     env = gym.make("roller_gym/RollerHold-v2", scene=Scene(m=100.0), randomize={"m": (0.8, 1.2)})
     assert env.unwrapped.config.nominal_scene == Scene(m=1.0)
-    assert _wins(env, controller_for(env)) >= 3
-    assert _wins(env, controller_for(env, scene=Scene(m=100.0))) <= 1
+    assert controller_wins(env, controller_for(env)) >= 3
+    assert controller_wins(env, controller_for(env, scene=Scene(m=100.0))) <= 1
     kept = gym.make("roller_gym/RollerHold-v2", randomize={"m": (0.8, 1.2)})
     assert kept.unwrapped.config.nominal_scene == Scene()  # (a base within the range stays)
 

@@ -4,21 +4,14 @@ solved, damping it refuses is not."""
 
 import gymnasium as gym
 import pytest
+from env_cases import controller_wins
 from roller_gym.agents import controller_for
 from roller_gym.physics import PRESETS
 
 
-def _wins(env_id, scene, episodes=4):
+def _wins(env_id, scene):
     env = gym.make(env_id, scene=scene)
-    controller, wins = controller_for(env), 0
-    for seed in range(episodes):
-        obs, info = env.reset(seed=seed)
-        done = False
-        while not done:
-            obs, _, terminated, truncated, info = env.step(controller.act(obs[None])[0])
-            done = terminated or truncated
-        wins += bool(info["is_success"])
-    return wins
+    return controller_wins(env, controller_for(env))
 
 
 @pytest.mark.parametrize(("env_id", "preset", "accepted", "refused"), [
