@@ -275,6 +275,32 @@ def test_info_tol_met_is_the_integrators_flag(integrator, substeps):
     np.testing.assert_array_equal(vinfo["tol_met"], [expected] * 3)
 
 
+def test_a_loose_tolerance_steps_the_envs_at_its_degree():
+    """At a tolerance the rule gives a lower Taylor degree, the single env (its fused
+    one-roller kernel) and the vector env on one core and on all (their fused kernels) step
+    as a Stepper of that degree does, bit for bit, and not as the default degree does."""
+    from roller_gym.physics import Stepper, taylor
+    from roller_gym.physics.integrators import PARALLEL_THRESHOLD
+
+    tol, scene = 0.3, preset("paper")
+    assert taylor.degree(tol) != taylor.ORDER
+    env = gym.make("roller_gym/RollerStabilize-v2", tolerance=tol)
+    env.reset(options={"state": (0.5, 2.0)})
+    info = env.step(act(0.6))[4]
+    got = [(env.unwrapped.phi, env.unwrapped.phi_dot)]
+    for n in (3, PARALLEL_THRESHOLD):
+        vec = gym.make_vec("roller_gym/RollerStabilize-v2", num_envs=n, tolerance=tol)
+        vec.reset(options={"state": (0.5, 2.0)})
+        vinfo = vec.step(np.full((n, 1), 0.6, np.float32))[4]
+        got += list(zip(vinfo["phi"].tolist(), vinfo["phi_dot"].tolist(), strict=True))
+        vec.close()
+    ruled = Stepper(scene, dt=0.05, tolerance=tol).advance(0.5, 2.0, info["torque"])[:2]
+    default = Stepper(scene, dt=0.05, tolerance=tol, degree=taylor.ORDER).advance(
+        0.5, 2.0, info["torque"])[:2]
+    assert ruled != default
+    assert set(got) == {ruled}
+
+
 def _accel(scene, phi, phi_dot, tau):
     return model(scene, phi, phi_dot, tau)["phi_ddot"]
 

@@ -56,6 +56,7 @@ from roller_gym.physics.integrators import (
     put_inputs,
     row_table,
 )
+from roller_gym.physics.integrators.taylor_kernel import taylor_kernels
 from roller_gym.physics.packed import PACKED_CALL, call_packed, pack_row, table_at, unpack
 from roller_gym.task import OBSERVATION_FIELDS
 
@@ -119,11 +120,11 @@ def _outcome_one_roller(reward, success, k, io, context, observed, out, flags, o
 
 
 # The schemes whose kernels have fused ones: module globals, as numba keys a cached kernel
-# on its closure's contents but not on the globals it calls.
+# on its closure's contents but not on the globals it calls ("taylor"'s, of each degree,
+# through the module its kernels reach each other by: ``TaylorKernels.namespace``).
 _TAYLOR, _RK = SCHEMES["taylor"], SCHEMES["rk8"]
-_TAYLOR_CHUNK, _RK_CHUNK = _TAYLOR.chunk, _RK.chunk
-_TAYLOR_SERIAL, _RK_SERIAL = _TAYLOR.kernels()[0], _RK.kernels()[0]
-_TAYLOR_ONE, _RK_ONE = _TAYLOR.one, _RK.one  # a roller alone: no chunk's lanes compiled
+_RK_CHUNK, _RK_SERIAL = _RK.chunk, _RK.kernels()[0]
+_RK_ONE = _RK.one  # a roller alone: no chunk's lanes compiled
 
 
 #: The arrays of a packed table (:data:`_ONE_ARRAYS`: the single environment's, and the
@@ -143,10 +144,17 @@ def _lazy_c_function(function: Callable) -> Callable[[], Any]:
     return compiled
 
 
-def _taylor_chunk_packed(pointer, lo, hi):
-    """The ``"taylor"`` scheme's physics of rollers lo..hi−1, from a packed table."""
-    io, tab, cfg = _unpack_one(table_at(pointer, _PACKED))[:3]
-    _TAYLOR_CHUNK(io, lo, hi, tab, cfg)
+@functools.cache
+def _taylor_chunk_c(degree: int) -> Callable[[], Any]:
+    """The ``"taylor"`` scheme's physics of rollers lo..hi−1 at ``degree``, from a packed
+    table, as a C function (:func:`_lazy_c_function`)."""
+    ns = taylor_kernels(degree).namespace
+
+    def taylor_chunk_packed(pointer, lo, hi):
+        io, tab, cfg = _unpack_one(table_at(pointer, _PACKED))[:3]
+        ns.chunk(io, lo, hi, tab, cfg)
+
+    return _lazy_c_function(taylor_chunk_packed)
 
 
 def _rk_chunk_packed(pointer, lo, hi):
@@ -155,7 +163,6 @@ def _rk_chunk_packed(pointer, lo, hi):
     _RK_CHUNK(io, lo, hi, tab, cfg)
 
 
-_TAYLOR_CHUNK_C = _lazy_c_function(_taylor_chunk_packed)
 _RK_CHUNK_C = _lazy_c_function(_rk_chunk_packed)
 
 
@@ -211,12 +218,21 @@ class TaskKernels:
     kernels call ``loop``, the parallel ones inline its code. ``fused``: the physics and the
     outcome in one call, by the stepper's kernel they run in place of; ``one``: the single
     environment's step, by the stepper's serial kernel, and with ``advance`` False its reset
-    (the outcome of the state itself, no step taken: one kernel compiled for both)."""
+    (the outcome of the state itself, no step taken: one kernel compiled for both).
+    ``add_degree(degree)`` adds those of ``"taylor"`` at a degree other than the default's
+    (made where a stepper first runs it: :meth:`for_stepper`)."""
 
     loop: Callable
     parallel: Callable
     fused: dict[Callable, Callable]
     one: dict[Callable, Callable]
+    add_degree: Callable[[int], None]
+
+    def for_stepper(self, stepper: Stepper | BatchStepper) -> TaskKernels:
+        """These kernels, with the fused ones of ``stepper``'s degree made."""
+        if stepper.integrator == _TAYLOR.name:
+            self.add_degree(stepper.degree)
+        return self
 
 
 def kernel_owner(task: type) -> type:
@@ -281,27 +297,10 @@ def task_kernels(task: type) -> TaskKernels:
     outcome_c = _lazy_c_function(outcome_packed)
 
     @jit
-    def taylor_then_outcome(io, tab, cfg, result, context, constants, observed, out, flags,
-                            obs, scratch):
-        _TAYLOR_SERIAL(io, tab, cfg)
-        call_loop(result, context, constants, observed, out, flags, obs, scratch)
-
-    @jit
     def rk_then_outcome(io, tab, cfg, result, context, constants, observed, out, flags, obs,
                         scratch):
         _RK_SERIAL(io, tab, cfg)
         call_loop(result, context, constants, observed, out, flags, obs, scratch)
-
-    @jit
-    def taylor_one(phi, phi_dot, tau, packed, advance):
-        io, tab, cfg, context, constants, observed, out, flags, obs = _unpack_one(packed)
-        _inputs_one(phi, phi_dot, tau, io, context)
-        if advance:
-            _TAYLOR_ONE(io, tab, cfg)
-        else:
-            at_rest(io, 0)
-        return _outcome_one_roller(reward, success, K(*_numbers(constants, n)), io, context,
-                                   observed, out, flags, obs)
 
     @jit
     def rk_one(phi, phi_dot, tau, packed, advance):
@@ -316,11 +315,40 @@ def task_kernels(task: type) -> TaskKernels:
 
     # the parallel fused kernels leave ``scratch`` unused (a chunk's is its own), as
     # ``parallel`` does
-    fused = {_TAYLOR.kernels()[1]: _parallel_fused(_TAYLOR_CHUNK_C, outcome_c),
-             _RK.kernels()[1]: _parallel_fused(_RK_CHUNK_C, outcome_c),
-             _TAYLOR_SERIAL: taylor_then_outcome, _RK_SERIAL: rk_then_outcome}
-    return TaskKernels(loop, parallel, fused,
-                       {_TAYLOR_SERIAL: taylor_one, _RK_SERIAL: rk_one})
+    fused = {_RK.kernels()[1]: _parallel_fused(_RK_CHUNK_C, outcome_c),
+             _RK_SERIAL: rk_then_outcome}
+    ones = {_RK_SERIAL: rk_one}
+    degrees: set[int] = set()
+
+    def add_degree(degree: int) -> None:
+        if degree in degrees:
+            return
+        degrees.add(degree)
+        k = taylor_kernels(degree)
+        ns = k.namespace
+
+        @jit
+        def taylor_then_outcome(io, tab, cfg, result, context, constants, observed, out, flags,
+                                obs, scratch):
+            ns.serial(io, tab, cfg)
+            call_loop(result, context, constants, observed, out, flags, obs, scratch)
+
+        @jit
+        def taylor_one(phi, phi_dot, tau, packed, advance):
+            io, tab, cfg, context, constants, observed, out, flags, obs = _unpack_one(packed)
+            _inputs_one(phi, phi_dot, tau, io, context)
+            if advance:
+                ns.one(io, tab, cfg)
+            else:
+                at_rest(io, 0)
+            return _outcome_one_roller(reward, success, K(*_numbers(constants, n)), io,
+                                       context, observed, out, flags, obs)
+
+        fused[k.parallel] = _parallel_fused(_taylor_chunk_c(degree), outcome_c)
+        fused[k.serial], ones[k.serial] = taylor_then_outcome, taylor_one
+
+    add_degree(_TAYLOR.order)  # the default's, made with the task's kernels
+    return TaskKernels(loop, parallel, fused, ones, add_degree)
 
 
 def _outcome_interpreted(task: type, result: np.ndarray, context: np.ndarray,
@@ -398,7 +426,7 @@ class OutcomeKernel:
         [rad] and φ' [rad/s] under τ [N·m]) and its outcome, as :meth:`run` on
         ``stepper.run``'s result; in one compiled call where the stepper's kernel has a fused
         kernel (on all cores: one pass over chunks of rollers). Returns :attr:`table`."""
-        fused = self.kernels.fused.get(stepper.kernel)
+        fused = self.kernels.for_stepper(stepper).fused.get(stepper.kernel)
         if fused is None:
             return self.run(stepper.run(phi, phi_dot, tau))
         self._renew()
@@ -422,7 +450,7 @@ class OutcomeKernel:
         unpack its arrays). Not for ``fresh`` buffers, which every step renews."""
         if self.fresh:
             raise ValueError("a fresh OutcomeKernel renews its buffers every step: use step()")
-        one = self.kernels.one.get(stepper.kernel)
+        one = self.kernels.for_stepper(stepper).one.get(stepper.kernel)
         if one is not None and not numba.config.DISABLE_JIT:  # (interpreted: two calls)
             step = stepper.bind(one, *self._buffers())
             kinds = tuple((a.dtype.type, a.ndim) for a in step.arrays)

@@ -13,7 +13,7 @@ module                 what it holds
                        and implicit midpoint at fixed substeps; scipy's DOP853), their compiled
                        kernels, the steppers (``docs/INTEGRATORS.md``)
 ``taylor``             the Taylor series of the motion, written out by a generator into
-                       ``_taylor_series`` (what the ``taylor`` scheme expands)
+                       ``_taylor_series_<degree>`` (what the ``taylor`` scheme expands)
 ``compiling``          how the small compiled functions are inlined; a line on stderr where
                        compiling a kernel for its first use takes long
 =====================  ================================================================

@@ -64,6 +64,7 @@ from roller_gym.physics.integrators.rules import (
     _propagated,
     _smaller_share,
     _substeps,
+    _swap_lanes,
     _write,
 )
 from scipy.integrate._ivp import dop853_coefficients
@@ -375,8 +376,7 @@ def _rk_chunk(io, lo, hi, tab, cfg):
         while i < na:
             if status[i] != 0.0:
                 na -= 1
-                for f in range(nf):
-                    par[f, i], par[f, na] = par[f, na], par[f, i]
+                _swap_lanes(par, i, na)
                 for x in (kp[0], kw[0], tau, phi, w, hdes, t, lift, slip, err_sum, hforce, count,
                           status, rejected, slot, carry, s00, s01, s10, s11, jp0, jq0, lshare,
                           retries, beyond):  # what outlives an attempt

@@ -214,6 +214,14 @@ _SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0
 _MAX_ATTEMPTS = 4 * MAX_SUBSTEPS
 
 
+@numba.extending.register_jitable
+def _swap_lanes(par, i, j):
+    """Swap lanes i and j of a chunk's scene rows ``par`` (one row per scene field): how a
+    kernel moves a finished roller out of the running lanes."""
+    for f in range(par.shape[0]):
+        par[f, i], par[f, j] = par[f, j], par[f, i]
+
+
 @numba.extending.register_jitable(inline="always")
 def _parallel(io, tab, cfg, chunk):
     """A batch kernel on all cores: ``chunk`` over chunks of CHUNK rollers."""

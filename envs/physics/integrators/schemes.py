@@ -10,7 +10,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from roller_gym.physics import _taylor_series as series
+from roller_gym.physics import taylor
 from roller_gym.physics.integrators.fixed import (
     _euler_kernel,
     _euler_substep,
@@ -34,6 +34,7 @@ from roller_gym.physics.integrators.taylor_kernel import (
     _taylor_parallel,
     _taylor_serial,
     _taylor_substep,
+    taylor_kernels,
 )
 from roller_gym.physics.scene import finite_real, shown, whole_number
 
@@ -76,6 +77,10 @@ class Scheme:
             substeps' estimates, carried to the step's end by the linearized motion, stay
             within this share of ``tolerance`` (above it the step is taken again with a smaller
             share, at most ``RETRIES`` times; ``docs/INTEGRATORS.md``).
+        degrees: for a scheme offered at several degrees (``"taylor"``: ``taylor.DEGREES``),
+            those; ``order`` is then the default tolerance's, and the kernels above are its.
+        degree_rule: for such a scheme, the rule choosing the degree from ``tolerance``
+            (``taylor.degree``).
     """
 
     name: str
@@ -94,10 +99,24 @@ class Scheme:
     halvings: int = 0
     tol_share: float = 1.0
     propagated_limit: float = math.inf
+    degrees: tuple[int, ...] = ()
+    degree_rule: Callable[[float], int] | None = None
 
-    def kernels(self) -> tuple[Callable, Callable]:
-        """(serial, parallel) kernels ``f(io, tableau, cfg)`` of this scheme."""
-        return _kernels(self)
+    def degree(self, tolerance: float) -> int:
+        """The order a step at ``tolerance`` runs at: the degree the rule chooses, or
+        ``order`` for a scheme of one."""
+        return self.order if self.degree_rule is None else self.degree_rule(tolerance)
+
+    def kernels(self, degree: int | None = None) -> tuple[Callable, Callable]:
+        """(serial, parallel) kernels ``f(io, tableau, cfg)`` of this scheme (at ``degree``,
+        one of ``degrees``, for a scheme offering several; None: ``order``)."""
+        if degree is None or degree == self.order:
+            return _kernels(self)
+        if degree not in self.degrees:
+            raise ValueError(f"degree={shown(degree)}: integrator={shown(self.name)} offers "
+                             f"{self.degrees or (self.order,)}")
+        k = taylor_kernels(degree)
+        return k.serial, k.parallel
 
     def __reduce__(self) -> tuple[Callable, tuple[str]]:
         """Pickled by name: unpickled, it is the row of :data:`SCHEMES` (its compiled
@@ -125,9 +144,9 @@ _SCHEME_LIST = (
     Scheme("euler", 1, 0.5, False, _euler_substep, kernel=_euler_kernel, constant=2.0),
     Scheme("midpoint", 2, math.inf, False, _midpoint_substep, kernel=_midpoint_kernel,
            constant=0.3),
-    Scheme("taylor", series.ORDER, 1.0, True, _taylor_substep, kernel=_taylor_serial,
+    Scheme("taylor", taylor.ORDER, 1.0, True, _taylor_substep, kernel=_taylor_serial,
            parallel=_taylor_parallel, chunk=_taylor_chunk, one=_taylor_one,
-           constant=1e-6, tol_share=0.01),
+           constant=1e-6, tol_share=0.01, degrees=taylor.DEGREES, degree_rule=taylor.degree),
     Scheme("dop853", 8, math.inf, True, None),
 )
 #: The schemes by name.

@@ -52,22 +52,27 @@ from roller_gym.physics.scene import Scene, require_scene, shown, whole_number
 
 class _Base:
     def __init__(self, num: int, integrator: str, dt: float, tolerance: float,
-                 substeps: int | None) -> None:
+                 substeps: int | None, degree: int | None = None) -> None:
         _check_step_args(dt, tolerance, substeps)
         self.scheme = scheme(integrator)
         if substeps is not None and self.scheme.substep is None:
             raise ValueError(f"substeps={shown(substeps)}: integrator={shown(integrator)} "
                              "chooses its "
                              "own steps")
+        if degree is not None and degree not in self.scheme.degrees:
+            raise ValueError(f"degree={shown(degree)}: integrator={shown(integrator)} offers "
+                             f"{self.scheme.degrees or 'one order only'}")
         self.integrator, self.dt, self.substeps = integrator, float(dt), substeps
         self.tolerance = float(tolerance)
-        self._serial, self._parallel = self.scheme.kernels()
+        #: the order the steps run at (for ``"taylor"``, the degree chosen from the tolerance)
+        self.degree = self.scheme.degree(self.tolerance) if degree is None else int(degree)
+        self._serial, self._parallel = self.scheme.kernels(self.degree)
         tab = self.scheme.pair(substeps is not None)
         self._tab = tab if tab is not None else np.zeros((1, 1))
         sch = self.scheme
         settings = {"dt": dt, "tolerance": tolerance, "substeps": substeps or 0,
                     "halvings": sch.halvings,
-                    "order": sch.order, "constant": sch.constant, "stable_step": sch.stable_step,
+                    "order": self.degree, "constant": sch.constant, "stable_step": sch.stable_step,
                     "sweep_exponent": sch.sweep_exponent, "tol_share": sch.tol_share,
                     "propagated_limit": sch.propagated_limit}
         self._cfg = np.array([settings[name] for name in CFG_FIELDS], dtype=float)
@@ -89,7 +94,8 @@ class _Base:
 
     def __setstate__(self, state: dict) -> None:
         self.__dict__.update(state)
-        self._serial, self._parallel = self.scheme.kernels()
+        self.__dict__.setdefault("degree", self.scheme.order)  # (pickled before degrees)
+        self._serial, self._parallel = self.scheme.kernels(self.degree)
         self._link()
 
     def _link(self) -> None:
@@ -184,11 +190,14 @@ class Stepper(_Base):
         dt: the control step [s].
         tolerance: the state error allowed per control step (φ in rad, φ' in rad/s).
         substeps: a fixed count of equal substeps instead of the error control.
+        degree: for ``"taylor"``, the degree of its expansion (one of its ``degrees``) in place
+            of the one ``tolerance`` chooses (``taylor.degree``).
     """
 
     def __init__(self, scene: Scene, *, integrator: str = DEFAULT_INTEGRATOR, dt: float,
-                 tolerance: float, substeps: int | None = None) -> None:
-        super().__init__(1, integrator, dt, tolerance, substeps)
+                 tolerance: float, substeps: int | None = None,
+                 degree: int | None = None) -> None:
+        super().__init__(1, integrator, dt, tolerance, substeps, degree)
         self._link()
         self.set_scene(scene)
 
@@ -311,17 +320,18 @@ class BatchStepper(_Base):
 
     Args:
         num: the number of rollers.
-        integrator, dt, tolerance, substeps: as for :class:`Stepper`.
+        integrator, dt, tolerance, substeps, degree: as for :class:`Stepper`.
 
     Set the rollers' scenes with :meth:`set_scenes` before the first :meth:`advance`.
     """
 
     def __init__(self, num: int, *, integrator: str = DEFAULT_INTEGRATOR, dt: float,
-                 tolerance: float, substeps: int | None = None) -> None:
+                 tolerance: float, substeps: int | None = None,
+                 degree: int | None = None) -> None:
         if not (whole_number(num) and num >= 1):
             raise ValueError(f"num={shown(num)} must be an integer >= 1")
         check_memory("num", int(num), BYTES_PER_ROLLER)
-        super().__init__(int(num), integrator, dt, tolerance, substeps)
+        super().__init__(int(num), integrator, dt, tolerance, substeps, degree)
         self.num = int(num)
         self._io[: len(SCENE_FIELDS)] = np.nan  # no scene yet
         self._unset = True  # some roller has no scene (checked where scenes are set)
@@ -486,6 +496,7 @@ def step(
     integrator: str = DEFAULT_INTEGRATOR,
     tolerance: float = 1e-9,
     substeps: int | None = None,
+    degree: int | None = None,
 ) -> StepResult:
     """Advance the roller(s) over ``dt`` seconds at constant torque ``tau``.
 
@@ -499,6 +510,7 @@ def step(
         tolerance: the state error allowed per control step (φ in rad, φ' in rad/s); for
             ``"dop853"`` its rtol and atol.
         substeps: a fixed number of equal substeps instead of the error control.
+        degree: for ``"taylor"``, as for :class:`Stepper`.
 
     Returns:
         A :class:`StepResult`; arrays of the broadcast shape, or scalars for scalar input.
@@ -518,7 +530,8 @@ def step(
     if arrays[0].size == 0:  # no states: a result of their (empty) shape
         return StepResult(*(np.empty(shape, dtype=_KIND[f]) for f in STEP_FIELDS))
     n = int(np.prod(shape))
-    stepper = BatchStepper(n, integrator=integrator, dt=dt, tolerance=tolerance, substeps=substeps)
+    stepper = BatchStepper(n, integrator=integrator, dt=dt, tolerance=tolerance, substeps=substeps,
+                           degree=degree)
     stepper._put_scenes([a.reshape(-1) for a in arrays[3:]], slice(None))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)

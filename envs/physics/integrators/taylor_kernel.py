@@ -1,19 +1,23 @@
 """The ``taylor`` scheme's kernels: one expansion of the motion a substep
 (:mod:`roller_gym.physics.taylor`), its size chosen from its own last terms after expanding
-(:func:`_taylor_substep`, so no substep is rejected), run for a chunk of rollers in SIMD
-lanes (:func:`_taylor_chunk`) or for one roller (:func:`_taylor_one`, bit for bit the same),
-on one core or all.
+(``substep``, so no substep is rejected), run for a chunk of rollers in SIMD lanes
+(``chunk``) or for one roller (``one``, bit for bit the same), on one core or all: made by
+:func:`taylor_kernels` for each degree, compiled at their first call.
 """
 
 from __future__ import annotations
 
+import functools
+import importlib
 import math
+import sys
+import types
+from dataclasses import dataclass
 
 import numba
 import numpy as np
-from roller_gym.physics import _taylor_series as series
 from roller_gym.physics import equations as eq
-from roller_gym.physics import trig
+from roller_gym.physics import taylor, trig
 from roller_gym.physics.integrators.layout import (
     _C,
     _CF_DT,
@@ -46,6 +50,7 @@ from roller_gym.physics.integrators.rules import (
     _finite,
     _jit,
     _parallel,
+    _swap_lanes,
     _write,
 )
 
@@ -65,69 +70,6 @@ _T_WIDTH = 8  # elements per lane in the substep loop's output (its fields, padd
 assert len(_T_OUT) <= _T_WIDTH
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy", forceinline=True)
-def _root(x):
-    """x^(1/16), as four square roots (which vectorize; a power does not)."""
-    return math.sqrt(math.sqrt(math.sqrt(math.sqrt(x))))
-
-
-@numba.njit(cache=True, nogil=True, error_model="numpy", forceinline=True)
-def _taylor_substep(phi, w, tau, m, r, kappa, e, k, g, c, mu, rest, floor, hfixed, rate):
-    """One substep of ``"taylor"`` from (φ, φ'): (φ, φ', h [s], its error estimate, the
-    lift-off and slip margins at its start, 1.0 if it reaches ``rest`` [s], the float64
-    rounding of its state). The margins take the sines the expansion evaluated.
-
-    The estimate is the size of the last two terms, t₁ h^(p−1) + t₂ hᵖ (p the degree, t the
-    largest of |X| and |V| at that power): two terms, as one coefficient can vanish by
-    accident where the next does not. With ``hfixed`` > 0 the substep is that long.
-    Otherwise h is the largest size whose terms are each within ``rate`` · h (the error
-    allowed per second): h₁ = (rate/t₁)^(1/(p−2)), and h₂ from t₂ h^(p−1) <= rate h with
-    h^(p−1) taken as min(h₁, rest) h^(p−2); then 0.9 of the smaller, at least ``floor``, at
-    most ``rest``.
-
-    The size goes as the 16th root of ``rate``, so a tolerance far below float64's reach
-    costs only a few more substeps, never a runaway count; the rounding the substep adds,
-    TAYLOR_ROUNDING ε max(|φ|, |φ'|) at its end, is returned so that the step can report
-    such a tolerance (``tol_met``). No branch: the batch runs it in SIMD lanes.
-    """
-    X, V, (sin_t, cos_t, sin_psi, cos_psi) = series.coefficients(phi, w, tau, m, r, kappa, e,
-                                                                  k, g, c)
-    p = series.ORDER
-    t1 = max(abs(X[p - 1]), abs(V[p - 1]))
-    t2 = max(abs(X[p]), abs(V[p]))
-    h1 = trig.select(t1 > 0.0, _root(rate / t1), math.inf)
-    near = min(h1, rest)
-    h2 = trig.select(t2 * near > 0.0, _root(rate / (t2 * near)), math.inf)
-    free = max(_SAFETY * min(h1, h2), floor)
-    fixed = hfixed > 0.0
-    h = trig.select(fixed, hfixed, min(free, rest))
-    sq = h * h
-    h8 = sq * sq * (sq * sq)
-    # t1 h^17 + t2 h^18; 0 where the series ends before them (h^17 may overflow there)
-    err = trig.select(t1 + t2 > 0.0, (t1 + t2 * h) * (h8 * h8) * h, 0.0)
-    last = trig.select(free >= rest, 1.0, 0.0)
-    phin, wn = series.value(X, h), series.value(V, h)
-    rounding = TAYLOR_ROUNDING * _EPS * max(abs(phin), abs(wn))
-    normal, friction = eq.forces(sin_t, cos_t, sin_psi, cos_psi, w, V[1], m, r, kappa, e, g)
-    lift, slip = eq.margins(normal, friction, m, g, mu)
-    return phin, wn, h, err, lift, slip, last, rounding
-
-
-@_jit
-def _taylor_lanes(x, na, hfixed, rate, out):
-    """:func:`_taylor_substep` of lanes 0..na−1: the scene and state from the rows of ``x``,
-    the results lane by lane into ``out`` (_T_WIDTH elements a lane). Reading one table and
-    writing another, laid out so, is what lets LLVM vectorize a body this long: it needs
-    just one overlap check."""
-    for i in range(na):
-        o = np.uint64(i) * np.uint64(_T_WIDTH)  # unsigned: no wraparound check on the index
-        (out[o], out[o + np.uint64(1)], out[o + np.uint64(2)], out[o + np.uint64(3)],
-         out[o + np.uint64(4)], out[o + np.uint64(5)], out[o + np.uint64(6)],
-         out[o + np.uint64(7)]) = _taylor_substep(
-            x[_TI_PHI, i], x[_TI_W, i], x[_TI_TAU, i], x[0, i], x[1, i], x[2, i], x[3, i],
-            x[4, i], x[5, i], x[6, i], x[7, i], x[_TI_REST, i], x[_TI_FLOOR, i], hfixed, rate)
-
-
 @numba.extending.register_jitable
 def _taylor_tick(fin, last, rounding, count, nfixed, t, h, err_sum, err, hforce, status,
                  round_sum, dt):
@@ -145,113 +87,221 @@ def _taylor_tick(fin, last, rounding, count, nfixed, t, h, err_sum, err, hforce,
     return status, t, count, err_sum + err, hforce, round_sum + rounding
 
 
-@_jit
-def _taylor_chunk(io, lo, hi, tab, cfg):
-    """Advance rollers (columns) lo..hi−1 of ``io`` over one control step with ``"taylor"``
-    (``cfg`` as for :func:`_rk_chunk`; ``tab`` unused): the running rollers in lanes
-    0..na−1, as there."""
-    n = hi - lo
-    dt, tol, nfixed = cfg[_CF_DT], cfg[_CF_TOLERANCE], cfg[_CF_SUBSTEPS]
-    share = tol * cfg[_CF_SHARE]
-    hfixed = dt / nfixed if nfixed > 0 else 0.0
-    nf = len(SCENE_FIELDS)
-    x = np.empty((nf + len(_T_IN), n + _PAD))  # what the substep loop reads
-    par = x[:nf]
-    phi, w, tau, rest, floor = x[_TI_PHI], x[_TI_W], x[_TI_TAU], x[_TI_REST], x[_TI_FLOOR]
-    out = np.empty(_T_WIDTH * n)
-    rows = np.empty((17, n + _PAD))
-    phin, wn, hh, err, lift_at, slip_at = rows[0], rows[1], rows[2], rows[3], rows[4], rows[5]
-    t, count, err_sum, hforce, status, slot = rows[6], rows[7], rows[8], rows[9], rows[10], rows[11]
-    lift, slip, rounding, round_sum, last = rows[12], rows[13], rows[14], rows[15], rows[16]
-    for i in range(n):
-        col = lo + i
-        for f in range(nf):
-            par[f, i] = io[f, col]
-        tau[i], phi[i], w[i] = io[_TAU, col], io[_PHI_IN, col], io[_W_IN, col]
-        t[i], count[i], err_sum[i], hforce[i], status[i], slot[i] = 0.0, 0.0, 0.0, 0.0, 0.0, i
-        lift[i], slip[i], round_sum[i] = np.inf, np.inf, 0.0
-    na = n
-    for _attempt in range(_MAX_ATTEMPTS):
-        if na == 0:
-            break
+@dataclass(frozen=True)
+class TaylorKernels:
+    """One degree's compiled functions (each compiled, or loaded from numba's cache, at its
+    first call): ``substep`` (one roller's substep), ``lanes`` (the substep of many, in SIMD
+    lanes), ``chunk(io, lo, hi, tab, cfg)``, ``one(io, tab, cfg)``, and the batch kernels
+    ``serial`` and ``parallel`` (``f(io, tab, cfg)``); ``namespace``, the module they reach
+    each other through (what a kernel made elsewhere calls them by, for the same reason)."""
+
+    degree: int
+    namespace: types.ModuleType
+    substep: numba.core.registry.CPUDispatcher
+    lanes: numba.core.registry.CPUDispatcher
+    chunk: numba.core.registry.CPUDispatcher
+    one: numba.core.registry.CPUDispatcher
+    serial: numba.core.registry.CPUDispatcher
+    parallel: numba.core.registry.CPUDispatcher
+
+
+@functools.cache
+def taylor_kernels(degree: int) -> TaylorKernels:
+    """The kernels of the expansion to ``degree`` (one of ``taylor.DEGREES``), made once; its
+    generated module is imported here, so a degree no step uses is neither imported nor
+    compiled.
+
+    Each kernel reaches the others, and the series, through a module made for the degree
+    (``ns``, named in ``sys.modules``): numba keys a cached kernel made here on its closure's
+    contents, pickled, and a module pickles by its name, where a compiled function would
+    pickle differently in every process (the kernel never loaded from the cache)."""
+    if degree not in taylor.DEGREES:
+        raise ValueError(f"degree={degree!r}: the taylor scheme offers {taylor.DEGREES}")
+    ns = types.ModuleType(f"{__name__}.degree{degree}")
+    sys.modules[ns.__name__] = ns
+    series = importlib.import_module(taylor.module_name(degree))
+    ns.coefficients, ns.value, ns.root, ns.power = (series.coefficients, series.value,
+                                                    series.root, series.power)
+    ns.ORDER = series.ORDER
+
+    @numba.njit(cache=True, nogil=True, error_model="numpy", forceinline=True)
+    def substep(phi, w, tau, m, r, kappa, e, k, g, c, mu, rest, floor, hfixed, rate):
+        """One substep of ``"taylor"`` from (φ, φ'): (φ, φ', h [s], its error estimate, the
+        lift-off and slip margins at its start, 1.0 if it reaches ``rest`` [s], the float64
+        rounding of its state). The margins take the sines the expansion evaluated.
+
+        The estimate is the size of the last two terms, t₁ h^(p−1) + t₂ hᵖ (p the degree, t
+        the largest of |X| and |V| at that power): two terms, as one coefficient can vanish
+        by accident where the next does not. With ``hfixed`` > 0 the substep is that long.
+        Otherwise h is the largest size whose terms are each within ``rate`` · h (the error
+        allowed per second): h₁ = (rate/t₁)^(1/(p−2)), and h₂ from t₂ h^(p−1) <= rate h
+        with h^(p−1) taken as min(h₁, rest) h^(p−2); then 0.9 of the smaller, at least
+        ``floor``, at most ``rest``.
+
+        The size goes as the (p−2)th root of ``rate``, so a tolerance far below float64's
+        reach costs only a few more substeps, never a runaway count; the rounding the
+        substep adds, TAYLOR_ROUNDING ε max(|φ|, |φ'|) at its end, is returned so that the
+        step can report such a tolerance (``tol_met``). No branch: the batch runs it in SIMD
+        lanes.
+        """
+        X, V, (sin_t, cos_t, sin_psi, cos_psi) = ns.coefficients(phi, w, tau, m, r, kappa, e,
+                                                                  k, g, c)
+        p = ns.ORDER
+        t1 = max(abs(X[p - 1]), abs(V[p - 1]))
+        t2 = max(abs(X[p]), abs(V[p]))
+        h1 = trig.select(t1 > 0.0, ns.root(rate / t1), math.inf)
+        near = min(h1, rest)
+        h2 = trig.select(t2 * near > 0.0, ns.root(rate / (t2 * near)), math.inf)
+        free = max(_SAFETY * min(h1, h2), floor)
+        fixed = hfixed > 0.0
+        h = trig.select(fixed, hfixed, min(free, rest))
+        # t1 h^(p−1) + t2 h^p; 0 where the series ends before them (h^(p−1) may overflow)
+        err = trig.select(t1 + t2 > 0.0, (t1 + t2 * h) * ns.power(h) * h, 0.0)
+        last = trig.select(free >= rest, 1.0, 0.0)
+        phin, wn = ns.value(X, h), ns.value(V, h)
+        rounding = TAYLOR_ROUNDING * _EPS * max(abs(phin), abs(wn))
+        normal, friction = eq.forces(sin_t, cos_t, sin_psi, cos_psi, w, V[1], m, r, kappa, e,
+                                     g)
+        lift, slip = eq.margins(normal, friction, m, g, mu)
+        return phin, wn, h, err, lift, slip, last, rounding
+
+    ns.substep = substep
+
+    @_jit
+    def lanes(x, na, hfixed, rate, out):
+        """``substep`` of lanes 0..na−1: the scene and state from the rows of ``x``, the
+        results lane by lane into ``out`` (_T_WIDTH elements a lane). Reading one table and
+        writing another, laid out so, is what lets LLVM vectorize a body this long: it needs
+        just one overlap check."""
         for i in range(na):
-            rest[i], floor[i] = dt - t[i], max(1e-12 * dt, hforce[i])
-        _taylor_lanes(x, na, hfixed, share / dt, out)
-        for i in range(na):
-            o = _T_WIDTH * i
-            phin[i], wn[i], hh[i], err[i], lift_at[i], slip_at[i], last[i], rounding[i] = (
-                out[o], out[o + 1], out[o + 2], out[o + 3], out[o + 4], out[o + 5], out[o + 6],
-                out[o + 7])
-        for i in range(na):
-            lift[i], slip[i] = min(lift[i], lift_at[i]), min(slip[i], slip_at[i])
-            fin = _finite(phin[i]) & _finite(wn[i]) & _finite(err[i])
-            status[i], t[i], count[i], err_sum[i], hforce[i], round_sum[i] = _taylor_tick(
-                fin, last[i], rounding[i], count[i], nfixed, t[i], hh[i], err_sum[i], err[i],
-                hforce[i], status[i], round_sum[i], dt)
-            phi[i] = trig.select(fin, phin[i], phi[i])
-            w[i] = trig.select(fin, wn[i], w[i])
-        i = 0
-        while i < na:
-            if status[i] != 0.0:
-                na -= 1
-                for f in range(nf):
-                    par[f, i], par[f, na] = par[f, na], par[f, i]
-                for v in (tau, phi, w, t, count, err_sum, hforce, status, slot, lift, slip,
-                          round_sum):
-                    v[i], v[na] = v[na], v[i]
-            else:
-                i += 1
-    end = np.empty((6, n + _PAD))
-    for i in range(n):  # (a loop: a slice assignment compiles numba's shape-mismatch message)
-        end[4, i], end[5, i] = lift[i], slip[i]
-    _end_lanes(phi, w, tau, par, n, end)
-    for i in range(n):
-        col = lo + int(slot[i])
-        io[_H_NEXT, col] = 0.0
-        _write(io, col, status[i] == 1.0, phi[i], w[i], count[i], end[0, i], end[1, i],
-               end[2, i], end[3, i], end[4, i], end[5, i], err_sum[i],
-               (err_sum[i] <= share) & (round_sum[i] <= ROUNDING_SHARE * tol))
+            o = np.uint64(i) * np.uint64(_T_WIDTH)  # unsigned: no wraparound check
+            (out[o], out[o + np.uint64(1)], out[o + np.uint64(2)], out[o + np.uint64(3)],
+             out[o + np.uint64(4)], out[o + np.uint64(5)], out[o + np.uint64(6)],
+             out[o + np.uint64(7)]) = ns.substep(
+                x[_TI_PHI, i], x[_TI_W, i], x[_TI_TAU, i], x[0, i], x[1, i], x[2, i],
+                x[3, i], x[4, i], x[5, i], x[6, i], x[7, i], x[_TI_REST, i], x[_TI_FLOOR, i],
+                hfixed, rate)
+
+    ns.lanes = lanes
+
+    @_jit
+    def chunk(io, lo, hi, tab, cfg):
+        """Advance rollers (columns) lo..hi−1 of ``io`` over one control step (``cfg`` as
+        for :func:`_rk_chunk`; ``tab`` unused): the running rollers in lanes 0..na−1, as
+        there."""
+        n = hi - lo
+        dt, tol, nfixed = cfg[_CF_DT], cfg[_CF_TOLERANCE], cfg[_CF_SUBSTEPS]
+        share = tol * cfg[_CF_SHARE]
+        hfixed = dt / nfixed if nfixed > 0 else 0.0
+        nf = len(SCENE_FIELDS)
+        x = np.empty((nf + len(_T_IN), n + _PAD))  # what the substep loop reads
+        par = x[:nf]
+        phi, w, tau, rest, floor = x[_TI_PHI], x[_TI_W], x[_TI_TAU], x[_TI_REST], x[_TI_FLOOR]
+        out = np.empty(_T_WIDTH * n)
+        rows = np.empty((17, n + _PAD))
+        phin, wn, hh, err, lift_at, slip_at = rows[0], rows[1], rows[2], rows[3], rows[4], rows[5]
+        t, count, err_sum, hforce, status, slot = (rows[6], rows[7], rows[8], rows[9], rows[10],
+                                                   rows[11])
+        lift, slip, rounding, round_sum, last = rows[12], rows[13], rows[14], rows[15], rows[16]
+        for i in range(n):
+            col = lo + i
+            for f in range(nf):
+                par[f, i] = io[f, col]
+            tau[i], phi[i], w[i] = io[_TAU, col], io[_PHI_IN, col], io[_W_IN, col]
+            t[i], count[i], err_sum[i], hforce[i], status[i], slot[i] = (0.0, 0.0, 0.0, 0.0,
+                                                                          0.0, i)
+            lift[i], slip[i], round_sum[i] = np.inf, np.inf, 0.0
+        na = n
+        for _attempt in range(_MAX_ATTEMPTS):
+            if na == 0:
+                break
+            for i in range(na):
+                rest[i], floor[i] = dt - t[i], max(1e-12 * dt, hforce[i])
+            ns.lanes(x, na, hfixed, share / dt, out)
+            for i in range(na):
+                o = _T_WIDTH * i
+                phin[i], wn[i], hh[i], err[i], lift_at[i], slip_at[i], last[i], rounding[i] = (
+                    out[o], out[o + 1], out[o + 2], out[o + 3], out[o + 4], out[o + 5],
+                    out[o + 6], out[o + 7])
+            for i in range(na):
+                lift[i], slip[i] = min(lift[i], lift_at[i]), min(slip[i], slip_at[i])
+                fin = _finite(phin[i]) & _finite(wn[i]) & _finite(err[i])
+                status[i], t[i], count[i], err_sum[i], hforce[i], round_sum[i] = _taylor_tick(
+                    fin, last[i], rounding[i], count[i], nfixed, t[i], hh[i], err_sum[i],
+                    err[i], hforce[i], status[i], round_sum[i], dt)
+                phi[i] = trig.select(fin, phin[i], phi[i])
+                w[i] = trig.select(fin, wn[i], w[i])
+            i = 0
+            while i < na:
+                if status[i] != 0.0:
+                    na -= 1
+                    _swap_lanes(par, i, na)
+                    for v in (tau, phi, w, t, count, err_sum, hforce, status, slot, lift, slip,
+                              round_sum):
+                        v[i], v[na] = v[na], v[i]
+                else:
+                    i += 1
+        end = np.empty((6, n + _PAD))
+        for i in range(n):  # (a loop: a slice assignment compiles numba's shape-mismatch text)
+            end[4, i], end[5, i] = lift[i], slip[i]
+        _end_lanes(phi, w, tau, par, n, end)
+        for i in range(n):
+            col = lo + int(slot[i])
+            io[_H_NEXT, col] = 0.0
+            _write(io, col, status[i] == 1.0, phi[i], w[i], count[i], end[0, i], end[1, i],
+                   end[2, i], end[3, i], end[4, i], end[5, i], err_sum[i],
+                   (err_sum[i] <= share) & (round_sum[i] <= ROUNDING_SHARE * tol))
+
+    ns.chunk = chunk
+
+    @_jit
+    def one(io, tab, cfg):
+        """One roller (column 0 of ``io``): ``chunk``'s arithmetic without lanes (bit for bit
+        the same result)."""
+        dt, tol, nfixed = cfg[_CF_DT], cfg[_CF_TOLERANCE], cfg[_CF_SUBSTEPS]
+        share = tol * cfg[_CF_SHARE]
+        hfixed = dt / nfixed if nfixed > 0 else 0.0
+        m, r, kappa, e = io[_M, 0], io[_RR, 0], io[_KAPPA, 0], io[_E, 0]
+        k, g, c, mu = io[_K, 0], io[_G, 0], io[_C, 0], io[_MU, 0]
+        tau, phi, w = io[_TAU, 0], io[_PHI_IN, 0], io[_W_IN, 0]
+        t, count, err_sum, hforce, status, round_sum = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        lift, slip = np.inf, np.inf
+        for _attempt in range(_MAX_ATTEMPTS):
+            if status != 0.0:
+                break
+            phin, wn, h, err, li, si, last, rounding = ns.substep(
+                phi, w, tau, m, r, kappa, e, k, g, c, mu, dt - t, max(1e-12 * dt, hforce),
+                hfixed, share / dt)
+            lift, slip = min(lift, li), min(slip, si)
+            fin = _finite(phin) & _finite(wn) & _finite(err)
+            status, t, count, err_sum, hforce, round_sum = _taylor_tick(
+                fin, last, rounding, count, nfixed, t, h, err_sum, err, hforce, status,
+                round_sum, dt)
+            phi, w = trig.select(fin, phin, phi), trig.select(fin, wn, w)
+        io[_H_NEXT, 0] = 0.0
+        _finish(io, 0, status == 1.0, phi, w, tau, count, lift, slip, err_sum,
+                (err_sum <= share) & (round_sum <= ROUNDING_SHARE * tol))
+
+    ns.one = one
+
+    @_jit
+    def serial(io, tab, cfg):  # the loop of rules.CHUNK's comment, written out
+        n = io.shape[1]
+        if n == 1:
+            ns.one(io, tab, cfg)
+            return
+        for lo in range(0, n, CHUNK):
+            ns.chunk(io, lo, min(lo + CHUNK, n), tab, cfg)
+
+    @numba.njit(cache=True, parallel=True, nogil=True, error_model="numpy")
+    def parallel(io, tab, cfg):
+        _parallel(io, tab, cfg, ns.chunk)
+
+    ns.serial, ns.parallel = serial, parallel
+    return TaylorKernels(degree, ns, substep, lanes, chunk, one, serial, parallel)
 
 
-@_jit
-def _taylor_one(io, tab, cfg):
-    """One roller (column 0 of ``io``) with ``"taylor"``: :func:`_taylor_chunk`'s arithmetic
-    without lanes (bit for bit the same result)."""
-    dt, tol, nfixed = cfg[_CF_DT], cfg[_CF_TOLERANCE], cfg[_CF_SUBSTEPS]
-    share = tol * cfg[_CF_SHARE]
-    hfixed = dt / nfixed if nfixed > 0 else 0.0
-    m, r, kappa, e = io[_M, 0], io[_RR, 0], io[_KAPPA, 0], io[_E, 0]
-    k, g, c, mu = io[_K, 0], io[_G, 0], io[_C, 0], io[_MU, 0]
-    tau, phi, w = io[_TAU, 0], io[_PHI_IN, 0], io[_W_IN, 0]
-    t, count, err_sum, hforce, status, round_sum = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    lift, slip = np.inf, np.inf
-    for _attempt in range(_MAX_ATTEMPTS):
-        if status != 0.0:
-            break
-        phin, wn, h, err, li, si, last, rounding = _taylor_substep(
-            phi, w, tau, m, r, kappa, e, k, g, c, mu, dt - t, max(1e-12 * dt, hforce), hfixed,
-            share / dt)
-        lift, slip = min(lift, li), min(slip, si)
-        fin = _finite(phin) & _finite(wn) & _finite(err)
-        status, t, count, err_sum, hforce, round_sum = _taylor_tick(
-            fin, last, rounding, count, nfixed, t, h, err_sum, err, hforce, status, round_sum,
-            dt)
-        phi, w = trig.select(fin, phin, phi), trig.select(fin, wn, w)
-    io[_H_NEXT, 0] = 0.0
-    _finish(io, 0, status == 1.0, phi, w, tau, count, lift, slip, err_sum,
-            (err_sum <= share) & (round_sum <= ROUNDING_SHARE * tol))
-
-
-@_jit
-def _taylor_serial(io, tab, cfg):  # the loop of rules.CHUNK's comment, written out
-    n = io.shape[1]
-    if n == 1:
-        _taylor_one(io, tab, cfg)
-        return
-    for lo in range(0, n, CHUNK):
-        _taylor_chunk(io, lo, min(lo + CHUNK, n), tab, cfg)
-
-
-@numba.njit(cache=True, parallel=True, nogil=True, error_model="numpy")
-def _taylor_parallel(io, tab, cfg):
-    _parallel(io, tab, cfg, _taylor_chunk)
+# The default degree's kernels, by the names the episode kernels and the benchmark call.
+_DEFAULT = taylor_kernels(taylor.ORDER)
+_taylor_substep, _taylor_lanes, _taylor_chunk = _DEFAULT.substep, _DEFAULT.lanes, _DEFAULT.chunk
+_taylor_one, _taylor_serial, _taylor_parallel = _DEFAULT.one, _DEFAULT.serial, _DEFAULT.parallel

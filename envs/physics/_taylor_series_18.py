@@ -3,6 +3,8 @@
 The recurrences are explained in :mod:`roller_gym.physics.taylor`.
 """
 
+import math
+
 import numba
 from roller_gym.physics import equations as eq
 from roller_gym.physics import taylor_ir
@@ -253,3 +255,20 @@ def coefficients(phi, phi_dot, tau, m, r, kappa, e, k, g, c):
 def value(P, h):
     """Σ P[n] hⁿ, by Horner's rule."""
     return ((((((((((((((((((P[18]) * h + P[17]) * h + P[16]) * h + P[15]) * h + P[14]) * h + P[13]) * h + P[12]) * h + P[11]) * h + P[10]) * h + P[9]) * h + P[8]) * h + P[7]) * h + P[6]) * h + P[5]) * h + P[4]) * h + P[3]) * h + P[2]) * h + P[1]) * h + P[0]
+
+
+@_jit
+def root(x):
+    """x^(1/16), as 4 square roots (which vectorize; a power does not)."""
+    return math.sqrt(math.sqrt(math.sqrt(math.sqrt(x))))
+
+
+@_jit
+def power(h):
+    """h^16, by 4 squarings."""
+    h1 = h
+    h2 = h1 * h1
+    h4 = h2 * h2
+    h8 = h4 * h4
+    h16 = h8 * h8
+    return h16
