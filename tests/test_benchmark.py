@@ -64,7 +64,8 @@ def _run(family: str, label: str, setting: float, err: float, seconds: float,
             "seconds": seconds, "finite": math.isfinite(err), "error": [err, 10 * err],
             "local_error": [err / 10 if local is None else local, err],
             "substeps": {"min": 1, "median": 2.0, "mean": 2.5, "max": 6},
-            "lifting": 3 if ours else None, "slipping": 4 if ours else None}
+            "lifting": 3 if ours else None, "slipping": 4 if ours else None,
+            "degree": 18 if family.startswith("taylor") else None}
 
 
 def _scene(name: str, default_err: float, default_seconds: float, own_error: float = 1e-12,
@@ -120,7 +121,8 @@ def synthetic_results() -> dict:
         "elapsed_s": 700.0, "quick": False,
         "settings": {"dt": 0.05, "tolerance": 1e-8, "method": "rk8", "max_torque": 0.5,
                      "reference_tol": 1e-13, "target_error": 1e-6, "seed": 0, "slow_s": 1.0,
-                     "parallel_threshold": 2048,
+                     "parallel_threshold": 2048, "taylor_degrees": [10, 18],
+                     "taylor_lower_above": 0.1,
                      "mujoco": {"default": {"timestep": 0.002, "integrator": "Euler",
                                             "solref": [0.02, 1.0],
                                             "solimp": [0.9, 0.95, 0.001, 0.5, 2.0],

@@ -138,12 +138,48 @@ def section_method(results: Results) -> list[str]:
         "solution carried on); "
         "`rk8`, `rk8 auto` = the same with the 8th-order Dormand–Prince tableau and its "
         "embedded estimate; `taylor`, `taylor auto` = the Taylor series of the motion to "
-        "degree 18, n fixed substeps or each substep's size chosen from the expansion's "
-        "last two terms (the environments' default integrator: "
+        f"{_degrees_in_words(st)}, n fixed substeps or each substep's size chosen from the "
+        "expansion's last two terms (the environments' default integrator: "
         f"`{st['method']}`); `midpoint` = implicit midpoint, n fixed substeps; "
         "`dop853` = scipy's, at rtol = atol = tol.",
         "",
     ]
+
+
+def _degrees_in_words(st: dict[str, Any]) -> str:
+    """The Taylor degrees the results' settings name, and the rule between them."""
+    if "taylor_degrees" not in st:  # (results measured before the degree followed tol)
+        return "degree 18"
+    low, high = min(st["taylor_degrees"]), max(st["taylor_degrees"])
+    return (f"the degree chosen from the tolerance (column `degree`: {low} above tol "
+            f"{st['taylor_lower_above']:.0e}, else {high})")
+
+
+def _degree(run: dict[str, Any]) -> str:
+    return "" if run.get("degree") is None else str(run["degree"])
+
+
+def section_degrees(results: Results) -> list[str]:
+    """taylor's degree, cost and local error at each tolerance, beside rk8's and rk4's."""
+    sc = scene(results, "paper")
+    hz = horizon(results, sc)
+    auto = {name: {r["setting"]: r for r in sc["runs"] if r["family"] == f"{name} auto"}
+            for name in ("taylor", "rk8", "rk4")}
+    rows = []
+    for tol in sorted(auto["taylor"], reverse=True):
+        row = [f"{tol:.0e}", _degree(auto["taylor"][tol])]
+        for name in ("taylor", "rk8", "rk4"):
+            run = auto[name].get(tol)
+            row += (["", ""] if run is None else
+                    [fmt_err(run["local_error"][0]), fmt_time(run["seconds"] / hz)])
+        rows.append(row)
+    return ["### The Taylor degree against the tolerance", "",
+            f"On `{sc['name']}` (the runs above): the degree `taylor auto` chose at each "
+            "tolerance, and its largest local φ error [rad] and cost per simulated second "
+            "beside those of `rk8 auto` and `rk4 auto` at the same tolerance.", "",
+            *md_table(["tol", "taylor degree", "taylor local φ error", "taylor per sim. s",
+                       "rk8 local φ error", "rk8 per sim. s", "rk4 local φ error",
+                       "rk4 per sim. s"], rows), ""]
 
 
 def section_work_precision(results: Results) -> list[str]:
@@ -174,11 +210,11 @@ def section_work_precision(results: Results) -> list[str]:
                 fmt_err(run["error"][0]), fmt_err(run["error"][1]),
                 fmt_err(local) if not math.isnan(local) else "",
                 _subs(run), fmt_time(run["seconds"] / hz),
-                f"{sc['steps'] / run['seconds']:,.0f}",
+                f"{sc['steps'] / run['seconds']:,.0f}", _degree(run),
             ])
         L += md_table(["family", "setting", "φ error [rad]", "φ' error [rad/s]",
                        "local φ error [rad]", "substeps per control step", "per sim. s",
-                       "steps/s"], rows)
+                       "steps/s", "degree"], rows)
         L += [""]
     energy_s = results["config"]["energy_horizon_s"]
     L += ["### Energy at zero torque", "",
@@ -430,7 +466,8 @@ def render(results: Results) -> str:
           "reproduce; the machine is below). The same run measures every peer, interleaved: "
           f"best of {cfg['repeats']} repeats, and only ratios are compared.", ""]
     for section in (section_summary, section_machine, section_method, section_work_precision,
-                    section_mujoco, section_environments, section_hard_cases, section_cost):
+                    section_degrees, section_mujoco, section_environments, section_hard_cases,
+                    section_cost):
         L += section(results)
     return "\n".join(L) + "\n"
 

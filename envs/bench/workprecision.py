@@ -44,9 +44,10 @@ from roller_gym.bench import mujoco_roller as mjr
 from roller_gym.bench import records, timing
 from roller_gym.bench.cost import CostConfig
 from roller_gym.bench.cost import measure as measure_cost
+from roller_gym.bench.env_error import global_error, measure_environments
 from roller_gym.bench.verdicts import TARGETS
 from roller_gym.config import DEFAULT_DT, DEFAULT_TOLERANCE
-from roller_gym.physics import Scene, energy, preset
+from roller_gym.physics import Scene, energy, preset, taylor
 from roller_gym.physics import integrators as integ
 from roller_gym.physics.integrators import STEP_FIELDS, Stepper
 from roller_gym.roller_env import RollerEnv
@@ -248,14 +249,6 @@ def predictability(floor: np.ndarray, bound: float = TARGET_ERROR) -> float:
     return math.inf if above.size == 0 else float(above[0] * DT)
 
 
-def global_error(states: np.ndarray, ref: np.ndarray) -> tuple[float, float]:
-    """The largest error along the episode (|Δφ| [rad], |Δφ'| [rad/s]); inf if it diverged."""
-    if not np.isfinite(states).all():
-        return math.inf, math.inf
-    worst = np.abs(states - ref).max(axis=0)
-    return float(worst[0]), float(worst[1])
-
-
 @dataclass
 class Run:
     """One candidate on one scene: how it is run, and what it measured."""
@@ -423,7 +416,9 @@ def measure_energy(cfg: Config, result: SceneResult) -> None:
         t0 = time.perf_counter()
         traj = run_kernel(stepper, zeros, phi0, w0)
         seconds = time.perf_counter() - t0
-        e = np.asarray(energy(scene, traj.states[:, 0], traj.states[:, 1]), dtype=float)
+        finite = np.isfinite(traj.states).all(axis=1)  # (energy() refuses a diverged state)
+        e = np.full(len(traj.states), np.nan)
+        e[finite] = energy(scene, traj.states[finite, 0], traj.states[finite, 1])
         rel = np.abs(e - e0) / abs(e0)
         # a blow-up: the first state whose energy is off by more than E0 (or not finite)
         bad = np.flatnonzero(~(rel <= 1.0))
@@ -434,56 +429,6 @@ def measure_energy(cfg: Config, result: SceneResult) -> None:
             "end": float(rel[-1]) if traj.finite else math.inf,
             "curve": energy_envelope(rel),
         })
-
-
-# -- Part 3: the environments' error ---------------------------------------------------------
-def env_episode_error(ref: np.ndarray, torques: np.ndarray) -> tuple[float, float]:
-    """The state error (φ [rad], φ' [rad/s]) of
-    ``gymnasium.make("roller_gym/RollerStabilize-v2")`` at default settings over the reference
-    episode: the same start (rest at φ = 0) and the same torques, through the env."""
-    import gymnasium as gym
-
-    env = gym.make("roller_gym/RollerStabilize-v2")
-    base = env.unwrapped
-    base.reset(seed=SEED, options={"state": (0.0, 0.0)})
-    states = [(0.0, 0.0)]
-    for tau in torques:  # the episode goes on past a termination: the physics is measured
-        base.step(np.array([tau / base.task.max_torque], dtype=np.float32))
-        states.append((base.phi, base.phi_dot))
-    env.close()
-    return global_error(np.array(states), ref)
-
-
-def vector_episode_error(ref: np.ndarray, torques: np.ndarray, n: int) -> tuple[float, float]:
-    """The same for ``gymnasium.make_vec`` with ``n`` sub-environments, all on the reference
-    episode, up to the first step at which one terminates (autoreset would restart it)."""
-    import gymnasium as gym
-
-    env = gym.make_vec("roller_gym/RollerStabilize-v2", num_envs=n)
-    env.reset(seed=SEED, options={"state": (0.0, 0.0)})
-    base = env.unwrapped
-    worst = np.zeros(2)
-    for i, tau in enumerate(torques):
-        a = np.full((n, 1), tau / base.task.max_torque, dtype=np.float32)
-        _, _, terminated, truncated, info = env.step(a)
-        if terminated.any() or truncated.any():
-            break
-        got = np.stack([info["phi"], info["phi_dot"]], axis=1)
-        worst = np.maximum(worst, np.abs(got - ref[i + 1]).max(axis=0))
-    env.close()
-    return float(worst[0]), float(worst[1])
-
-
-def measure_environments(cfg: Config, paper: SceneResult) -> dict[str, Any]:
-    """Part 3: the state errors (φ [rad], φ' [rad/s]) of the environments at default settings
-    on the default scene's reference episode: one through ``gymnasium.make``, and
-    ``cfg.vector_error_envs`` sub-environments of ``gymnasium.make_vec``."""
-    import roller_gym  # noqa: F401 - registers the environments
-
-    n = cfg.vector_error_envs
-    return {"env_error": list(env_episode_error(paper.ref.states, paper.torques)),
-            "vector_error": list(vector_episode_error(paper.ref.states, paper.torques, n)),
-            "vector_error_envs": n}
 
 
 # ================================================================================================
@@ -504,6 +449,7 @@ def run_record(run: Run) -> dict[str, Any]:
         "substeps": {"min": int(subs.min()), "median": float(np.median(subs)),
                      "mean": float(subs.mean()), "max": int(subs.max())},
         "lifting": None if traj.lifting is None else int(traj.lifting.sum()),
+        "degree": run.stepper.degree if run.family.startswith("taylor") else None,
         "slipping": None if traj.slipping is None else int(traj.slipping.sum()),
     }
 
@@ -540,6 +486,7 @@ def settings() -> dict[str, Any]:
         "max_torque": MAX_TORQUE, "reference_tol": REFERENCE_TOL,
         "target_error": TARGET_ERROR, "seed": SEED, "slow_s": SLOW_S,
         "parallel_threshold": integ.PARALLEL_THRESHOLD,
+        "taylor_degrees": list(taylor.DEGREES), "taylor_lower_above": taylor.LOWER_DEGREE_ABOVE,
         "mujoco": {
             "default": dataclasses.asdict(mjr.DEFAULT),
             "tuned": {"integrator": tuned.integrator, "solimp": list(tuned.solimp),
@@ -583,7 +530,8 @@ def measure(cfg: Config, command: str, progress: Callable[[str], None] = timing.
                  f"error {res.ref_floor[0]:.1e} rad ({time.perf_counter() - t0:.0f} s)")
     paper = next(r for r in results if r.name == "paper")
     progress("the environments' error on the default scene's episode")
-    environments = measure_environments(cfg, paper)
+    environments = measure_environments(paper.ref.states, paper.torques,
+                                        cfg.vector_error_envs, SEED)
     costs = measure_cost(cfg.cost, command, progress)
     return {
         "study": "work-precision",
