@@ -15,6 +15,8 @@ from __future__ import annotations
 import functools
 import math
 import re
+import sys
+import types as pytypes
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -119,12 +121,16 @@ def _outcome_one_roller(reward, success, k, io, context, observed, out, flags, o
             flags[F.terminated, 0])
 
 
-# The schemes whose kernels have fused ones: module globals, as numba keys a cached kernel
-# on its closure's contents but not on the globals it calls ("taylor"'s, of each degree,
-# through the module its kernels reach each other by: ``TaylorKernels.namespace``).
+# The schemes whose kernels have fused ones. A fused kernel reaches the scheme's through a
+# module (in ``sys.modules``), as numba keys a cached kernel on its closure's contents, which
+# pickle a module by its name (a compiled function differently in every process): "taylor"'s,
+# of each degree, through ``TaylorKernels.namespace``, rk8's through ``_RK_KERNELS``. Each
+# holds ``serial``, ``parallel``, ``chunk`` and ``one`` (a roller alone: no chunk's lanes).
 _TAYLOR, _RK = SCHEMES["taylor"], SCHEMES["rk8"]
-_RK_CHUNK, _RK_SERIAL = _RK.chunk, _RK.kernels()[0]
-_RK_ONE = _RK.one  # a roller alone: no chunk's lanes compiled
+_RK_KERNELS = pytypes.ModuleType(f"{__name__}.rk8")
+sys.modules[_RK_KERNELS.__name__] = _RK_KERNELS
+(_RK_KERNELS.serial, _RK_KERNELS.parallel), _RK_KERNELS.chunk = _RK.kernels(), _RK.chunk
+_RK_KERNELS.one = _RK.one
 
 
 #: The arrays of a packed table (:data:`_ONE_ARRAYS`: the single environment's, and the
@@ -145,25 +151,15 @@ def _lazy_c_function(function: Callable) -> Callable[[], Any]:
 
 
 @functools.cache
-def _taylor_chunk_c(degree: int) -> Callable[[], Any]:
-    """The ``"taylor"`` scheme's physics of rollers lo..hi−1 at ``degree``, from a packed
-    table, as a C function (:func:`_lazy_c_function`)."""
-    ns = taylor_kernels(degree).namespace
+def _chunk_c(kernels: pytypes.ModuleType) -> Callable[[], Any]:
+    """A scheme's physics of rollers lo..hi−1 (``kernels.chunk``), from a packed table, as a
+    C function (:func:`_lazy_c_function`)."""
 
-    def taylor_chunk_packed(pointer, lo, hi):
+    def chunk_packed(pointer, lo, hi):
         io, tab, cfg = _unpack_one(table_at(pointer, _PACKED))[:3]
-        ns.chunk(io, lo, hi, tab, cfg)
+        kernels.chunk(io, lo, hi, tab, cfg)
 
-    return _lazy_c_function(taylor_chunk_packed)
-
-
-def _rk_chunk_packed(pointer, lo, hi):
-    """The ``"rk8"`` scheme's physics of rollers lo..hi−1, from a packed table."""
-    io, tab, cfg = _unpack_one(table_at(pointer, _PACKED))[:3]
-    _RK_CHUNK(io, lo, hi, tab, cfg)
-
-
-_RK_CHUNK_C = _lazy_c_function(_rk_chunk_packed)
+    return _lazy_c_function(chunk_packed)
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy", parallel=True)
@@ -296,57 +292,42 @@ def task_kernels(task: type) -> TaskKernels:
 
     outcome_c = _lazy_c_function(outcome_packed)
 
-    @jit
-    def rk_then_outcome(io, tab, cfg, result, context, constants, observed, out, flags, obs,
-                        scratch):
-        _RK_SERIAL(io, tab, cfg)
-        call_loop(result, context, constants, observed, out, flags, obs, scratch)
-
-    @jit
-    def rk_one(phi, phi_dot, tau, packed, advance):
-        io, tab, cfg, context, constants, observed, out, flags, obs = _unpack_one(packed)
-        _inputs_one(phi, phi_dot, tau, io, context)
-        if advance:
-            _RK_ONE(io, tab, cfg)
-        else:
-            at_rest(io, 0)
-        return _outcome_one_roller(reward, success, K(*_numbers(constants, n)), io, context,
-                                   observed, out, flags, obs)
-
     # the parallel fused kernels leave ``scratch`` unused (a chunk's is its own), as
     # ``parallel`` does
-    fused = {_RK.kernels()[1]: _parallel_fused(_RK_CHUNK_C, outcome_c),
-             _RK_SERIAL: rk_then_outcome}
-    ones = {_RK_SERIAL: rk_one}
-    degrees: set[int] = set()
+    fused: dict[Callable, Callable] = {}
+    ones: dict[Callable, Callable] = {}
 
-    def add_degree(degree: int) -> None:
-        if degree in degrees:
-            return
-        degrees.add(degree)
-        k = taylor_kernels(degree)
-        ns = k.namespace
+    def add(kernels: pytypes.ModuleType) -> None:
+        """The fused kernels of the scheme whose kernels ``kernels`` holds."""
 
         @jit
-        def taylor_then_outcome(io, tab, cfg, result, context, constants, observed, out, flags,
-                                obs, scratch):
-            ns.serial(io, tab, cfg)
+        def then_outcome(io, tab, cfg, result, context, constants, observed, out, flags, obs,
+                         scratch):
+            kernels.serial(io, tab, cfg)
             call_loop(result, context, constants, observed, out, flags, obs, scratch)
 
         @jit
-        def taylor_one(phi, phi_dot, tau, packed, advance):
+        def one_roller(phi, phi_dot, tau, packed, advance):
             io, tab, cfg, context, constants, observed, out, flags, obs = _unpack_one(packed)
             _inputs_one(phi, phi_dot, tau, io, context)
             if advance:
-                ns.one(io, tab, cfg)
+                kernels.one(io, tab, cfg)
             else:
                 at_rest(io, 0)
             return _outcome_one_roller(reward, success, K(*_numbers(constants, n)), io,
                                        context, observed, out, flags, obs)
 
-        fused[k.parallel] = _parallel_fused(_taylor_chunk_c(degree), outcome_c)
-        fused[k.serial], ones[k.serial] = taylor_then_outcome, taylor_one
+        fused[kernels.parallel] = _parallel_fused(_chunk_c(kernels), outcome_c)
+        fused[kernels.serial], ones[kernels.serial] = then_outcome, one_roller
 
+    degrees: set[int] = set()
+
+    def add_degree(degree: int) -> None:
+        if degree not in degrees:
+            degrees.add(degree)
+            add(taylor_kernels(degree).namespace)
+
+    add(_RK_KERNELS)
     add_degree(_TAYLOR.order)  # the default's, made with the task's kernels
     return TaskKernels(loop, parallel, fused, ones, add_degree)
 
