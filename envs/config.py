@@ -91,7 +91,8 @@ class Settings:
         "the integrator's target state error per control step (φ [rad], φ' [rad/s]), >= 1e-12 "
         "(float64 cannot verify a tighter one); it sets the number of substeps."))
     integrator: str = field(default=DEFAULT_INTEGRATOR, metadata=_doc(
-        "``\"taylor\"`` (the series of the motion to degree 18, its substeps chosen from "
+        "``\"taylor\"`` (the series of the motion to degree 18, 10 at a tolerance above "
+        "0.1 (:func:`roller_gym.physics.taylor.degree`), its substeps chosen from "
         "its own error estimate; the default and the fastest), ``\"rk8\"`` and ``\"rk4\"`` "
         "(error-controlled Runge–Kutta), ``\"euler\"`` (semi-implicit, Pendulum's scheme), "
         "``\"midpoint\"`` (implicit, energy-stable) or ``\"dop853\"`` (scipy's adaptive, "
