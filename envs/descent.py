@@ -27,8 +27,6 @@ __all__ = ["doomed", "fastest_rolling", "fixed_scene_problem", "slips_on_descent
 #: Points of the scalar check's grid of |φ| from the bottom to the farthest start (and as
 #: many on from there to ψ = π).
 GRID_POINTS = 2001
-#: Start candidates at rest, from the bottom to the start range's edge, that are checked.
-START_POINTS = 201
 #: x = φ'² [rad²/s²] taken as unbounded.
 _X_CAP = 1e30
 
@@ -78,17 +76,6 @@ def fastest_rolling(A: np.ndarray, B: np.ndarray, C: np.ndarray, low: float,
     return best
 
 
-def _starts(task: Any, scene: Scene) -> np.ndarray:
-    """|φ| [rad] of the starts at rest the draw may accept, beyond the success band: the
-    candidates of :data:`START_POINTS` uniforms from the bottom to the range's edge
-    (:meth:`Task.start_candidates`) that roll (:meth:`Task.start_accepted`)."""
-    u = np.linspace(0.5, 1.0, START_POINTS)[None, :]
-    phi, _ = task.start_candidates(u, np.full_like(u, 0.5), scene)
-    rolls = task.start_accepted(phi, np.zeros_like(phi), scene)[0]
-    starts = np.unique(np.abs(phi[0][rolls]))
-    return starts[starts > task.success_band]
-
-
 def _cell_inertia(phi: np.ndarray, m: float, r: float, kappa: float, e: float, k: float,
                   inertia: np.ndarray) -> np.ndarray:
     """A lower bound of J_I [kg·m²] on each cell between neighbouring points of ``phi``:
@@ -99,7 +86,7 @@ def _cell_inertia(phi: np.ndarray, m: float, r: float, kappa: float, e: float, k
 
 
 def doomed(task: Any, scene: Scene) -> tuple[float, float, float] | None:
-    """The nearest start at rest the draw may accept (:data:`START_POINTS` candidates) in
+    """The nearest start at rest the draw may accept (:meth:`Task.accepted_starts`) in
     the scalar ``scene`` from which the roller must slip or lift off whatever the torque:
     (its |φ| [rad], the |φ| [rad] where, the least speed [rad/s] there), or None.
 
@@ -109,7 +96,8 @@ def doomed(task: Any, scene: Scene) -> tuple[float, float, float] | None:
     out, as long as its least kinetic energy stays positive (it cannot stop, so cannot turn
     back). Checked on a grid of :data:`GRID_POINTS` |φ| out to the starts and as many on
     to ψ = π."""
-    starts = _starts(task, scene)
+    starts = np.unique(task.accepted_starts(scene))
+    starts = starts[starts > task.success_band]
     if not starts.size:
         return None
     torque, band = task.max_torque, task.success_band

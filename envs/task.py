@@ -361,13 +361,15 @@ class Task:
         episode (else no torque at all may succeed); None (the default) for the others."""
         return None
 
+    start_points: ClassVar[int] = 201  #: the candidates of :meth:`accepted_starts`
+
     def accepted_starts(self, scene: Scene) -> np.ndarray:
-        """|φ| [rad] of the starts at rest in the scalar ``scene`` of the grid of
-        :meth:`fallback_candidates` that are accepted (empty if none is: :meth:`fallback_start`
-        fails then)."""
-        phi, phi_dot = self.fallback_candidates(scene)
-        ok = self.start_accepted(phi, phi_dot, scene)[0]
-        return np.abs(phi[0][ok])
+        """|φ| [rad] of the starts at rest the draw may accept in the scalar ``scene``: of
+        :attr:`start_points` candidates from the bottom to the range's (symmetric) edge
+        (:meth:`start_candidates`), those that roll (:meth:`start_accepted`)."""
+        u = np.linspace(0.5, 1.0, self.start_points)[None, :]
+        phi, _ = self.start_candidates(u, np.full_like(u, 0.5), scene)
+        return np.abs(phi[0][self.start_accepted(phi, np.zeros_like(phi), scene)[0]])
 
     def fallback_start(self, scene: Scene) -> tuple[float, float] | None:
         """The start state (φ [rad], φ' [rad/s]) the draw falls back to when none of its
