@@ -241,9 +241,7 @@ class BalanceTask(Task):
         widths, over phi's lower end (or the largest of them, where that is less)."""
         edges = np.linspace(0.0, float(phi.hi), pieces + 1)
         piece = Interval(edges[:-1], edges[1:])
-        squared = (2.0 * (top - potential_enclosure(p, piece))
-                   / equations.inertia(piece, p.m, p.r, p.kappa, p.e, p.k))
-        fastest = np.sqrt(np.maximum(squared.hi, 0.0))
+        fastest = np.sqrt(np.maximum(_orbit_squared(p, top, piece).hi, 0.0))
         mean = np.sum(fastest * np.diff(edges)) / float(phi.lo) if phi.lo > 0 else np.inf
         return float(min(mean, np.max(fastest))) * (1.0 + 1e-12)  # (a mean is at most the max)
 
@@ -268,8 +266,7 @@ class BalanceTask(Task):
             if examined > self.orbit_pieces:
                 return False
             piece = Interval(lo, hi)
-            squared = (2.0 * (top - potential_enclosure(p, piece))
-                       / equations.inertia(piece, p.m, p.r, p.kappa, p.e, p.k))
+            squared = _orbit_squared(p, top, piece)
             beyond = squared.hi < 0  # no scene's swing comes here
             speed = Interval(np.maximum(squared.lo, 0.0), np.maximum(squared.hi, 0.0)).sqrt()
             ok = np.ones(lo.shape, bool)
@@ -320,3 +317,10 @@ def unstable_rest_targets(scene: Scene) -> np.ndarray:
         targets = unstable_rest_positions(Scene(r=r[j], R=big_r[j], e=e[j]))
         out[j] = abs(targets[0]) if targets else np.nan
     return out[np.asarray(inverse).reshape(-1)]
+
+
+def _orbit_squared(p: Any, top: Interval, piece: Interval) -> Interval:
+    """φ'² [rad²/s²] of the swing of energy ``top`` [J] on each φ of ``piece`` [rad], over
+    the box ``p``: 2 (top − V(φ)) / J_I(φ) on intervals (below 0 where it does not come)."""
+    return (2.0 * (top - potential_enclosure(p, piece))
+            / equations.inertia(piece, p.m, p.r, p.kappa, p.e, p.k))

@@ -79,9 +79,9 @@ def fastest_rolling(A: np.ndarray, B: np.ndarray, C: np.ndarray, low: float,
 def _cell_inertia(phi: np.ndarray, m: float, r: float, kappa: float, e: float, k: float,
                   inertia: np.ndarray) -> np.ndarray:
     """A lower bound of J_I [kg·m²] on each cell between neighbouring points of ``phi``:
-    the smaller end, or its least m (k² + (r − e)²) where θ = φ/s passes a whole turn."""
+    the smaller end, or its least, J_I(0), where θ = φ/s passes a whole turn."""
     turns = np.floor(phi / (2.0 * math.pi * (1.0 - r * kappa)))
-    return np.where(turns[1:] != turns[:-1], m * (k * k + (r - e) ** 2),
+    return np.where(turns[1:] != turns[:-1], equations.inertia(0.0, m, r, kappa, e, k),
                     np.minimum(inertia[:-1], inertia[1:]))
 
 
