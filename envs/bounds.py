@@ -261,7 +261,10 @@ def too_slow(task: Any, scene: Scene, dt: float) -> str | None:
     """Why the target is out of reach within an episode of steps of ``dt`` [s] in the
     scalar ``scene`` for ``task`` (:meth:`Task.least_times`, from any of its
     :meth:`Task.accepted_starts`, past :attr:`Task.reach_share` of it), or reached with no
-    torque (:meth:`Task.unaided_time`, from the farthest, within it); None if neither."""
+    torque (:meth:`Task.unaided_time`, from the farthest, within it); None if neither (and
+    for a task that does not :attr:`~Task.descends`: a pump bounds its own time)."""
+    if not task.descends:
+        return None
     starts = task.accepted_starts(scene)
     if not starts.size:
         return None

@@ -1,28 +1,31 @@
 """The forced descent from a start: where no torque holds the roller, it rolls on toward the
 bottom at a speed the torque cannot take away, and there it may have to slip or lift off.
 
-From a start at rest at |φ| = φs to a target near the bottom, wherever dV/d|φ| > max_torque
-the roller cannot stop; by the power balance (``docs/PHYSICS.md``) its kinetic energy at φ is
-then at least V(φa) − V(φ) − max_torque·(φa − φ) − the damping's work, φa the last point
-where it could have stopped. N and F are affine in (φ'², τ − cφ'), so whether some speed
-above that and some torque roll at φ is a linear program in two variables
-(:func:`fastest_rolling`). A start where one has none is doomed: every episode from it ends
-in a slip or a lift-off, whatever the policy. :func:`doomed` finds the nearest such start of
-a task's accepted ones in a scalar scene, and :func:`fixed_scene_problem` refuses a fixed
-scene with one. Over ``randomize`` ranges it is not yet proven (``docs/MAINTAINERS.md``).
+From a start at |φ| = φs (at rest, or moving in at the draw's speed) to a target near the
+bottom, wherever dV/d|φ| > max_torque the roller cannot stop; by the power balance
+(``docs/PHYSICS.md``) its kinetic energy at φ is then at least V(φa) − V(φ) −
+max_torque·(φa − φ) − the damping's work, φa the last point where it could have stopped
+(plus the start's own kinetic energy, where φa = φs). N and F are affine in (φ'², τ − cφ'),
+so whether some speed above that and some torque roll at φ is a linear program in two
+variables (:func:`fastest_rolling`). A start where one has none is doomed: every episode
+from it ends in a slip or a lift-off, whatever the policy. :func:`doomed` finds the nearest
+such start of those a task's draw may accept in a scalar scene (:mod:`roller_gym.start_set`),
+and :func:`fixed_scene_problem` refuses a fixed scene with one. Over ``randomize`` ranges it
+is not yet proven (``docs/MAINTAINERS.md``).
 """
 
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
+from roller_gym import start_set
 from roller_gym.physics import Scene, equations
 from roller_gym.physics.scene import shown
 from roller_gym.rest import reach
 
-__all__ = ["doomed", "fastest_rolling", "fixed_scene_problem", "slips_on_descent"]
+__all__ = ["Doom", "doomed", "fastest_rolling", "fixed_scene_problem", "slips_on_descent"]
 
 #: Points of the scalar check's grid of |φ| from the bottom to the farthest start (and as
 #: many on from there to ψ = π).
@@ -85,19 +88,31 @@ def _cell_inertia(phi: np.ndarray, m: float, r: float, kappa: float, e: float, k
                     np.minimum(inertia[:-1], inertia[1:]))
 
 
-def doomed(task: Any, scene: Scene) -> tuple[float, float, float] | None:
-    """The nearest start at rest the draw may accept (:meth:`Task.accepted_starts`) in
-    the scalar ``scene`` from which the roller must slip or lift off whatever the torque:
-    (its |φ| [rad], the |φ| [rad] where, the least speed [rad/s] there), or None.
+class Doom(NamedTuple):
+    """A doomed start: at |φ| = ``start`` [rad] moving at ``speed`` [rad/s] toward ``where``
+    (|φ| [rad]), where it passes at ``least`` [rad/s] or faster and no torque rolls."""
+
+    start: float
+    speed: float
+    where: float
+    least: float
+
+
+def doomed(task: Any, scene: Scene) -> Doom | None:
+    """The nearest start the draw may accept in the scalar ``scene`` (the far end of a cell
+    of :func:`roller_gym.start_set.covering`, at rest or at its fastest speed in or out) from
+    which the roller must slip or lift off whatever the torque (a :class:`Doom`), or None.
 
     Two ways: on its way in to the success band, through each stretch where dV/d|φ| >
-    max_torque (it cannot stop there) from rest at the stretch's top; and, where gravity
+    max_torque (it cannot stop there) from the stretch's top (at rest, or the start's speed
+    where the stretch begins at the start); and, where gravity
     pushes the start away harder than the torque holds (dV/d|φ| < −max_torque), on its way
     out, as long as its least kinetic energy stays positive (it cannot stop, so cannot turn
     back). Checked on a grid of :data:`GRID_POINTS` |φ| out to the starts and as many on
     to ψ = π."""
-    starts = np.unique(task.accepted_starts(scene))
-    starts = starts[starts > task.success_band]
+    cover = start_set.covering(task, scene)
+    keep = cover.phi > task.success_band
+    starts, speed_in, speed_out = cover.phi[keep], cover.speed_in[keep], cover.speed_out[keep]
     if not starts.size:
         return None
     torque, band = task.max_torque, task.success_band
@@ -124,32 +139,39 @@ def doomed(task: Any, scene: Scene) -> tuple[float, float, float] | None:
     stops = np.where(~forced, np.arange(phi.size), phi.size)
     stop_above = np.minimum.accumulate(stops[::-1])[::-1]  # the next point that may stop
 
-    def spent(anchor: np.ndarray, cells: np.ndarray) -> np.ndarray:
-        """The damping's most work [J] on each cell of a run from rest at ``anchor``:
-        c·|φ'|max·Δφ, |φ'|max from the most energy the run can have there."""
+    def spent(anchor: np.ndarray, cells: np.ndarray, kinetic: np.ndarray) -> np.ndarray:
+        """The damping's most work [J] on each cell of a run from ``anchor`` with the
+        kinetic energy ``kinetic`` [J] there: c·|φ'|max·Δφ, |φ'|max from the most energy the
+        run can have on the cell."""
         reach_ = np.maximum(abs(phi[cells] - phi[anchor]), abs(phi[cells + 1] - phi[anchor]))
-        most = V[anchor] - cell_v[cells] + torque * reach_
+        most = V[anchor] + kinetic - cell_v[cells] + torque * reach_
         return c * np.sqrt(np.maximum(2.0 * most / cell_j[cells], 0.0)) * width[cells]
 
-    for s in np.searchsorted(phi, starts):
+    for s, w_in, w_out in zip(np.searchsorted(phi, starts), speed_in, speed_out, strict=True):
         i = np.arange(s + 1)
-        a = np.minimum(stop_above[i], s)  # where the way in through i began at rest
-        work = spent(a[:-1], i[:-1])
+        a = np.minimum(stop_above[i], s)  # where the way in through i began (at rest, or at s)
+        # At s itself the start may move in at up to w_in: its kinetic energy there.
+        kinetic = np.where(a == s, 0.5 * inertia[s] * w_in**2, 0.0)
+        work = spent(a[:-1], i[:-1], kinetic[:-1])
         below = np.concatenate([np.cumsum(work[::-1])[::-1], [0.0]])  # Σ over cells >= i
-        least = 2.0 * (V[a] - V[i] - torque * (phi[a] - phi[i]) - (below - below[a])) / inertia[i]
+        least = 2.0 * (V[a] + kinetic - V[i] - torque * (phi[a] - phi[i])
+                       - (below - below[a])) / inertia[i]
         dead = forced[i] & (phi[i] > band) & (least > most_in[i])
         if dead.any():
             j = int(np.flatnonzero(dead)[-1])  # the first met on the way in
-            return float(phi[s]), float(phi[j]), math.sqrt(max(least[j], 0.0))
+            return Doom(float(phi[s]), float(w_in), float(phi[j]),
+                        math.sqrt(max(least[j], 0.0)))
         if slope[s] < -torque:  # pushed out
             j = np.arange(s + 1, phi.size)
-            energy = (V[s] - V[j] - torque * (phi[j] - phi[s])
-                      - np.cumsum(spent(np.full(j.size, s), j - 1)))
+            kinetic = 0.5 * inertia[s] * w_out**2  # moving out at up to w_out
+            energy = (V[s] + kinetic - V[j] - torque * (phi[j] - phi[s])
+                      - np.cumsum(spent(np.full(j.size, s), j - 1, np.full(j.size, kinetic))))
             least = 2.0 * energy / inertia[j]
             dead = np.cumprod(energy > 0.0).astype(bool) & (least > most_out[j])
             if dead.any():
                 q = int(np.flatnonzero(dead)[0])
-                return float(phi[s]), float(phi[j[q]]), math.sqrt(max(least[q], 0.0))
+                return Doom(float(phi[s]), float(w_out), float(phi[j[q]]),
+                            math.sqrt(max(least[q], 0.0)))
     return None
 
 
@@ -159,10 +181,10 @@ def slips_on_descent(task: Any, scene: Scene) -> str | None:
     found = doomed(task, scene)
     if found is None:
         return None
-    start, where, speed = found
+    start, _, where, speed = found
     return (f"{task.name} cannot be solved from every start of {shown(scene)} with "
-            f"max_torque={task.max_torque:g} N·m: from the start at rest at |phi| = "
-            f"{start:.4g} rad no torque can stop the roller before |phi| = {where:.4g} rad "
+            f"max_torque={task.max_torque:g} N·m: from a start the draw may take at |phi| up "
+            f"to {start:.4g} rad no torque can stop the roller before |phi| = {where:.4g} rad "
             f"(gravity outweighs max_torque on the way), where it passes at {speed:.3g} "
             "rad/s or more and slips or lifts off under every torque; use a larger "
             "max_torque or mu, or a smaller e")

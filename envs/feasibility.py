@@ -23,9 +23,10 @@ What is proven on a box B (the conditions of :func:`problem`, in exact arithmeti
    |q| = |rκ/(1 − rκ)| monotone in r and in R on either side of R = 0, which a range cannot
    cross).
 3. The target within reach (:func:`roller_gym.bounds.reach_proven`): the least times of
-   :func:`roller_gym.bounds.least_times` from every start (|φ| up to the farthest candidate
-   of 2. not proven to slip) within the task's share of the episode, and the unaided time
-   from the farthest start (from the farthest candidate proven to roll) past it.
+   :func:`roller_gym.bounds.least_times` from every start (|φ| up to the far end of the
+   farthest cell between candidates of 2. where a start at rest or moving may roll) within
+   the task's share of the episode, and the unaided time from the farthest start (from the
+   farthest candidate proven to roll) past it.
 4. The task's own condition (:meth:`Task.scene_proven`): none for Stabilize and Hold; for
    Balance, :func:`unstable_rest_enclosure`.
 """
@@ -39,7 +40,7 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from typing import Any
 
 import numpy as np
-from roller_gym import validation
+from roller_gym import start_set, validation
 from roller_gym.bounds import Params, box_params, reach_proven
 from roller_gym.intervals import Interval
 from roller_gym.physics import Scene, equations
@@ -144,13 +145,17 @@ def _corners(scene: Scene, boxes: Sequence[Box]) -> Scene:
 def _starts_proven(task: Task, scene: Scene, boxes: Sequence[Box],
                    p: Params) -> tuple[np.ndarray, Interval]:
     """Whether, for each box, one start candidate rolls in all its scenes; and an interval
-    holding each box's farthest of :meth:`Task.accepted_starts`: from the farthest candidate
-    proven to roll to the farthest one not proven to slip or lift off (under some torque) in
-    all."""
+    holding each box's farthest start the draw may take: from the farthest candidate proven
+    to roll to the far end of the farthest cell between neighbouring candidates where a start
+    at rest or moving may roll (:func:`roller_gym.start_set.roll_status`) in some scene."""
     n = len(boxes)
-    phi, phi_dot = task.fallback_candidates(_corners(scene, boxes) if boxes[0] else scene)
+    corners = _corners(scene, boxes) if boxes[0] else scene
+    phi, phi_dot = task.fallback_candidates(corners)
     phi, phi_dot = (Interval.hull(x.reshape(n, -1, x.shape[-1]), axis=1)
                     for x in (phi, phi_dot))  # (boxes, candidates)
+    pieces = start_set.speed_pieces(task, corners)  # (corners of every box, pieces)
+    speeds = Interval(pieces.lo.reshape(n, -1, pieces.lo.shape[-1]).min(axis=1)[:, None, :],
+                      pieces.hi.reshape(n, -1, pieces.hi.shape[-1]).max(axis=1)[:, None, :])
     p = Params(*(Interval(x.lo[:, None], x.hi[:, None]) for x in p))
     weights = [(p.m, p.g)]
     if not (phi_dot.lo.any() or phi_dot.hi.any()):
@@ -163,13 +168,15 @@ def _starts_proven(task: Task, scene: Scene, boxes: Sequence[Box],
         for normal, friction in task.start_contacts(phi, phi_dot, m, p.r, p.kappa, p.e, p.k,
                                                     g, p.c):
             ok &= (normal.lo > 0) & (abs(friction).hi <= (p.mu * normal).lo)
-    refused = np.zeros(np.shape(phi.lo), bool)
-    for normal, friction in task.start_contacts(phi, phi_dot, p.m, p.r, p.kappa, p.e, p.k,
-                                                p.g, p.c):
-        refused |= (normal.hi <= 0) | (abs(friction).lo > (p.mu * normal).hi)
-    size = abs(phi)
-    return ok.any(axis=1), Interval(np.max(np.where(ok, size.lo, 0.0), axis=1),
-                                    np.max(np.where(refused, 0.0, size.hi), axis=1))
+    # The cells between the grid's neighbouring candidates (after the first, the middle).
+    cells = Interval(np.minimum(phi.lo[:, 1:-1], phi.lo[:, 2:]),
+                     np.maximum(phi.hi[:, 1:-1], phi.hi[:, 2:]))
+    q = Params(*(Interval(x.lo[:, :, None], x.hi[:, :, None]) for x in p))
+    may = start_set.roll_status(task, Interval(cells.lo[:, :, None], cells.hi[:, :, None]),
+                                speeds, q.m, q.r, q.kappa, q.e, q.k, q.g, q.c,
+                                q.mu)[0].any(axis=2)
+    return ok.any(axis=1), Interval(np.max(np.where(ok, abs(phi).lo, 0.0), axis=1),
+                                    np.max(np.where(may, abs(cells).hi, 0.0), axis=1))
 
 
 def _boxes_proven(task: Task, scene: Scene, dt: float, boxes: Sequence[Box],

@@ -54,10 +54,11 @@ redrawn until the roller rolls there.
 ``gymnasium.make("roller_gym/RollerStabilize-v2", scene=..., dt=..., max_torque=..., tolerance=...,
 integrator=..., substeps=..., randomize=..., render_mode=...)``: see
 :class:`roller_gym.roller_env.RollerEnv`. Refused: settings with which bringing the roller
-from an accepted start to rest at the bottom takes more than half the episode at the least
-(:func:`roller_gym.bounds.least_times`), damping that might do it with no torque within
-the episode (:func:`roller_gym.bounds.unaided_time`), and a fixed scene with a start doomed
-to slip or lift off on its way down whatever the torque (:func:`roller_gym.descent.doomed`).
+from a start the draw may take (at rest or moving) to rest at the bottom takes more than
+half the episode at the least (:func:`roller_gym.bounds.least_times`), damping that might
+do it with no torque within the episode (:func:`roller_gym.bounds.unaided_time`), and a
+fixed scene with a start doomed to slip or lift off on its way down whatever the torque
+(:func:`roller_gym.descent.doomed`).
 
 ## Version History
 

@@ -64,7 +64,7 @@ from collections.abc import Sequence
 from typing import Any, ClassVar
 
 import numpy as np
-from roller_gym import bounds, rewards
+from roller_gym import bounds, rewards, start_set
 from roller_gym.physics import Scene, equations, trig
 from roller_gym.physics.compiling import inlined
 from roller_gym.physics.integrators import contact_state, scene_arrays
@@ -364,12 +364,10 @@ class Task:
     start_points: ClassVar[int] = 201  #: the candidates of :meth:`accepted_starts`
 
     def accepted_starts(self, scene: Scene) -> np.ndarray:
-        """|φ| [rad] of the starts at rest the draw may accept in the scalar ``scene``: of
-        :attr:`start_points` candidates from the bottom to the range's (symmetric) edge
-        (:meth:`start_candidates`), those that roll (:meth:`start_accepted`)."""
-        u = np.linspace(0.5, 1.0, self.start_points)[None, :]
-        phi, _ = self.start_candidates(u, np.full_like(u, 0.5), scene)
-        return np.abs(phi[0][self.start_accepted(phi, np.zeros_like(phi), scene)[0]])
+        """|φ| [rad] bounding every start the draw may accept in the scalar ``scene``, at rest
+        or moving: the far ends of the cells between :attr:`start_points` candidates over the
+        start range that may hold one (:func:`roller_gym.start_set.covering`)."""
+        return start_set.covering(self, scene).phi
 
     def fallback_start(self, scene: Scene) -> tuple[float, float] | None:
         """The start state (φ [rad], φ' [rad/s]) the draw falls back to when none of its

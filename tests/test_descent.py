@@ -8,15 +8,19 @@ import numpy as np
 import pytest
 from roller_gym import Scene, descent
 from roller_gym.physics import PRESETS, equations
+from roller_gym.rest import reach
 from roller_gym.task import get_task
 from scipy.integrate import solve_ivp
 
 #: (scene, max_torque [N·m]) where every policy fails from some start of RollerStabilize:
-#: on its way in, with damping too; and on the drum, pushed out past the barrier.
+#: on its way in, with damping too; on the drum, pushed out past the barrier; and from a
+#: start the draw takes past every start at rest.
 DOOMED = [(PRESETS["rim_mass"], 0.5), (Scene(e=0.2), 0.5), (Scene(e=0.2, damping=0.01), 0.5),
           (PRESETS["balance"], 0.5), (Scene(e=0.099, k=0.005), 0.5),
           (PRESETS["rim_mass"].replace(damping=1e-3), 0.6), (PRESETS["drum"], 0.5),
-          (PRESETS["drum"], 1.0)]
+          (PRESETS["drum"], 1.0),
+          # a start taken past every start at rest that rolls (21.2 rad against 15.2)
+          (Scene(R=3.0, e=0.06698, k=0.02974, mu=0.4308), 0.5254)]
 #: ... and where no start is doomed (the beam search of a review reached the target from
 #: rim_mass at 1 N·m).
 NOT_DOOMED = [(PRESETS["paper"], 0.5), (PRESETS["rim_mass"], 1.0), (Scene(e=0.09), 0.5),
@@ -37,10 +41,10 @@ def _rolling_torque_exists(scene, phi, speed, max_torque, torques=801):
     return bool(np.any((normal > 0) & (np.abs(friction) <= scene.mu * normal)))
 
 
-def _braked_speed(scene, start, where, max_torque):
-    """|φ'| [rad/s] at |φ| = ``where`` of the roller released at rest at ``start`` under the
-    full torque against its motion toward ``where`` (the most a torque can slow it), by a
-    tight reference integration."""
+def _braked_speed(scene, start, where, max_torque, speed=0.0):
+    """|φ'| [rad/s] at |φ| = ``where`` of the roller released at ``start`` at |φ'| =
+    ``speed`` toward ``where`` under the full torque against that motion (the most a torque
+    can slow it), by a tight reference integration."""
     m, r, kappa, e, k, g, c = scene.params
     brake = max_torque * math.copysign(1.0, start - where)
 
@@ -51,7 +55,8 @@ def _braked_speed(scene, start, where, max_torque):
         return y[0] - where
 
     arrive.terminal = True
-    sol = solve_ivp(rhs, (0.0, 20.0), [start, 0.0], events=arrive, rtol=1e-11, atol=1e-12,
+    sol = solve_ivp(rhs, (0.0, 20.0), [start, -speed * math.copysign(1.0, start - where)],
+                    events=arrive, rtol=1e-11, atol=1e-12,
                     method="DOP853")
     assert sol.status == 1, "the braked roller never got there"
     return abs(sol.y_events[0][0][1])
@@ -63,8 +68,14 @@ def test_a_doomed_start_is_doomed_by_a_direct_search(scene, max_torque):
     that speed and above (up to the braked one) no torque rolls there."""
     found = descent.doomed(_stabilize(max_torque), scene)
     assert found is not None
-    start, where, least = found
-    braked = _braked_speed(scene, start, where, max_torque)
+    start, speed, where, least = found
+    # The draw takes a start in the named one's cell (the cells between the task's
+    # candidates: their far ends are the starts the check counts).
+    task = _stabilize(max_torque)
+    width = float(reach(scene, task.start_angle)) / (task.start_points - 1)
+    cell, speeds = np.meshgrid(np.linspace(start - width, start, 201), np.linspace(-1, 1, 41))
+    assert task.start_accepted(cell.reshape(1, -1), speeds.reshape(1, -1), scene).any()
+    braked = _braked_speed(scene, start, where, max_torque, speed)
     assert least <= braked * (1 + 1e-9)
     way = math.copysign(1.0, where - start)  # (in, or out past a barrier)
     for speed in np.linspace(least, max(braked, least) * 1.5, 25):
@@ -119,7 +130,7 @@ def test_the_rolling_set_ends_where_no_torque_is_left():
 
 
 def test_a_doomed_scene_is_refused_at_construction_and_reset():
-    with pytest.raises(ValueError, match=r"max_torque=0.5 N·m: from the start at rest"):
+    with pytest.raises(ValueError, match=r"max_torque=0.5 N·m: from a start the draw may take"):
         gym.make("roller_gym/RollerStabilize-v2", scene="rim_mass")
     with pytest.raises(ValueError, match=r"scene\[1\] \(sub-environment 1.*slips or lifts off"):
         gym.make_vec("roller_gym/RollerHold-v2", num_envs=2, max_torque=0.5,
@@ -139,6 +150,6 @@ def test_hold_randomized_v1_holds_doomed_starts_in_its_ranges():
     scene = env.config.scene.replace(R=1.0, m=1.6, e=0.07, k=0.07)
     low, high = env.config.randomize["R"]
     assert low <= 1.0 <= high and env.config.randomize["m"][1] >= 1.6
-    start, where, least = descent.doomed(env.task, scene)
-    assert least <= _braked_speed(scene, start, where, env.task.max_torque) * (1 + 1e-9)
+    start, speed, where, least = descent.doomed(env.task, scene)
+    assert least <= _braked_speed(scene, start, where, env.task.max_torque, speed) * (1 + 1e-9)
     assert not _rolling_torque_exists(scene, where, -least, env.task.max_torque)

@@ -247,8 +247,10 @@ import json, os, sys
 import numpy as np
 from roller_gym.physics import integrators as integ, preset, Scene, trig
 if os.environ["NUMBA_DISABLE_JIT"] == "1":  # interpreted, sin and cos are NumPy's: take the
-    trig.sin, trig.cos, trig.sincos = trig._sin, trig._cos, trig._sincos  # the branch-free
-    trig.exp, trig.tanh = trig._exp, trig._tanh  # form the compiled code has
+    for name in ("sin", "cos", "sincos", "exp", "tanh"):  # branch-free form the compiled
+        def either(x, free=getattr(trig, "_" + name), face=getattr(trig, name)):  # code has
+            return free(x) if trig._looped(x) else face(x)  # (intervals: the face's)
+        setattr(trig, name, either)
 rng = np.random.default_rng(3)
 n = 4  # interpreted, a kernel runs about 10,000 times slower: one roller per scene
 scenes = [preset("paper"), preset("drum"), preset("floor"), Scene(R=0.21, e=0.09)]
