@@ -445,11 +445,10 @@ class Task:
         """The contact forces (N, F) [N] at the state under each torque of
         :attr:`start_torques`: plain arithmetic on the equations, so floats, arrays and
         intervals (:mod:`roller_gym.intervals`) alike (the feasibility proofs)."""
-        out = []
-        for tau in self.start_torques:
-            a = equations.accel(phi, phi_dot, tau, m, r, kappa, e, k, g, c)
-            out.append(equations.contact_forces(phi, phi_dot, a, m, r, kappa, e, g))
-        return out
+        lhs, inertia, *trig_terms, _ = equations.accel_terms(phi, phi_dot, 0.0, m, r, kappa, e,
+                                                             k, g, c)  # shared by the torques
+        return [equations.forces(*trig_terms, phi_dot, (lhs + tau / m) / inertia, m, r, kappa,
+                                 e, g) for tau in self.start_torques]
 
     def target_from_option(self, value: Any, scene: Scene) -> float:
         """φ* [rad] from ``reset(options={"target": value})``; tasks with a target override."""
