@@ -16,7 +16,7 @@ in 97 % (return 182.6): ``roller-gym evaluate --env roller_gym/RollerHoldRandomi
 prints both, the latter as the baseline ``informed``. The ranges keep nearly every episode
 solvable: the informed controller fails only where the roller slips on its way from a far
 start. Some of those starts are doomed whatever the policy (:mod:`roller_gym.descent`: up
-to 26 % of the starts where R is near 1 m, m near 1.6 kg and e near 0.07 m).
+to 27 % of the starts where R is near 1 m, m near 1.6 kg and e near 0.07 m).
 
 ## Action space
 
