@@ -78,7 +78,7 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-from roller_gym import bounds, feasibility
+from roller_gym import bounds, unstable_rest
 from roller_gym.bounds import potential_enclosure
 from roller_gym.intervals import Interval
 from roller_gym.physics import Scene, contact, energy, equations
@@ -207,12 +207,12 @@ class BalanceTask(Task):
         return phi_b
 
     def scene_proven(self, params: Any, estimates: Sequence[Scene], dt: float) -> bool:
-        """:func:`roller_gym.feasibility.unstable_rest_enclosure` (Φ, holding φ_b), and with
+        """:func:`roller_gym.unstable_rest.unstable_rest_enclosure` (Φ, holding φ_b), and with
         V(Φ) and J_I(0) on intervals over the box, the damping's condition (c·mean|φ'|, the
         mean bounded piece by piece: :meth:`_mean_speed_bound`) and the pump time
         (:meth:`pump_time`'s, from the start energy's lower end to the upper end of
         V(φ_b − success_band)) bounded by their upper ends."""
-        phi = feasibility.unstable_rest_enclosure(params, estimates)
+        phi = unstable_rest.unstable_rest_enclosure(params, estimates)
         if phi is None:
             return False
         p = params
@@ -274,7 +274,7 @@ class BalanceTask(Task):
                 phi_dot = sign * speed
                 rolls = np.zeros(lo.shape, bool)
                 for tau in torques:
-                    rolls |= feasibility.rolls_proven(p, piece, phi_dot, tau)
+                    rolls |= unstable_rest.rolls_proven(p, piece, phi_dot, tau)
                 ok &= rolls
             ok |= beyond
             half = 0.5 * (lo + hi)

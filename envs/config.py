@@ -109,7 +109,8 @@ class Settings:
         "randomization), e.g. ``{\"m\": (0.8, 1.2), \"e\": (0.03, 0.05)}``. At "
         "construction the task is proven posable in every scene of the box of ranges "
         "(:mod:`roller_gym.feasibility`), so no later reset can fail on a drawn scene; "
-        "otherwise a ``ValueError`` names the field and a feasible part of its range. "
+        "otherwise a ``ValueError`` names the field and a feasible part of its range, and "
+        "whether that part, with the other ranges as given, is proven. "
         "RollerSwing takes none: its scenes are checked one by one (its target swings must "
         "roll and stay below the potential's barrier). "
         "Default: the task's own ranges (``Task.scene_ranges``: none but for the tasks "
@@ -277,7 +278,9 @@ def check_randomize(task: Task, scene: Scene, dt: float,
     bound, the equations evaluated on intervals), so a range that constructs cannot fail
     at a later reset. Where a scene of the box fails the check, the error names the field,
     the scene and a feasible part of the field's range (found by bisection to 1e-6 of its
-    width, through the failing scene); where the proof does not close (as at an isolated
+    width, through the failing scene), and whether that part is proven with the other
+    ranges as given (the scan's edge may lie past where the proof closes); where the proof
+    does not close (as at an isolated
     infeasible value), the range is refused all the same, naming the part that was proven.
     The result is cached per (task, scene, dt, ranges).
     """

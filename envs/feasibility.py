@@ -28,7 +28,7 @@ What is proven on a box B (the conditions of :func:`problem`, in exact arithmeti
    the task's share of the episode, and the unaided time from the farthest start (from the
    farthest candidate proven to roll) past it.
 4. The task's own condition (:meth:`Task.scene_proven`): none for Stabilize and Hold; for
-   Balance, :func:`unstable_rest_enclosure`.
+   Balance, :func:`roller_gym.unstable_rest.unstable_rest_enclosure`.
 """
 
 from __future__ import annotations
@@ -37,19 +37,16 @@ import functools
 import itertools
 import math
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from typing import Any
 
 import numpy as np
 from roller_gym import start_set, validation
 from roller_gym.bounds import Params, box_params, reach_proven
 from roller_gym.intervals import Interval
-from roller_gym.physics import Scene, equations
-from roller_gym.physics.analysis import MAX_TURNS, nearest_unstable_rests
+from roller_gym.physics import Scene
 from roller_gym.physics.scene import shown
-from roller_gym.task import Task, unstable_rest_positions
+from roller_gym.task import Task
 
-__all__ = ["MAX_BOXES", "Params", "box_params", "check_ranges", "problem",
-           "rolls_proven", "unstable_rest_enclosure"]
+__all__ = ["MAX_BOXES", "Params", "box_params", "check_ranges", "problem"]
 
 #: The most boxes the branch and bound examines before it refuses a range as not proven.
 MAX_BOXES = 4000
@@ -196,181 +193,6 @@ def _boxes_proven(task: Task, scene: Scene, dt: float, boxes: Sequence[Box],
     return ok
 
 
-# -- Balance: the unstable rest position ------------------------------------------------------
-#: The most pieces of (0, φ_b) examined when excluding a nearer unstable rest position.
-MAX_PIECES = 4096
-
-
-def unstable_rest_enclosure(p: Params, estimates: Sequence[Scene]) -> Interval | None:
-    """An interval Φ [rad] that holds φ_b of every scene of the box ``p``, where it is proven
-    that for every such scene the nearest unstable rest position φ_b > 0 of
-    :func:`roller_gym.task.unstable_rest_positions` exists and the roller rests there
-    (N > 0, |F| <= μN at φ = φ_b, φ' = 0, τ = 0), as :meth:`BalanceTask.default_target`
-    requires; None where it is not proven. Shown on intervals, with Φ = [a, b] around the
-    estimate of φ_b over the box (from the rest position of each scene of ``estimates`` in
-    turn, refined by Newton's method at the box's corners):
-
-    * dV/dφ(a) > 0 > dV/dφ(b) and d²V/dφ² < 0 on Φ: exactly one rest position in Φ, and it
-      is unstable (d²V/dφ² < 0, as the rule asks);
-    * b inside the window :func:`roller_gym.physics.equilibria` searches (|ψ| < π, and
-      |φ| < MAX_TURNS turns);
-    * no unstable rest position in (0, a): (0, a] is covered by pieces on each of which
-      dV/dφ ≠ 0, or d²V/dφ² >= 0 (a rest position there is not unstable), or (a piece
-      starting at 0, where dV/dφ = 0) d²V/dφ² ≠ 0, so dV/dφ is strictly monotone from 0;
-    * N > 0 and μN − |F| >= 0 at rest on Φ (:func:`equations.margins`). At rest (φ' = 0)
-      under τ = 0, φ'' ∝ g and N, F ∝ m g, so these margins N/(m g) and (μN − |F|)/(m g)
-      do not depend on m or g: they are evaluated at the box's least m and g, which keeps
-      the intervals from counting m's and g's range twice.
-
-    The mirror image −φ_b counts as well and is not needed: the rule takes the positive one.
-    Where the rule gives φ_b = 0 instead (no unstable rest position > 0, an unstable one at
-    0), :func:`_unstable_bottom_proven` shows that (Φ = [0, 0]); on the floor, where the
-    unstable rest position is at the window's edge (φ = −π), :func:`_floor_top_proven`
-    (Φ holds π).
-    A box where any of this fails is not proven (split, or refused where that does not end).
-    """
-    for scene in estimates:
-        nearest = float(nearest_unstable_rests(scene.r, scene.kappa, scene.e)[0])
-        near = _unstable_rest_near(p, nearest) if nearest > 0 else None  # (None for NaN)
-        if near is not None:
-            return near
-        if not math.isnan(nearest):
-            continue
-        estimate = unstable_rest_positions(scene)  # the rule's other cases
-        if estimate == (0.0,) and _unstable_bottom_proven(p):
-            return Interval(0.0)
-        if estimate and estimate[0] < 0 and _floor_top_proven(p):
-            return FLOOR_TOP
-    return None
-
-
-def _floor_top_proven(p: Params) -> bool:
-    """The rule on the floor (κ = 0), whose window is φ in [−π, π): dV/dφ = m g e sin φ
-    vanishes at 0 (stable: d²V/dφ² = m g e > 0) and at −π (unstable), and at no unstable
-    point of (0, π) (shown as in :func:`unstable_rest_enclosure`; by symmetry none in
-    (−π, 0) either), so the rule takes φ_b = |−π| = π, the mass center above the axle,
-    where the roller is checked to rest."""
-    m, r, kappa, e, g = p.m, p.r, p.kappa, p.e, p.g
-    if not (kappa.lo == kappa.hi == 0.0
-            and equations.d2potential(Interval(0.0), m, r, kappa, e, g).lo > 0):
-        return False
-    return _nearer_excluded(p, math.pi * (1.0 - 1e-9)) and _rests(p, FLOOR_TOP)
-
-
-#: An interval [rad] that holds π.
-FLOOR_TOP = Interval(math.pi, float(np.nextafter(math.pi, 4.0)))
-
-
-def _window(p: Params) -> tuple[Interval, float]:
-    """(dψ/dφ as an interval, the largest φ [rad] the search window of
-    :func:`roller_gym.physics.equilibria` reaches over the box)."""
-    rate = abs(p.r * p.kappa / (1.0 - p.r * p.kappa))
-    if rate.hi == 0.0:  # the floor
-        return rate, math.pi
-    if not rate.lo > 0:
-        return rate, math.inf
-    return rate, math.pi * min(1.0 / float(rate.lo), MAX_TURNS) * (1.0 + 1e-9)  # rounded up
-
-
-def _unstable_bottom_proven(p: Params) -> bool:
-    """The rule's other case: φ_b = 0 (the rule then takes the unstable rest position at
-    φ = 0, as on top of a drum with the mass center high): d²V/dφ² < 0 at 0 and no
-    unstable rest position in (0, the window's end] (as in :func:`unstable_rest_enclosure`);
-    the roller rests at 0 (N = m g, F = 0) and is checked as well."""
-    m, r, kappa, e, g = p.m, p.r, p.kappa, p.e, p.g
-    zero = Interval(0.0)
-    _, end = _window(p)
-    if not (equations.d2potential(zero, m, r, kappa, e, g).hi < 0 and math.isfinite(end)
-            and _nearer_excluded(p, end)):
-        return False
-    return _rests(p, zero)
-
-
-def _rests(p: Params, phi: Interval) -> bool:
-    """N > 0 and μN − |F| >= 0 at rest under τ = 0 at every φ of ``phi``, for every scene
-    of the box; m and g at their least values (the margins do not depend on them, see
-    :func:`unstable_rest_enclosure`)."""
-    return bool(rolls_proven(p._replace(m=Interval(p.m.lo), g=Interval(p.g.lo)), phi, 0.0,
-                             0.0).all())
-
-
-def rolls_proven(p: Params, phi: Any, phi_dot: Any, tau: Any) -> np.ndarray:
-    """Elementwise: N > 0 and μN − |F| >= 0 at every state of the intervals (or numbers)
-    φ [rad], φ' [rad/s] under the torque τ [N·m], for every scene of the box ``p``."""
-    acc = equations.accel(phi, phi_dot, tau, p.m, p.r, p.kappa, p.e, p.k, p.g, p.c)
-    normal, friction = equations.contact_forces(phi, phi_dot, acc, p.m, p.r, p.kappa, p.e, p.g)
-    liftoff, slip = equations.margins(normal, friction, p.m, p.g, p.mu)
-    return np.asarray((liftoff.lo > 0) & (slip.lo >= 0))
-
-
-def _unstable_rest_near(p: Params, estimate: float) -> Interval | None:
-    phi = _roots_at_corners(p, estimate)
-    if phi is None:
-        return None
-    m, r, kappa, e, g = p.m, p.r, p.kappa, p.e, p.g
-    spread = float(phi.max() - phi.min())
-    for pad in (0.5 * spread, 2.0 * spread):
-        pad += 1e-9 * max(1.0, float(phi.max()))
-        a, b = float(phi.min()) - pad, float(phi.max()) + pad
-        if a <= 0:
-            return None
-        if (equations.dpotential(Interval(a), m, r, kappa, e, g).lo > 0
-                and equations.dpotential(Interval(b), m, r, kappa, e, g).hi < 0
-                and equations.d2potential(Interval(a, b), m, r, kappa, e, g).hi < 0):
-            break
-    else:
-        return None
-    big = Interval(b)
-    rate, _ = _window(p)
-    if rate.hi == 0.0:  # the floor: |φ| < π
-        inside = big.hi < math.pi * (1.0 - 2e-9)
-    else:  # |ψ| < π and |φ| < MAX_TURNS turns
-        inside = (big.hi < MAX_TURNS * math.pi * (1.0 - 2e-9)
-                  and (big * rate).hi < math.pi * (1.0 - 2e-9))
-    whole = Interval(a, b)
-    return whole if inside and _nearer_excluded(p, a) and _rests(p, whole) else None
-
-
-def _roots_at_corners(p: Params, start: float) -> np.ndarray | None:
-    """The root of dV/dφ near ``start`` at each corner of the box (Newton's method), or None
-    where it does not converge to an unstable one: an estimate, checked by the proof."""
-    ends = [(x.lo, x.hi) for x in (p.m, p.r, p.kappa, p.e, p.g)]
-    m, r, kappa, e, g = (np.asarray(c, float) for c in zip(*itertools.product(*ends),
-                                                            strict=True))
-    phi = np.full(m.shape, start)
-    for _ in range(30):
-        step = (equations.dpotential(phi, m, r, kappa, e, g)
-                / equations.d2potential(phi, m, r, kappa, e, g))
-        phi = phi - step
-        if np.all(np.abs(step) <= 1e-14 * np.abs(phi)):
-            break
-    if not (np.all(np.isfinite(phi)) and np.all(phi > 0)
-            and np.all(equations.d2potential(phi, m, r, kappa, e, g) < 0)):
-        return None
-    return phi
-
-
-def _nearer_excluded(p: Params, a: float) -> bool:
-    """No unstable rest position in (0, a] for any scene of the box (see
-    :func:`unstable_rest_enclosure`), by bisecting pieces of it."""
-    m, r, kappa, e, g = p.m, p.r, p.kappa, p.e, p.g
-    edges = np.linspace(0.0, a, 33)
-    lo, hi = edges[:-1], edges[1:]
-    examined = 0
-    while lo.size:
-        examined += lo.size
-        if examined > MAX_PIECES:
-            return False
-        piece = Interval(lo, hi)
-        slope = equations.dpotential(piece, m, r, kappa, e, g)
-        curvature = equations.d2potential(piece, m, r, kappa, e, g)
-        ok = (slope.lo > 0) | (slope.hi < 0) | (curvature.lo >= 0)
-        ok |= (lo == 0.0) & ((curvature.lo > 0) | (curvature.hi < 0))
-        half = 0.5 * (lo + hi)
-        lo, hi = np.concatenate([lo[~ok], half[~ok]]), np.concatenate([half[~ok], hi[~ok]])
-    return True
-
-
 # -- the branch and bound ---------------------------------------------------------------------
 def _middle(box: Box) -> dict[str, float]:
     return {n: 0.5 * lo + 0.5 * hi for n, (lo, hi) in box.items()}
@@ -425,6 +247,10 @@ def _check_ranges_cached(task_class: type[Task], max_torque: float,
     def fails(values: Mapping[str, float]) -> str | None:
         return problem(task, scene.replace(**values), dt)
 
+    def proves(narrower: Mapping[str, tuple[float, float]]) -> bool:
+        return _check_ranges_cached(task_class, max_torque, scene_items, dt,
+                                    tuple(sorted(narrower.items()))) is None
+
     if (type(task).scene_proven is Task.scene_proven
             and not task.scene_proven(None, (), dt)):  # (a condition with no proof of it)
         return (f"randomize={shown(ranges)} cannot be used with {task.name}: the task has its own "
@@ -436,7 +262,7 @@ def _check_ranges_cached(task_class: type[Task], max_torque: float,
         corner = dict(zip(names, ends, strict=True))
         reason = fails(corner)
         if reason is not None:
-            return _counterexample(ranges, corner, reason, fails)
+            return _counterexample(ranges, corner, reason, fails, proves)
     width = {n: hi - lo for n, (lo, hi) in ranges.items()}
     frontier: list[Box] = [dict(ranges)]  # the boxes of one depth, examined together
     proven: list[Box] = []
@@ -458,7 +284,7 @@ def _check_ranges_cached(task_class: type[Task], max_torque: float,
             middle = _middle(box)
             reason = None if next(posable) else fails(middle)
             if reason is not None:
-                return _counterexample(ranges, middle, reason, fails)
+                return _counterexample(ranges, middle, reason, fails, proves)
             shares = {n: _share(box[n], ranges[n]) for n in names if width[n] > 0}
             widest = max(shares, key=shares.get, default=None)
             if widest is not None and shares[widest] < FINE_SHARE:
@@ -484,9 +310,12 @@ def _check_ranges_cached(task_class: type[Task], max_torque: float,
 
 
 def _counterexample(ranges: Mapping[str, tuple[float, float]], point: Mapping[str, float],
-                    reason: str, fails: Callable[[Mapping[str, float]], str | None]) -> str:
+                    reason: str, fails: Callable[[Mapping[str, float]], str | None],
+                    proves: Callable[[Mapping[str, tuple[float, float]]], bool]) -> str:
     """The refusal at a point where the task cannot be posed: names the field (of several,
-    the one with the longest feasible part of its range through the point) and that part."""
+    the one with the longest feasible part of its range through the point) and that part,
+    and whether that part, with the other fields' ranges as given, is proven (``proves``):
+    the scan's edge is where the task stops being posable, which the proof may not reach."""
     best = None
     for name, (low, high) in ranges.items():
         def ok(v: float, n: str = name) -> bool:
@@ -499,19 +328,25 @@ def _counterexample(ranges: Mapping[str, tuple[float, float]], point: Mapping[st
     _, name, part = best
     others = {n: v for n, v in point.items() if n != name}
     where = f"{name} = {point[name]:.6g}" + (f" (other fields at {others})" if others else "")
-    feasible = "none" if part is None else _inward(*part)
+    feasible = "none"
+    if part is not None:
+        feasible, low, high = _inward(*part)
+        feasible += (
+            " (proven with the other ranges as given)" if proves({**ranges, name: (low, high)})
+            else " (a scan of it poses the task, but the proof, with the other ranges as "
+            "given, does not close on all of it: use a narrower part)")
     return (f"randomize[{shown(name)}]={shown(ranges[name])} cannot be used: at {where} {reason}; "
             f"feasible part of the range: {feasible}")
 
 
-def _inward(low: float, high: float, digits: int = 6) -> str:
+def _inward(low: float, high: float, digits: int = 6) -> tuple[str, float, float]:
     """[low, high] with its ends rounded inward to ``digits`` significant digits (more where
-    that would empty it)."""
+    that would empty it): as written, and its two ends."""
     for n in range(digits, 18):
         a, b = (_round_to(x, n, up) for x, up in ((low, True), (high, False)))
         if a <= b:
-            return f"[{a:.{n}g}, {b:.{n}g}]"
-    return f"[{shown(low)}, {shown(high)}]"
+            return f"[{a:.{n}g}, {b:.{n}g}]", a, b
+    return f"[{shown(low)}, {shown(high)}]", low, high
 
 
 def _round_to(x: float, digits: int, up: bool) -> float:
@@ -528,7 +363,7 @@ def _not_proven(ranges: Mapping[str, tuple[float, float]], proven: list[Box],
     that the range may be feasible, where the proof stalled, and what was proven (for one
     field, every proven run of it, on both sides of the stalls)."""
     def show(b: Mapping[str, tuple[float, float]]) -> str:
-        return ", ".join(f"{n} in {_inward(lo, hi)}" for n, (lo, hi) in b.items())
+        return ", ".join(f"{n} in {_inward(lo, hi)[0]}" for n, (lo, hi) in b.items())
 
     def runs(boxes: list[Box]) -> list[Box]:  # one field: touching boxes merged
         (name,) = ranges

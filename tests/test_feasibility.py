@@ -12,7 +12,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import roller_gym
-from roller_gym import Scene, feasibility, validation
+from roller_gym import Scene, feasibility, unstable_rest, validation
 from roller_gym.intervals import Interval
 from roller_gym.physics import equations
 from roller_gym.stabilize import StabilizeTask
@@ -456,7 +456,7 @@ def test_the_upper_end_of_the_potential_over_a_box_holds_every_scenes_target_ene
         p = feasibility.box_params(scene, box)
         middle = scene.replace(**{n: 0.5 * (a + b) for n, (a, b) in box.items()})
         with np.errstate(all="ignore"):
-            phi = feasibility.unstable_rest_enclosure(p, [middle])
+            phi = unstable_rest.unstable_rest_enclosure(p, [middle])
             upper = max(float(np.max(potential_enclosure(p, phi).hi)), 0.0)
         energies = []
         for _ in range(30):

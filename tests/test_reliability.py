@@ -68,6 +68,31 @@ def test_the_feasible_part_it_names_is_feasible_and_its_edge_is_the_boundary():
         vec.step(np.zeros((256, 1), np.float32))
 
 
+@pytest.mark.parametrize(("env_id", "ranges", "verdict"), [
+    (HOLD, {"mu": (0.2, 1.0)}, "proven"),
+    # the scan's edge (the scalar damping limit) lies past where the proof closes
+    (BALANCE, {"damping": (0.0, 0.05)}, "a scan"),
+    # m's part is scanned with e at the point where it failed; with e's range it is not proven
+    (HOLD, {"m": (0.2, 5.0), "e": (0.02, 0.09)}, "a scan")])
+def test_a_named_feasible_part_says_whether_it_is_proven_and_means_it(env_id, ranges,
+                                                                      verdict):
+    """A refused range names a feasible part of one field's range, found by a scan of
+    scenes; it says whether that part, with the other ranges as given, is proven, and the
+    narrower ranges are accepted exactly when it says so."""
+    with pytest.raises(ValueError) as info:
+        gym.make(env_id, randomize=ranges)
+    found = re.search(r"randomize\['(\w+)'\].*feasible part of the range: \[([^,]+), "
+                      r"([^\]]+)\] \((proven|a scan)", str(info.value))
+    name, low, high, said = found.groups()
+    assert said == verdict
+    narrower = {**ranges, name: (float(low), float(high))}
+    if said == "proven":
+        gym.make(env_id, randomize=narrower)
+    else:
+        with pytest.raises(ValueError, match="could not be proven"):
+            gym.make(env_id, randomize=narrower)
+
+
 def test_feasible_ranges_construct_and_start():
     vec = gym.make_vec(BALANCE, num_envs=64, randomize={"R": (0.9, 1.5), "m": (0.8, 1.2)})
     vec.reset(seed=1)
