@@ -162,9 +162,8 @@ def _starts_proven(task: Task, scene: Scene, boxes: Sequence[Box],
         weights = [(Interval(p.m.lo), Interval(p.g.lo)), (Interval(p.m.hi), Interval(p.g.hi))]
     ok = np.ones(np.shape(phi.lo), bool)
     for m, g in weights:
-        for normal, friction in task.start_contacts(phi, phi_dot, m, p.r, p.kappa, p.e, p.k,
-                                                    g, p.c):
-            ok &= (normal.lo > 0) & (abs(friction).hi <= (p.mu * normal).lo)
+        ok &= start_set.roll_status(task, phi, phi_dot, m, p.r, p.kappa, p.e, p.k, g, p.c,
+                                    p.mu)[1]
     # The cells between the grid's neighbouring candidates (after the first, the middle).
     cells = Interval(np.minimum(phi.lo[:, 1:-1], phi.lo[:, 2:]),
                      np.maximum(phi.hi[:, 1:-1], phi.hi[:, 2:]))

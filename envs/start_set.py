@@ -101,25 +101,26 @@ def cover(task: Any, scene: Scene) -> Starts:
     n = edges.size - 1
     far, fastest = np.full(n, -np.inf), np.zeros((2, n))  # of the boxes kept, by cell
 
-    def gains(a: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray,
-              cell: np.ndarray) -> np.ndarray:
-        """Which boxes would move their cell's far end or fastest speed in or out (φ >= 0:
-        in is φ' <= 0) on from what is kept."""
-        speed = np.maximum(abs(lo), abs(hi))
-        return ((b > far[cell]) | ((hi <= 0.0) & (speed > fastest[0, cell]))
-                | ((lo >= 0.0) & (speed > fastest[1, cell])))
+    def ways(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
+        """The boxes' fastest |φ'| and whether they move in, or out (φ >= 0: in is φ' <= 0;
+        a piece never straddles 0), each way a row of ``fastest``."""
+        return np.maximum(abs(lo), abs(hi)), (hi <= 0.0, lo >= 0.0)
 
     for depth in range(DEPTH + 1):
         may, sure = roll_status(task, Interval(*boxes[:2]), Interval(*boxes[2:4]),
                                 *scene.params, scene.mu)
         done = sure | (may & (depth == DEPTH))
-        a, b, lo, hi, cell = (x[done] for x in boxes)
-        speed = np.maximum(abs(lo), abs(hi))
+        _, b, lo, hi, cell = (x[done] for x in boxes)
+        speed, moving = ways(lo, hi)
         np.maximum.at(far, cell, b)
-        np.maximum.at(fastest[0], cell[hi <= 0.0], speed[hi <= 0.0])
-        np.maximum.at(fastest[1], cell[lo >= 0.0], speed[lo >= 0.0])
-        open_ = [x[may & ~done] for x in boxes]
-        a, b, lo, hi, cell = (x[gains(*open_)] for x in open_)
+        for row, way in enumerate(moving):
+            np.maximum.at(fastest[row], cell[way], speed[way])
+        a, b, lo, hi, cell = (x[may & ~done] for x in boxes)
+        speed, moving = ways(lo, hi)
+        gains = b > far[cell]  # the boxes that could move their cell's far end or a speed
+        for row, way in enumerate(moving):
+            gains |= way & (speed > fastest[row, cell])
+        a, b, lo, hi, cell = (x[gains] for x in (a, b, lo, hi, cell))
         mid, half = 0.5 * (a + b), 0.5 * (lo + hi)  # four halves of each undecided box
         boxes = [np.concatenate(x) for x in ((a, mid, a, mid), (mid, b, mid, b),
                                              (lo, lo, half, half), (half, half, hi, hi),
