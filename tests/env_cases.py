@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 import roller_gym
 from roller_gym import Scene
+from roller_gym.rest import reach
 
 # From the docstrings: steps per episode, default max_torque [N·m], observation size,
 # default preset.
@@ -130,3 +131,17 @@ def controller_wins(env, controller, seeds=range(4)) -> int:
             done = terminated or truncated
         wins += bool(info["is_success"])
     return wins
+
+
+def farthest_at_rest(task, scene: Scene, points: int = 4001) -> float:
+    """|φ| [rad] of the farthest start at rest the task's draw accepts in ``scene``, on a
+    grid of ``points`` over its start range: a start the simulations can take."""
+    u = np.linspace(0.5, 1.0, points)[None, :]
+    phi, _ = task.start_candidates(u, np.full_like(u, 0.5), scene)
+    return float(np.abs(phi[task.start_accepted(phi, np.zeros_like(phi), scene)]).max())
+
+
+def cell_width(task, scene: Scene) -> float:
+    """|φ| [rad] between neighbouring candidates of the task's start range: a cell of
+    roller_gym.start_set's covering."""
+    return float(reach(scene, task.start_angle)) / (task.start_points - 1)

@@ -6,9 +6,9 @@ import math
 import gymnasium as gym
 import numpy as np
 import pytest
+from env_cases import cell_width
 from roller_gym import Scene, descent
 from roller_gym.physics import PRESETS, equations
-from roller_gym.rest import reach
 from roller_gym.task import get_task
 from scipy.integrate import solve_ivp
 
@@ -72,7 +72,7 @@ def test_a_doomed_start_is_doomed_by_a_direct_search(scene, max_torque):
     # The draw takes a start in the named one's cell (the cells between the task's
     # candidates: their far ends are the starts the check counts).
     task = _stabilize(max_torque)
-    width = float(reach(scene, task.start_angle)) / (task.start_points - 1)
+    width = cell_width(task, scene)
     cell, speeds = np.meshgrid(np.linspace(start - width, start, 201), np.linspace(-1, 1, 41))
     assert task.start_accepted(cell.reshape(1, -1), speeds.reshape(1, -1), scene).any()
     braked = _braked_speed(scene, start, where, max_torque, speed)

@@ -11,6 +11,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import roller_gym
+from env_cases import farthest_at_rest
 from roller_gym import Scene
 from roller_gym.bounds import box_params, too_slow
 from roller_gym.intervals import Interval
@@ -36,14 +37,6 @@ def first_success(scene: Scene, phi: float, torque, seconds: float, dt: float = 
         if abs(phi) <= band and abs(w) <= speed:
             return t
     return None
-
-
-def farthest_at_rest(task, scene: Scene, points: int = 4001) -> float:
-    """|φ| [rad] of the farthest start at rest the task's draw accepts in ``scene``, on a
-    fine grid over its start range: a start the simulations can take."""
-    u = np.linspace(0.5, 1.0, points)[None, :]
-    phi, _ = task.start_candidates(u, np.full_like(u, 0.5), scene)
-    return float(phi[task.start_accepted(phi, np.zeros_like(phi), scene)].max())
 
 
 @pytest.mark.parametrize("kwargs", [{}, {"m": 5.0}, {"mu": 3.0}, {"m": 2.0, "mu": 2.0, "k": 0.2}],

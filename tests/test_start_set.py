@@ -5,8 +5,8 @@ in scenes where the accepted starts are patchy or, moving, lie past every start 
 import gymnasium as gym
 import numpy as np
 import pytest
+from env_cases import cell_width, farthest_at_rest
 from roller_gym import Scene, feasibility, start_set
-from roller_gym.rest import reach
 
 STABILIZE = "roller_gym/RollerStabilize-v2"
 #: A cylinder (R = 2 m) where, at these torques, the starts the draw accepts come in patches
@@ -21,22 +21,15 @@ def _draws(env, seeds=(0, 1)):
     return np.concatenate([np.abs(env.reset(seed=seed)[1]["phi"]) for seed in seeds])
 
 
-def _rest_candidates_far(task, scene):
-    """The farthest of the task's candidates at rest that roll: all that the checks on starts
-    counted before moving and in-between starts were."""
-    u = np.linspace(0.5, 1.0, task.start_points)[None, :]
-    phi, _ = task.start_candidates(u, np.full_like(u, 0.5), scene)
-    return float(np.abs(phi[task.start_accepted(phi, np.zeros_like(phi), scene)]).max())
-
-
 @pytest.mark.parametrize(("scene", "max_torque"), CASES)
 def test_every_drawn_start_lies_in_a_covered_cell(scene, max_torque):
     env = gym.make_vec(STABILIZE, num_envs=4096, scene=scene, max_torque=max_torque)
     task = env.unwrapped.task
     phi = _draws(env)
-    assert phi.max() > _rest_candidates_far(task, scene)  # what was missed before
+    # past the farthest candidate at rest: all that the checks on starts counted before
+    assert phi.max() > farthest_at_rest(task, scene, task.start_points)
     cover = start_set.covering(task, scene)
-    width = float(reach(scene, task.start_angle)) / (task.start_points - 1)  # a cell's
+    width = cell_width(task, scene)
     cell = np.searchsorted(cover.phi, phi)  # the nearest covered far end at or past each
     assert (cell < cover.phi.size).all()
     assert (cover.phi[cell] - phi <= width * (1 + 1e-9)).all()  # ... is its own cell's
