@@ -39,7 +39,7 @@ run: $(STAMP)  ## train the default agent (SAC, rl-zoo3) on the default task, ev
 	$(RG) evaluate --env roller_gym/RollerStabilize-v2 --runs runs --algos sac --out results
 
 TASKS := roller_gym/RollerStabilize-v2 roller_gym/RollerHold-v2 roller_gym/RollerBalance-v2 \
-	roller_gym/RollerTrack-v1 roller_gym/RollerSwing-v1 roller_gym/RollerHoldRandomized-v1 \
+	roller_gym/RollerTrack-v1 roller_gym/RollerSwing-v1 roller_gym/RollerHoldRandomized-v2 \
 	roller_gym/RollerBalanceWeak-v0
 SEEDS := 0 1 2 3 4
 ALGOS := sac td3 ppo

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import inspect
 import re
+import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import MISSING, dataclass, field, fields
 from typing import Any, TypeVar
@@ -85,7 +86,9 @@ class Settings:
         ":func:`roller_gym.bounds.least_times` (its energy taken out, the way rolled at the "
         "speeds its energy, its lift-off and the damping allow), and a fixed scene with a "
         "start from which no torque can stop the roller before a point where it must slip or "
-        "lift off (:func:`roller_gym.descent.doomed`); RollerStabilize also refuses "
+        "lift off (:func:`roller_gym.descent.doomed`), and warn where a start would be "
+        "doomed with half of max_torque to brake (:func:`roller_gym.descent.fixed_scene_problem`: "
+        "the check holds in continuous time only); RollerStabilize also refuses "
         "damping that might bring the roller to rest there with no torque within the "
         "episode."))
     tolerance: float = field(default=DEFAULT_TOLERANCE, metadata=_doc(
@@ -110,7 +113,9 @@ class Settings:
         "construction the task is proven posable in every scene of the box of ranges "
         "(:mod:`roller_gym.feasibility`), so no later reset can fail on a drawn scene; "
         "otherwise a ``ValueError`` names the field and a feasible part of its range, and "
-        "whether that part, with the other ranges as given, is proven. "
+        "whether that part, with the other ranges as given, is proven. The tasks that bring "
+        "the roller down also refuse a box with a start doomed to slip at a corner or its "
+        "middle (:func:`roller_gym.descent.range_problem`; not proven between them). "
         "RollerSwing takes none: its scenes are checked one by one (its target swings must "
         "roll and stay below the potential's barrier). "
         "Default: the task's own ranges (``Task.scene_ranges``: none but for the tasks "
@@ -241,9 +246,12 @@ class EnvConfig:
                 if not ranges:  # (a range's proof covers every scene drawn, and only those:
                     # the base values of the fields it draws are never stepped)
                     validation.check_integrable(one, dt, task.max_torque, task.start_speed)
-                    reason = descent.fixed_scene_problem(task, one, dt)
-                    if reason is not None:
-                        raise ValueError(reason)
+                    verdict = descent.fixed_scene_problem(task, one, dt)
+                    if verdict.refused is not None:
+                        raise ValueError(verdict.refused)
+                    if verdict.caution is not None:
+                        where = "" if scenes is None else f"scene[{i}]: "
+                        warnings.warn(where + verdict.caution, UserWarning, stacklevel=5)
             except ValueError as exc:
                 if scenes is None:
                     raise
@@ -323,5 +331,8 @@ def check_randomize(task: Task, scene: Scene, dt: float,
 
     if ranges:
         feasibility.check_ranges(task, scene, dt, ranges)
+        reason = descent.range_problem(task, scene, ranges)
+        if reason is not None:
+            raise ValueError(reason)
     return ranges
 

@@ -10,13 +10,17 @@ so whether some speed above that and some torque roll at φ is a linear program 
 variables (:func:`fastest_rolling`). A start where one has none is doomed: every episode
 from it ends in a slip or a lift-off, whatever the policy. :func:`doomed` finds the nearest
 such start of those a task's draw may accept in a scalar scene (:mod:`roller_gym.start_set`),
-and :func:`fixed_scene_problem` refuses a fixed scene with one. Over ``randomize`` ranges it
-is not yet proven (``docs/MAINTAINERS.md``).
+and :func:`fixed_scene_problem` refuses a fixed scene with one (and cautions where one is
+near). Over ``randomize`` ranges, :func:`range_problem` refuses a box with a doomed start at
+a corner or its middle; between them nothing is proven (``docs/MAINTAINERS.md``).
 """
 
 from __future__ import annotations
 
+import functools
+import itertools
 import math
+from collections.abc import Mapping
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -25,11 +29,21 @@ from roller_gym.physics import Scene, equations
 from roller_gym.physics.scene import shown
 from roller_gym.rest import reach
 
-__all__ = ["Doom", "doomed", "fastest_rolling", "fixed_scene_problem", "slips_on_descent"]
+__all__ = ["CORNERS", "MARGIN", "Doom", "Verdict", "doomed", "fastest_rolling",
+           "fixed_scene_problem", "range_problem"]
 
 #: Points of the scalar check's grid of |φ| from the bottom to the farthest start (and as
 #: many on from there to ψ = π).
 GRID_POINTS = 2001
+#: The share of max_torque :func:`fixed_scene_problem`'s caution lets brake: a scene whose
+#: starts would be doomed with only this share is near the rule's threshold. Independent
+#: beam searches over torque sequences at dt = 0.05 s found scenes the rule accepts with no
+#: way down from a start at up to 1.9 times the torque the rule needs
+#: (``docs/MAINTAINERS.md``).
+MARGIN = 0.5
+#: The most corners of a ``randomize`` box :func:`range_problem` checks, besides its middle:
+#: every corner up to four fields, else this many, picked with a fixed seed.
+CORNERS = 16
 #: x = φ'² [rad²/s²] taken as unbounded.
 _X_CAP = 1e30
 
@@ -98,15 +112,17 @@ class Doom(NamedTuple):
     least: float
 
 
-def doomed(task: Any, scene: Scene) -> Doom | None:
+def doomed(task: Any, scene: Scene, braking: float | None = None) -> Doom | None:
     """The nearest start the draw may accept in the scalar ``scene`` (the far end of a cell
     of :func:`roller_gym.start_set.covering`, at rest or at its fastest speed in or out) from
     which the roller must slip or lift off whatever the torque (a :class:`Doom`), or None.
+    ``braking`` [N·m], default max_torque: the most torque that may slow the roller (what
+    rolls is still judged with the whole ±max_torque).
 
     Two ways: on its way in to the success band, through each stretch where dV/d|φ| >
-    max_torque (it cannot stop there) from the stretch's top (at rest, or the start's speed
+    ``braking`` (it cannot stop there) from the stretch's top (at rest, or the start's speed
     where the stretch begins at the start); and, where gravity
-    pushes the start away harder than the torque holds (dV/d|φ| < −max_torque), on its way
+    pushes the start away harder than the torque holds (dV/d|φ| < −``braking``), on its way
     out, as long as its least kinetic energy stays positive (it cannot stop, so cannot turn
     back). Checked on a grid of :data:`GRID_POINTS` |φ| out to the starts and as many on
     to ψ = π."""
@@ -116,6 +132,7 @@ def doomed(task: Any, scene: Scene) -> Doom | None:
     if not starts.size:
         return None
     torque, band = task.max_torque, task.success_band
+    brake = torque if braking is None else braking
     m, r, kappa, e, k, g, c = scene.params
     far = float(starts[-1])
     phi = np.unique(np.concatenate([np.linspace(0.0, far, GRID_POINTS), starts, np.linspace(
@@ -135,7 +152,7 @@ def doomed(task: Any, scene: Scene) -> Doom | None:
               for ends in ((-torque, _X_CAP), (-_X_CAP, torque))]
     most_in = fastest_rolling(*rows, -torque, torque + c * widest[0])
     most_out = fastest_rolling(*rows, -torque - c * widest[1], torque)
-    forced = slope > torque
+    forced = slope > brake
     stops = np.where(~forced, np.arange(phi.size), phi.size)
     stop_above = np.minimum.accumulate(stops[::-1])[::-1]  # the next point that may stop
 
@@ -154,17 +171,17 @@ def doomed(task: Any, scene: Scene) -> Doom | None:
         kinetic = np.where(a == s, 0.5 * inertia[s] * w_in**2, 0.0)
         work = spent(a[:-1], i[:-1], kinetic[:-1])
         below = np.concatenate([np.cumsum(work[::-1])[::-1], [0.0]])  # Σ over cells >= i
-        least = 2.0 * (V[a] + kinetic - V[i] - torque * (phi[a] - phi[i])
+        least = 2.0 * (V[a] + kinetic - V[i] - brake * (phi[a] - phi[i])
                        - (below - below[a])) / inertia[i]
         dead = forced[i] & (phi[i] > band) & (least > most_in[i])
         if dead.any():
             j = int(np.flatnonzero(dead)[-1])  # the first met on the way in
             return Doom(float(phi[s]), float(w_in), float(phi[j]),
                         math.sqrt(max(least[j], 0.0)))
-        if slope[s] < -torque:  # pushed out
+        if slope[s] < -brake:  # pushed out
             j = np.arange(s + 1, phi.size)
             kinetic = 0.5 * inertia[s] * w_out**2  # moving out at up to w_out
-            energy = (V[s] + kinetic - V[j] - torque * (phi[j] - phi[s])
+            energy = (V[s] + kinetic - V[j] - brake * (phi[j] - phi[s])
                       - np.cumsum(spent(np.full(j.size, s), j - 1, np.full(j.size, kinetic))))
             least = 2.0 * energy / inertia[j]
             dead = np.cumprod(energy > 0.0).astype(bool) & (least > most_out[j])
@@ -175,12 +192,16 @@ def doomed(task: Any, scene: Scene) -> Doom | None:
     return None
 
 
-def slips_on_descent(task: Any, scene: Scene) -> str | None:
-    """Why ``task`` cannot be posed in the scalar ``scene`` for a doomed start
-    (:func:`doomed`), or None."""
-    found = doomed(task, scene)
-    if found is None:
-        return None
+class Verdict(NamedTuple):
+    """A fixed scene's verdict (:func:`fixed_scene_problem`): why the task cannot be posed
+    there (``refused``, for a ValueError), or why it may still hold starts no policy brings
+    down (``caution``, for a warning); None each where there is none."""
+
+    refused: str | None
+    caution: str | None
+
+
+def _refusal(task: Any, scene: Scene, found: Doom) -> str:
     start, _, where, speed = found
     return (f"{task.name} cannot be solved from every start of {shown(scene)} with "
             f"max_torque={task.max_torque:g} N·m: from a start the draw may take at |phi| up "
@@ -190,11 +211,62 @@ def slips_on_descent(task: Any, scene: Scene) -> str | None:
             "max_torque or mu, or a smaller e")
 
 
-def fixed_scene_problem(task: Any, scene: Scene, dt: float) -> str | None:
+def _caution(task: Any, scene: Scene, found: Doom) -> str:
+    start, _, where, speed = found
+    return (f"{task.name} in {shown(scene)} with max_torque={task.max_torque:g} N·m is "
+            f"accepted, but near the least torque the descent check proves necessary: with "
+            f"{MARGIN:.0%} of it to brake, a start the draw may take at |phi| up to "
+            f"{start:.4g} rad would pass |phi| = {where:.4g} rad at {speed:.3g} rad/s or "
+            "more, where no torque rolls. The check holds in continuous time only, so some "
+            "starts may still end in a slip or a lift-off whatever the policy; a larger "
+            "max_torque or mu, or a smaller e or dt, gives a margin")
+
+
+def fixed_scene_problem(task: Any, scene: Scene, dt: float) -> Verdict:
     """:meth:`Task.infeasible` in a scene no ``randomize`` range draws (the construction's
     scenes, ``reset(options={"scene": ...})``), and there, for a task that
-    :attr:`~roller_gym.task.Task.descends`, :func:`slips_on_descent`."""
+    :attr:`~roller_gym.task.Task.descends`, a start :func:`doomed` (refused) or doomed with
+    only :data:`MARGIN` of max_torque to brake (a caution: the rule is a necessary
+    condition in continuous time, blind to dt and to friction leaving only part of the
+    torque at speed)."""
     reason = task.infeasible(scene, dt)
-    if reason is None and task.descends:
-        reason = slips_on_descent(task, scene)
-    return reason
+    if reason is not None or not task.descends:
+        return Verdict(reason, None)
+    found = doomed(task, scene)
+    if found is not None:
+        return Verdict(_refusal(task, scene, found), None)
+    near = doomed(task, scene, MARGIN * task.max_torque)
+    return Verdict(None, None if near is None else _caution(task, scene, near))
+
+
+def range_problem(task: Any, scene: Scene, ranges: Mapping[str, tuple[float, float]]) -> str | None:
+    """Why ``task`` cannot be posed over the ``randomize`` box ``ranges`` around ``scene``
+    (the other fields): a corner of the box (of :data:`CORNERS`) or its middle holding a
+    start :func:`doomed` to slip, or None (also for a task that does not
+    :attr:`~roller_gym.task.Task.descends`). A refusal is sound: the draw takes scenes next
+    to that point, where the start stays doomed (the conditions are strict). A pass proves
+    nothing between the points checked."""
+    if not task.descends or not ranges:
+        return None
+    return _range_problem(type(task), task.max_torque, tuple(scene.as_dict().items()),
+                          tuple(sorted(ranges.items())))
+
+
+@functools.lru_cache(maxsize=64)
+def _range_problem(task_class: type, max_torque: float, scene_items: tuple,
+                   range_items: tuple) -> str | None:
+    task, scene, ranges = task_class(max_torque), Scene(**dict(scene_items)), dict(range_items)
+    corners = list(itertools.product(*ranges.values()))
+    if len(corners) > CORNERS:
+        pick = np.random.default_rng(0).choice(len(corners), CORNERS, replace=False)
+        corners = [corners[i] for i in sorted(pick)]
+    middle = tuple(0.5 * (low + high) for low, high in ranges.values())
+    for values in (middle, *corners):
+        point = dict(zip(ranges, map(float, values), strict=True))
+        found = doomed(task, scene.replace(**point))
+        if found is not None:
+            where = ", ".join(f"{name}={value:.6g}" for name, value in point.items())
+            return (f"randomize={shown(ranges)} draws scenes next to {where}, where "
+                    f"{_refusal(task, scene.replace(**point), found)}, or narrow the ranges "
+                    "away from that point")
+    return None

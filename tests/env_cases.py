@@ -32,7 +32,7 @@ DOCUMENTED = {
     "roller_gym/RollerSwing-v1": {"steps": 400, "max_torque": 0.1, "obs": 9, "scene": "paper",
                                   "energy_band": 0.1, "energy_margin": 0.4, "reach_margin": 2.0,
                                   "reach_weight": 0.2},
-    "roller_gym/RollerHoldRandomized-v1": {"steps": 200, "max_torque": 1.0, "obs": 9,
+    "roller_gym/RollerHoldRandomized-v2": {"steps": 200, "max_torque": 1.0, "obs": 9,
                                            "scene": "paper", "band": 0.05, "margin": 2.0},
     "roller_gym/RollerBalanceWeak-v0": {"steps": 400, "max_torque": 0.1, "obs": 5,
                                         "scene": "balance", "band": 0.1, "margin": 3.0},

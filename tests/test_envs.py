@@ -357,7 +357,10 @@ def test_randomize_draws_scenes_within_the_ranges(env_id):
 CHECKED_KWARGS = [
     {}, {"scene": "floor"}, {"scene": "drum"}, {"render_mode": "rgb_array"},
     {"randomize": {"m": (0.8, 1.2), "k": (0.08, 0.12)}},
-    *({"integrator": name} for name in ("rk8", "rk4", "midpoint", "dop853")),
+    *({"integrator": name} for name in ("rk8", "rk4", "midpoint")),
+    # scipy's error control is relative to its own norm: at the default tolerance a step from
+    # a far start (|φ| of several rad) may miss it absolutely, and says so (with a warning)
+    {"integrator": "dop853", "tolerance": 1e-6},
     # first-order: at the default tolerance a step can need more than MAX_SUBSTEPS
     # substeps, and then says so (tol_met False, with a warning)
     {"integrator": "euler", "tolerance": 1e-4},

@@ -14,7 +14,7 @@ from roller_gym.agents.classical import Informed
 from roller_gym.agents.hyperparams import CLASSICAL
 from roller_gym.agents.policies import TrainedPolicy, baselines_for
 
-ID = "roller_gym/RollerHoldRandomized-v1"
+ID = "roller_gym/RollerHoldRandomized-v2"
 HOLD = "roller_gym/RollerHold-v2"
 
 

@@ -205,7 +205,7 @@ def test_each_tier_is_aggregated_over_its_own_tasks_and_says_which_algorithms_di
     """A base task and a hard one: two aggregates, each over its own task. On the hard one SAC
     beats TD3 on every seed (P = 1, an interval that excludes one half) and ties PPO seed for
     seed (P = one half): the page says the first pair differs and the second does not."""
-    hard = "roller_gym/RollerHoldRandomized-v1"
+    hard = "roller_gym/RollerHoldRandomized-v2"
     base_runs = [_run(a, s, 195.0 + s, 1.0) for a in ("sac", "td3", "ppo") for s in range(5)]
     hard_runs = ([_run("sac", s, 150.0 + s, 0.8) for s in range(5)]
                  + [_run("td3", s, 100.0 + s, 0.3) for s in range(5)]

@@ -345,7 +345,7 @@ def test_set_options_judges_the_values_on_the_next_resets_own_scene():
     another's: set_options judges it on the episode the next reset draws, with the seed set
     before it, so that what it accepts the reset takes and what it refuses the reset would
     have refused (checked by setting the options past the check)."""
-    env = RollerVecEnv("roller_gym/RollerHoldRandomized-v1", n_envs=1, seed=0)
+    env = RollerVecEnv("roller_gym/RollerHoldRandomized-v2", n_envs=1, seed=0)
     env.reset()
     verdicts = []
     for seed in range(12):

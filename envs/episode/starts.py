@@ -9,6 +9,7 @@ number of Python operations whatever the batch's size.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from typing import Any
@@ -222,9 +223,11 @@ def start_episodes(
     task = config.task
     if options.get("scene") is not None:
         scene = config.resolve_option_scene(options["scene"])
-        reason = descent.fixed_scene_problem(task, scene, config.dt)
-        if reason is not None:
-            raise ValueError(f"options['scene']: {reason}")
+        verdict = descent.fixed_scene_problem(task, scene, config.dt)
+        if verdict.refused is not None:
+            raise ValueError(f"options['scene']: {verdict.refused}")
+        if verdict.caution is not None:
+            warnings.warn(f"options['scene']: {verdict.caution}", UserWarning, stacklevel=4)
         validation.check_integrable(scene, config.dt, task.max_torque, task.start_speed)
     elif config.randomize:
         fields_ = scene_rows(base, n)
