@@ -201,25 +201,27 @@ class Verdict(NamedTuple):
     caution: str | None
 
 
-def _refusal(task: Any, scene: Scene, found: Doom) -> str:
+def _way(found: Doom) -> str:
+    """Where the doomed start of ``found`` goes."""
     start, _, where, speed = found
+    return (f"from a start the draw may take at |phi| up to {start:.4g} rad the roller "
+            f"passes |phi| = {where:.4g} rad at {speed:.3g} rad/s or more, where no torque "
+            "rolls")
+
+
+def _refusal(task: Any, scene: Scene, found: Doom) -> str:
     return (f"{task.name} cannot be solved from every start of {shown(scene)} with "
-            f"max_torque={task.max_torque:g} N·m: from a start the draw may take at |phi| up "
-            f"to {start:.4g} rad no torque can stop the roller before |phi| = {where:.4g} rad "
-            f"(gravity outweighs max_torque on the way), where it passes at {speed:.3g} "
-            "rad/s or more and slips or lifts off under every torque; use a larger "
-            "max_torque or mu, or a smaller e")
+            f"max_torque={task.max_torque:g} N·m: {_way(found)} (gravity outweighs "
+            "max_torque on the way, so no torque can stop it before), and slips or lifts "
+            "off; use a larger max_torque or mu, or a smaller e")
 
 
 def _caution(task: Any, scene: Scene, found: Doom) -> str:
-    start, _, where, speed = found
     return (f"{task.name} in {shown(scene)} with max_torque={task.max_torque:g} N·m is "
             f"accepted, but near the least torque the descent check proves necessary: with "
-            f"{MARGIN:.0%} of it to brake, a start the draw may take at |phi| up to "
-            f"{start:.4g} rad would pass |phi| = {where:.4g} rad at {speed:.3g} rad/s or "
-            "more, where no torque rolls. The check holds in continuous time only, so some "
-            "starts may still end in a slip or a lift-off whatever the policy; a larger "
-            "max_torque or mu, or a smaller e or dt, gives a margin")
+            f"{MARGIN:.0%} of it to brake, {_way(found)}. The check holds in continuous "
+            "time only, so some starts may still end in a slip or a lift-off whatever the "
+            "policy; a larger max_torque or mu, or a smaller e or dt, gives a margin")
 
 
 def fixed_scene_problem(task: Any, scene: Scene, dt: float) -> Verdict:
