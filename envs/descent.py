@@ -112,6 +112,72 @@ class Doom(NamedTuple):
     least: float
 
 
+class _Grid(NamedTuple):
+    """What :func:`doomed` reads of a task in a scene, whatever may brake: on a grid of |φ|
+    [rad], V [J], dV/d|φ| [N·m], J_I [kg·m²], J_I's least on each cell, the cells' widths,
+    V's least on each cell, the largest φ'² [rad²/s²] at which some torque rolls moving in
+    and out; the starts (:func:`roller_gym.start_set.covering`, past the success band) and
+    their fastest speeds in and out [rad/s]."""
+
+    phi: np.ndarray
+    V: np.ndarray
+    slope: np.ndarray
+    inertia: np.ndarray
+    cell_j: np.ndarray
+    width: np.ndarray
+    cell_v: np.ndarray
+    most_in: np.ndarray
+    most_out: np.ndarray
+    starts: np.ndarray
+    speed_in: np.ndarray
+    speed_out: np.ndarray
+
+
+#: :func:`_grid`'s answers by task type, torques and scene numbers (a fixed scene's refusal
+#: and caution ask for the same); the last CACHED kept.
+_GRIDS: dict[tuple, _Grid | None] = {}
+
+
+def _grid(task: Any, scene: Scene) -> _Grid | None:
+    """The :class:`_Grid` of ``task`` in the scalar ``scene``; None where no start lies past
+    the success band."""
+    key = (type(task), task.max_torque, tuple(task.start_torques), task.success_band,
+           *map(float, (*scene.params, scene.mu)))
+    if key in _GRIDS:
+        return _GRIDS[key]
+    if len(_GRIDS) >= start_set.CACHED:
+        _GRIDS.clear()
+    cover = start_set.covering(task, scene)
+    keep = cover.phi > task.success_band
+    starts = cover.phi[keep]
+    if not starts.size:
+        _GRIDS[key] = None
+        return None
+    torque = task.max_torque
+    m, r, kappa, e, k, g, c = scene.params
+    far = float(starts[-1])
+    phi = np.unique(np.concatenate([np.linspace(0.0, far, GRID_POINTS), starts, np.linspace(
+        far, float(max(reach(scene, math.pi), far)), GRID_POINTS)]))
+    V = equations.potential(phi, m, r, kappa, e, g)
+    slope = equations.dpotential(phi, m, r, kappa, e, g)
+    inertia = equations.inertia(phi, m, r, kappa, e, k)
+    width = np.diff(phi)
+    # V on a cell is at least its smaller end less what its slope takes over half of it.
+    cell_v = np.minimum(V[:-1], V[1:]) - 0.5 * width * np.maximum(abs(slope[:-1]),
+                                                                  abs(slope[1:]))
+    rows = _rows(phi, m, r, kappa, e, k, g, scene.mu)
+    # u = τ − cφ' lies in [−T, T + c|φ'|] moving in and [−T − c|φ'|, T] moving out, with
+    # |φ'| at most the fastest at which anything rolls with u unbounded that way.
+    widest = [np.sqrt(np.maximum(fastest_rolling(*rows, *ends), 0.0))
+              for ends in ((-torque, _X_CAP), (-_X_CAP, torque))]
+    _GRIDS[key] = _Grid(phi, V, slope, inertia,
+                        _cell_inertia(phi, m, r, kappa, e, k, inertia), width, cell_v,
+                        fastest_rolling(*rows, -torque, torque + c * widest[0]),
+                        fastest_rolling(*rows, -torque - c * widest[1], torque),
+                        starts, cover.speed_in[keep], cover.speed_out[keep])
+    return _GRIDS[key]
+
+
 def doomed(task: Any, scene: Scene, braking: float | None = None) -> Doom | None:
     """The nearest start the draw may accept in the scalar ``scene`` (the far end of a cell
     of :func:`roller_gym.start_set.covering`, at rest or at its fastest speed in or out) from
@@ -126,32 +192,14 @@ def doomed(task: Any, scene: Scene, braking: float | None = None) -> Doom | None
     out, as long as its least kinetic energy stays positive (it cannot stop, so cannot turn
     back). Checked on a grid of :data:`GRID_POINTS` |φ| out to the starts and as many on
     to ψ = π."""
-    cover = start_set.covering(task, scene)
-    keep = cover.phi > task.success_band
-    starts, speed_in, speed_out = cover.phi[keep], cover.speed_in[keep], cover.speed_out[keep]
-    if not starts.size:
+    grid = _grid(task, scene)
+    if grid is None:
         return None
+    (phi, V, slope, inertia, cell_j, width, cell_v, most_in, most_out, starts, speed_in,
+     speed_out) = grid
     torque, band = task.max_torque, task.success_band
     brake = torque if braking is None else braking
-    m, r, kappa, e, k, g, c = scene.params
-    far = float(starts[-1])
-    phi = np.unique(np.concatenate([np.linspace(0.0, far, GRID_POINTS), starts, np.linspace(
-        far, float(max(reach(scene, math.pi), far)), GRID_POINTS)]))
-    V = equations.potential(phi, m, r, kappa, e, g)
-    slope = equations.dpotential(phi, m, r, kappa, e, g)
-    inertia = equations.inertia(phi, m, r, kappa, e, k)
-    cell_j = _cell_inertia(phi, m, r, kappa, e, k, inertia)
-    width = np.diff(phi)
-    # V on a cell is at least its smaller end less what its slope takes over half of it.
-    cell_v = np.minimum(V[:-1], V[1:]) - 0.5 * width * np.maximum(abs(slope[:-1]),
-                                                                  abs(slope[1:]))
-    rows = _rows(phi, m, r, kappa, e, k, g, scene.mu)
-    # u = τ − cφ' lies in [−T, T + c|φ'|] moving in and [−T − c|φ'|, T] moving out, with
-    # |φ'| at most the fastest at which anything rolls with u unbounded that way.
-    widest = [np.sqrt(np.maximum(fastest_rolling(*rows, *ends), 0.0))
-              for ends in ((-torque, _X_CAP), (-_X_CAP, torque))]
-    most_in = fastest_rolling(*rows, -torque, torque + c * widest[0])
-    most_out = fastest_rolling(*rows, -torque - c * widest[1], torque)
+    c = scene.damping
     forced = slope > brake
     stops = np.where(~forced, np.arange(phi.size), phi.size)
     stop_above = np.minimum.accumulate(stops[::-1])[::-1]  # the next point that may stop
