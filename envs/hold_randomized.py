@@ -68,7 +68,7 @@ rolls.
 
 ## Arguments
 
-``gymnasium.make("roller_gym/RollerHoldRandomized-v1", scene=..., dt=..., max_torque=...,
+``gymnasium.make("roller_gym/RollerHoldRandomized-v2", scene=..., dt=..., max_torque=...,
 tolerance=..., integrator=..., substeps=..., randomize=..., render_mode=...)``: see
 :class:`roller_gym.roller_env.RollerEnv`; ``randomize`` replaces the ranges above
 (``{}`` fixes the scene: RollerHold).
