@@ -43,6 +43,9 @@ def test_docstring_table_is_the_declared_observation(task):
     assert docstring_table(module) == list(enumerate(task.observation))
     assert f"``Box(-1, 1, ({len(task.observation)},), float32)``" in module.__doc__
     assert f"roller_gym/{task.name}-v{task.version}" in module.__doc__.splitlines()[0]
+    # every ID of the task the text names, but in its version history, is the current one
+    text = module.__doc__.split("## Version History")[0]
+    assert set(re.findall(rf"roller_gym/{task.name}-v\d+", text)) == {task.env_id()}
 
 
 @pytest.mark.parametrize("task", TASK_CLASSES, ids=lambda t: t.name)
