@@ -29,18 +29,17 @@ from roller_gym.physics import Scene, equations
 from roller_gym.physics.scene import shown
 from roller_gym.rest import reach
 
-__all__ = ["CORNERS", "MARGIN", "Doom", "Verdict", "doomed", "fastest_rolling",
+__all__ = ["CORNERS", "NEAR", "Doom", "Verdict", "doomed", "fastest_rolling",
            "fixed_scene_problem", "range_problem"]
 
 #: Points of the scalar check's grid of |φ| from the bottom to the farthest start (and as
 #: many on from there to ψ = π).
 GRID_POINTS = 2001
-#: The share of max_torque :func:`fixed_scene_problem`'s caution lets brake: a scene whose
-#: starts would be doomed with only this share is near the rule's threshold. Independent
-#: beam searches over torque sequences at dt = 0.05 s found scenes the rule accepts with no
-#: way down from a start at up to 1.9 times the torque the rule needs
-#: (``docs/MAINTAINERS.md``).
-MARGIN = 0.5
+#: A fixed scene the rule would refuse with max_torque divided by NEAR is accepted with a
+#: caution (:func:`fixed_scene_problem`). Independent beam searches over torque sequences at
+#: dt = 0.05 s found scenes the rule accepts with a start they could not bring down at up
+#: to 2.46 times the least torque the rule accepts (``docs/MAINTAINERS.md``).
+NEAR = 2.5
 #: The most corners of a ``randomize`` box :func:`range_problem` checks, besides its middle:
 #: every corner up to four fields, else this many, picked with a fixed seed.
 CORNERS = 16
@@ -113,7 +112,7 @@ class Doom(NamedTuple):
 
 
 class _Grid(NamedTuple):
-    """What :func:`doomed` reads of a task in a scene, whatever may brake: on a grid of |φ|
+    """What :func:`doomed` reads of a task in a scene: on a grid of |φ|
     [rad], V [J], dV/d|φ| [N·m], J_I [kg·m²], J_I's least on each cell, the cells' widths,
     V's least on each cell, the largest φ'² [rad²/s²] at which some torque rolls moving in
     and out; the starts (:func:`roller_gym.start_set.covering`, past the success band) and
@@ -178,17 +177,15 @@ def _grid(task: Any, scene: Scene) -> _Grid | None:
     return _GRIDS[key]
 
 
-def doomed(task: Any, scene: Scene, braking: float | None = None) -> Doom | None:
+def doomed(task: Any, scene: Scene) -> Doom | None:
     """The nearest start the draw may accept in the scalar ``scene`` (the far end of a cell
     of :func:`roller_gym.start_set.covering`, at rest or at its fastest speed in or out) from
     which the roller must slip or lift off whatever the torque (a :class:`Doom`), or None.
-    ``braking`` [N·m], default max_torque: the most torque that may slow the roller (what
-    rolls is still judged with the whole ±max_torque).
 
     Two ways: on its way in to the success band, through each stretch where dV/d|φ| >
-    ``braking`` (it cannot stop there) from the stretch's top (at rest, or the start's speed
+    max_torque (it cannot stop there) from the stretch's top (at rest, or the start's speed
     where the stretch begins at the start); and, where gravity
-    pushes the start away harder than the torque holds (dV/d|φ| < −``braking``), on its way
+    pushes the start away harder than the torque holds (dV/d|φ| < −max_torque), on its way
     out, as long as its least kinetic energy stays positive (it cannot stop, so cannot turn
     back). Checked on a grid of :data:`GRID_POINTS` |φ| out to the starts and as many on
     to ψ = π."""
@@ -198,9 +195,8 @@ def doomed(task: Any, scene: Scene, braking: float | None = None) -> Doom | None
     (phi, V, slope, inertia, cell_j, width, cell_v, most_in, most_out, starts, speed_in,
      speed_out) = grid
     torque, band = task.max_torque, task.success_band
-    brake = torque if braking is None else braking
     c = scene.damping
-    forced = slope > brake
+    forced = slope > torque
     stops = np.where(~forced, np.arange(phi.size), phi.size)
     stop_above = np.minimum.accumulate(stops[::-1])[::-1]  # the next point that may stop
 
@@ -219,17 +215,17 @@ def doomed(task: Any, scene: Scene, braking: float | None = None) -> Doom | None
         kinetic = np.where(a == s, 0.5 * inertia[s] * w_in**2, 0.0)
         work = spent(a[:-1], i[:-1], kinetic[:-1])
         below = np.concatenate([np.cumsum(work[::-1])[::-1], [0.0]])  # Σ over cells >= i
-        least = 2.0 * (V[a] + kinetic - V[i] - brake * (phi[a] - phi[i])
+        least = 2.0 * (V[a] + kinetic - V[i] - torque * (phi[a] - phi[i])
                        - (below - below[a])) / inertia[i]
         dead = forced[i] & (phi[i] > band) & (least > most_in[i])
         if dead.any():
             j = int(np.flatnonzero(dead)[-1])  # the first met on the way in
             return Doom(float(phi[s]), float(w_in), float(phi[j]),
                         math.sqrt(max(least[j], 0.0)))
-        if slope[s] < -brake:  # pushed out
+        if slope[s] < -torque:  # pushed out
             j = np.arange(s + 1, phi.size)
             kinetic = 0.5 * inertia[s] * w_out**2  # moving out at up to w_out
-            energy = (V[s] + kinetic - V[j] - brake * (phi[j] - phi[s])
+            energy = (V[s] + kinetic - V[j] - torque * (phi[j] - phi[s])
                       - np.cumsum(spent(np.full(j.size, s), j - 1, np.full(j.size, kinetic))))
             least = 2.0 * energy / inertia[j]
             dead = np.cumprod(energy > 0.0).astype(bool) & (least > most_out[j])
@@ -265,27 +261,28 @@ def _refusal(task: Any, scene: Scene, found: Doom) -> str:
 
 
 def _caution(task: Any, scene: Scene, found: Doom) -> str:
+    weaker = task.max_torque / NEAR
     return (f"{task.name} in {shown(scene)} with max_torque={task.max_torque:g} N·m is "
-            f"accepted, but near the least torque the descent check proves necessary: with "
-            f"{MARGIN:.0%} of it to brake, {_way(found)}. The check holds in continuous "
-            "time only, so some starts may still end in a slip or a lift-off whatever the "
-            "policy; a larger max_torque or mu, or a smaller e or dt, gives a margin")
+            f"accepted, but within {NEAR:g} times the least torque the descent check proves "
+            f"necessary: at max_torque={weaker:.3g} N·m, {_way(found)}. The check is a "
+            "necessary condition, in continuous time, so near it some starts may still end "
+            "in a slip or a lift-off whatever the policy; a larger max_torque or mu, or a "
+            "smaller e or dt, gives a margin")
 
 
 def fixed_scene_problem(task: Any, scene: Scene, dt: float) -> Verdict:
     """:meth:`Task.infeasible` in a scene no ``randomize`` range draws (the construction's
     scenes, ``reset(options={"scene": ...})``), and there, for a task that
-    :attr:`~roller_gym.task.Task.descends`, a start :func:`doomed` (refused) or doomed with
-    only :data:`MARGIN` of max_torque to brake (a caution: the rule is a necessary
-    condition in continuous time, blind to dt and to friction leaving only part of the
-    torque at speed)."""
+    :attr:`~roller_gym.task.Task.descends`, a start :func:`doomed` (refused), or doomed at
+    max_torque / :data:`NEAR` (a caution: the rule is a necessary condition in continuous
+    time, blind to dt and to friction leaving only part of the torque at speed)."""
     reason = task.infeasible(scene, dt)
     if reason is not None or not task.descends:
         return Verdict(reason, None)
     found = doomed(task, scene)
     if found is not None:
         return Verdict(_refusal(task, scene, found), None)
-    near = doomed(task, scene, MARGIN * task.max_torque)
+    near = doomed(type(task)(task.max_torque / NEAR), scene)
     return Verdict(None, None if near is None else _caution(task, scene, near))
 
 
