@@ -12,7 +12,8 @@ from it ends in a slip or a lift-off, whatever the policy. :func:`doomed` finds 
 such start of those a task's draw may accept in a scalar scene (:mod:`roller_gym.start_set`),
 and :func:`fixed_scene_problem` refuses a fixed scene with one (and cautions where one is
 near). Over ``randomize`` ranges, :func:`range_problem` refuses a box with a doomed start at
-a corner or its middle; between them nothing is proven (``docs/MAINTAINERS.md``).
+its middle, a corner or a scene drawn from it; between them nothing is proven
+(``docs/MAINTAINERS.md``).
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ from roller_gym.physics import Scene, equations
 from roller_gym.physics.scene import shown
 from roller_gym.rest import reach
 
-__all__ = ["CORNERS", "NEAR", "Doom", "Verdict", "doomed", "fastest_rolling",
+__all__ = ["CORNERS", "DRAWS_PER_FIELD", "NEAR", "Doom", "Verdict", "doomed", "fastest_rolling",
            "fixed_scene_problem", "range_problem"]
 
 #: Points of the scalar check's grid of |φ| from the bottom to the farthest start (and as
@@ -40,9 +41,12 @@ GRID_POINTS = 2001
 #: dt = 0.05 s found scenes the rule accepts with a start they could not bring down at up
 #: to 2.46 times the least torque the rule accepts (``docs/MAINTAINERS.md``).
 NEAR = 2.5
-#: The most corners of a ``randomize`` box :func:`range_problem` checks, besides its middle:
-#: every corner up to four fields, else this many, picked with a fixed seed.
-CORNERS = 16
+#: The most corners of a ``randomize`` box :func:`range_problem` checks: every corner up to
+#: six fields, else this many, picked with a fixed seed.
+CORNERS = 64
+#: The scenes :func:`range_problem` draws from a box besides its corners and middle, per
+#: field (uniformly, with a fixed seed, as the resets draw them).
+DRAWS_PER_FIELD = 8
 #: x = φ'² [rad²/s²] taken as unbounded.
 _X_CAP = 1e30
 
@@ -288,11 +292,11 @@ def fixed_scene_problem(task: Any, scene: Scene, dt: float) -> Verdict:
 
 def range_problem(task: Any, scene: Scene, ranges: Mapping[str, tuple[float, float]]) -> str | None:
     """Why ``task`` cannot be posed over the ``randomize`` box ``ranges`` around ``scene``
-    (the other fields): a corner of the box (of :data:`CORNERS`) or its middle holding a
-    start :func:`doomed` to slip, or None (also for a task that does not
-    :attr:`~roller_gym.task.Task.descends`). A refusal is sound: the draw takes scenes next
-    to that point, where the start stays doomed (the conditions are strict). A pass proves
-    nothing between the points checked."""
+    (the other fields): a scene of the box holding a start :func:`doomed` to slip, among its
+    middle, its corners (:data:`CORNERS`) and :data:`DRAWS_PER_FIELD` draws per field; or
+    None (also for a task that does not :attr:`~roller_gym.task.Task.descends`). A refusal
+    is sound: the draw takes scenes next to that one, where the start stays doomed (the
+    conditions are strict). A pass proves nothing between the scenes checked."""
     if not task.descends or not ranges:
         return None
     return _range_problem(type(task), task.max_torque, tuple(scene.as_dict().items()),
@@ -303,17 +307,18 @@ def range_problem(task: Any, scene: Scene, ranges: Mapping[str, tuple[float, flo
 def _range_problem(task_class: type, max_torque: float, scene_items: tuple,
                    range_items: tuple) -> str | None:
     task, scene, ranges = task_class(max_torque), Scene(**dict(scene_items)), dict(range_items)
-    corners = list(itertools.product(*ranges.values()))
+    rng = np.random.default_rng(0)
+    low, high = (np.array(ends) for ends in zip(*ranges.values(), strict=True))
+    corners = np.array(list(itertools.product(*ranges.values())))
     if len(corners) > CORNERS:
-        pick = np.random.default_rng(0).choice(len(corners), CORNERS, replace=False)
-        corners = [corners[i] for i in sorted(pick)]
-    middle = tuple(0.5 * (low + high) for low, high in ranges.values())
-    for values in (middle, *corners):
+        corners = corners[np.sort(rng.choice(len(corners), CORNERS, replace=False))]
+    drawn = low + (high - low) * rng.random((DRAWS_PER_FIELD * len(ranges), len(ranges)))
+    for values in np.concatenate([[0.5 * (low + high)], corners, drawn]):
         point = dict(zip(ranges, map(float, values), strict=True))
         found = doomed(task, scene.replace(**point))
         if found is not None:
             where = ", ".join(f"{name}={value:.6g}" for name, value in point.items())
             return (f"randomize={shown(ranges)} draws scenes next to {where}, where "
                     f"{_refusal(task, scene.replace(**point), found)}, or narrow the ranges "
-                    "away from that point")
+                    "away from that scene")
     return None
