@@ -211,7 +211,10 @@ def test_a_narrow_infeasible_pocket_between_scan_points_is_refused():
         assert low <= a < b <= high
         assert a >= pocket[1] - 1e-9 or b <= pocket[0] + 1e-9  # the pocket is left out
     for side in ((low, pocket[0] - 1e-4), (pocket[1] + 1e-4, high)):
-        gym.make(STABILIZE, scene=scene, randomize={"R": side})  # proven feasible
+        feasibility.check_ranges(task, scene, 0.05, {"R": side})  # proven: every start rolls
+        # (though with e = 0.09 and mu = 0.46 some start is doomed on its way down)
+        with pytest.raises(ValueError, match=r"draws scenes next to .* no torque rolls"):
+            gym.make(STABILIZE, scene=scene, randomize={"R": side})
 
 
 # -- feasible ranges construct, and every sub-environment starts -------------------------------
@@ -301,8 +304,15 @@ def test_balance_at_the_top_of_a_drum_and_the_isolated_value_where_it_cannot_be_
 def test_plain_domain_randomization_of_four_fields_is_proven_and_every_start_rolls():
     """Four fields around the default scene, m among them over a 4× range (its range was
     counted twice in J_min and the contact forces: refused as not proven); m and g enter the
-    start's contact margins only through τ/(m g), so their ends bound them."""
+    start's contact margins only through τ/(m g), so their ends bound them. The proof
+    closes; the box is still refused, as its corner m = 2 kg, e = 0.09 m, k = 0.05 m, R =
+    0.4 m holds a start doomed on its way down at 0.5 N·m (test_descent), and with R up to
+    0.7 m and e up to 0.07 m it constructs."""
     ranges = {"R": (0.4, 1.0), "e": (0.04, 0.09), "k": (0.05, 0.2), "m": (0.5, 2.0)}
+    feasibility.check_ranges(StabilizeTask(0.5), roller_gym.preset("paper"), 0.05, ranges)
+    with pytest.raises(ValueError, match=r"draws scenes next to .* no torque rolls"):
+        gym.make(STABILIZE, randomize=ranges)
+    ranges = {**ranges, "R": (0.4, 0.7), "e": (0.04, 0.07)}
     gym.make(STABILIZE, randomize=ranges)
     vec = gym.make_vec(STABILIZE, num_envs=512, randomize=ranges)
     _, info = vec.reset(seed=4)
