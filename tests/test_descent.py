@@ -69,7 +69,9 @@ def _braked_speed(scene, start, where, max_torque, speed=0.0):
 NEAR = [(Scene(R=2.0, e=0.044038, k=0.0075265, mu=1.2004), 0.42738, "RollerHold"),
         (Scene(R=-2.0, e=0.0338, k=0.00787, mu=1.089), 0.917, "RollerHold"),
         (Scene(R=3.0, e=0.0349, k=0.00893, mu=1.17), 0.70, "RollerStabilize"),
-        (Scene(R=3.0, e=0.073, k=0.0169, mu=0.592), 0.832, "RollerStabilize")]
+        (Scene(R=3.0, e=0.073, k=0.0169, mu=0.592), 0.832, "RollerStabilize"),
+        # 2.55 times that torque (a 2 ms greedy braking controller dies too)
+        (Scene(R=1.31326, e=0.0310667, k=0.0172431, mu=1.23346), 0.146514, "RollerTrack")]
 
 
 @pytest.mark.parametrize(("scene", "max_torque"),
@@ -104,7 +106,7 @@ def test_a_scene_near_the_threshold_is_accepted_with_a_warning(scene, max_torque
     review found one (at construction, for a sub-environment, and for a reset's scene)."""
     env_id = get_task(task, current=True).env_id()
     assert descent.doomed(get_task(task, current=True)(max_torque), scene) is None
-    with pytest.warns(UserWarning, match=r"accepted, but within 2.5 times the least torque"):
+    with pytest.warns(UserWarning, match=r"accepted, but within 3 times the least torque"):
         env = gym.make(env_id, scene=scene, max_torque=max_torque)
     with pytest.warns(UserWarning, match=r"^scene\[1\]: .*whatever the policy"):
         gym.make_vec(env_id, num_envs=2, scene=["paper", scene], max_torque=max_torque)
@@ -239,3 +241,13 @@ def test_a_box_is_refused_for_a_doomed_scene_inside_it(task, scene, max_torque, 
     way = math.copysign(1.0, where - start)
     assert least <= _braked_speed(at, start, where, max_torque, speed) * (1 + 1e-9)
     assert not _rolling_torque_exists(at, where, way * least, max_torque)
+
+
+def test_the_helpers_refuse_what_they_cannot_check():
+    """A batch of scenes (the checks take one scene) and a range that is not (low <= high)."""
+    task = _stabilize(0.5)
+    with pytest.raises(ValueError, match=r"scene=.* is a batch of 2 rollers: .*scene.item"):
+        descent.doomed(task, Scene(e=np.array([0.04, 0.05])))
+    for bad in ((0.05, 0.03), (0.03, math.nan), (-math.inf, 0.05)):
+        with pytest.raises(ValueError, match=r"ranges\['e'\]=.* must be finite \(low, high\)"):
+            descent.range_problem(task, PRESETS["paper"], {"e": bad})
