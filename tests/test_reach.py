@@ -138,11 +138,11 @@ def test_the_lift_off_speed_at_the_eccentric_masss_top_is_the_physics():
 
 def test_a_proven_range_holds_scene_by_scene():
     """Ranges the proof accepts (the hard tier's default, four fields of plain domain
-    randomization, damping below the limit): every one of 300 drawn scenes passes the
-    scalar check."""
+    randomization, with R and e narrowed so that no corner holds a doomed start, damping
+    below the limit): every one of 300 drawn scenes passes the scalar check."""
     rng = np.random.default_rng(0)
     for env_id, ranges in ((RANDOMIZED, None),
-                           (STABILIZE, {"R": (0.4, 1.0), "e": (0.04, 0.09), "k": (0.05, 0.2),
+                           (STABILIZE, {"R": (0.4, 0.7), "e": (0.04, 0.07), "k": (0.05, 0.2),
                                         "m": (0.5, 2.0)}),
                            (STABILIZE, {"damping": (0.0, 0.004)})):
         env = gym.make(env_id, **({} if ranges is None else {"randomize": ranges})).unwrapped
