@@ -25,9 +25,9 @@ from collections.abc import Mapping
 from typing import Any, NamedTuple
 
 import numpy as np
-from roller_gym import start_set
+from roller_gym import start_set, validation
 from roller_gym.physics import Scene, equations
-from roller_gym.physics.scene import shown
+from roller_gym.physics.scene import require_scene, shown
 from roller_gym.rest import reach
 
 __all__ = ["CORNERS", "DRAWS_PER_FIELD", "NEAR", "Doom", "Verdict", "doomed", "fastest_rolling",
@@ -182,6 +182,15 @@ def _grid(task: Any, scene: Scene) -> _Grid | None:
     return _GRIDS[key]
 
 
+def _one_scene(scene: Any) -> None:
+    """Raise TypeError unless ``scene`` is a Scene, ValueError where it is a batch: the
+    checks here take one scene."""
+    require_scene(scene)
+    if scene.batch_size is not None:
+        raise ValueError(f"scene={shown(scene)} is a batch of {scene.batch_size} rollers: "
+                         "the descent checks take one scene; pass scene.item(i)")
+
+
 def doomed(task: Any, scene: Scene) -> Doom | None:
     """The nearest start the draw may accept in the scalar ``scene`` (the far end of a cell
     of :func:`roller_gym.start_set.covering`, at rest or at its fastest speed in or out) from
@@ -194,9 +203,7 @@ def doomed(task: Any, scene: Scene) -> Doom | None:
     out, as long as its least kinetic energy stays positive (it cannot stop, so cannot turn
     back). Checked on a grid of :data:`GRID_POINTS` |φ| out to the starts and as many on
     to ψ = π."""
-    if scene.batch_size is not None:
-        raise ValueError(f"scene={shown(scene)} is a batch of {scene.batch_size} rollers: "
-                         "doomed checks one scene; pass scene.item(i)")
+    _one_scene(scene)
     grid = _grid(task, scene)
     if grid is None:
         return None
@@ -284,6 +291,8 @@ def fixed_scene_problem(task: Any, scene: Scene, dt: float) -> Verdict:
     :attr:`~roller_gym.task.Task.descends`, a start :func:`doomed` (refused), or doomed at
     max_torque / :data:`NEAR` (a caution: the rule is a necessary condition in continuous
     time, blind to dt and to friction leaving only part of the torque at speed)."""
+    _one_scene(scene)
+    validation.real("dt", dt, positive=True, unit="s")
     reason = task.infeasible(scene, dt)
     if reason is not None or not task.descends:
         return Verdict(reason, None)
@@ -301,10 +310,21 @@ def range_problem(task: Any, scene: Scene, ranges: Mapping[str, tuple[float, flo
     None (also for a task that does not :attr:`~roller_gym.task.Task.descends`). A refusal
     is sound: the draw takes scenes next to that one, where the start stays doomed (the
     conditions are strict). A pass proves nothing between the scenes checked."""
-    for name, (low, high) in ranges.items():
-        if not (math.isfinite(low) and math.isfinite(high) and low <= high):
-            raise ValueError(f"ranges[{shown(name)}]={shown((low, high))} must be finite "
-                             "(low, high) with low <= high")
+    _one_scene(scene)
+    if not isinstance(ranges, Mapping):
+        raise TypeError(f"ranges={shown(ranges)} must be a mapping of Scene fields to "
+                        f"(low, high), not {type(ranges).__name__}")
+    for name, ends in ranges.items():
+        if not (isinstance(name, str) and name in Scene.__dataclass_fields__):
+            raise ValueError(f"ranges names {shown(name)}, not a Scene field")
+        if not (isinstance(ends, tuple | list) and len(ends) == 2):
+            raise ValueError(f"ranges[{shown(name)}]={shown(ends)} must be finite (low, high) "
+                             "with low <= high")
+        low, high = (validation.real(f"ranges[{shown(name)}][{i}]", end)
+                     for i, end in enumerate(ends))
+        if not low <= high:
+            raise ValueError(f"ranges[{shown(name)}]={shown(ends)} must be finite (low, high) "
+                             "with low <= high")
     if not task.descends or not ranges:
         return None
     return _range_problem(type(task), task.max_torque, tuple(scene.as_dict().items()),

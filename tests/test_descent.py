@@ -244,10 +244,28 @@ def test_a_box_is_refused_for_a_doomed_scene_inside_it(task, scene, max_torque, 
 
 
 def test_the_helpers_refuse_what_they_cannot_check():
-    """A batch of scenes (the checks take one scene) and a range that is not (low <= high)."""
-    task = _stabilize(0.5)
-    with pytest.raises(ValueError, match=r"scene=.* is a batch of 2 rollers: .*scene.item"):
-        descent.doomed(task, Scene(e=np.array([0.04, 0.05])))
-    for bad in ((0.05, 0.03), (0.03, math.nan), (-math.inf, 0.05)):
-        with pytest.raises(ValueError, match=r"ranges\['e'\]=.* must be finite \(low, high\)"):
-            descent.range_problem(task, PRESETS["paper"], {"e": bad})
+    """A batch of scenes (the checks take one scene), a step that is no duration, and ranges
+    that are not a mapping of Scene fields to finite (low <= high): each a clear error naming
+    the argument, as the environments give before these are reached."""
+    task, batch = _stabilize(0.5), Scene(e=np.array([0.04, 0.05]))
+    for call in (lambda: descent.doomed(task, batch),
+                 lambda: descent.fixed_scene_problem(task, batch, 0.05),
+                 lambda: descent.range_problem(task, batch, {"e": (0.03, 0.05)})):
+        with pytest.raises(ValueError, match=r"scene=.* is a batch of 2 rollers: .*scene.item"):
+            call()
+    with pytest.raises(TypeError, match=r"scene='paper' must be a Scene"):
+        descent.doomed(task, "paper")
+    for dt in (0.0, -0.05, math.nan, math.inf, "0.05"):
+        with pytest.raises(ValueError, match=r"^dt=.* must be a finite real number > 0 \[s\]"):
+            descent.fixed_scene_problem(task, PRESETS["paper"], dt)
+    with pytest.raises(TypeError, match=r"ranges=.* must be a mapping"):
+        descent.range_problem(task, PRESETS["paper"], [("e", (0.03, 0.05))])
+    for ranges, match in (({"e": (0.05, 0.03)}, r"ranges\['e'\]=.* must be finite \(low, hi"),
+                          ({"e": (0.03, math.nan)}, r"ranges\['e'\]\[1\]=nan .* finite real"),
+                          ({"e": (-math.inf, 0.05)}, r"ranges\['e'\]\[0\]=-inf .* finite re"),
+                          ({"e": (0.03, 0.04, 0.05)}, r"ranges\['e'\]=.* must be finite \(low"),
+                          ({"e": "0.03"}, r"ranges\['e'\]=.* must be finite \(low, high"),
+                          ({"x": (0.0, 1.0)}, r"ranges names 'x', not a Scene field"),
+                          ({1: (0.0, 1.0)}, r"ranges names 1, not a Scene field")):
+        with pytest.raises(ValueError, match=match):
+            descent.range_problem(task, PRESETS["paper"], ranges)
