@@ -19,7 +19,6 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import MISSING, dataclass, field, fields
 from typing import Any, TypeVar
 
-import numpy as np
 from roller_gym import descent, feasibility, validation
 from roller_gym.episode import INFO_KEYS
 from roller_gym.physics import INTEGRATORS, Scene, preset
@@ -37,7 +36,6 @@ DEFAULT_TOLERANCE = 1e-8
 #: The tightest tolerance an environment takes (the physics' steppers take any, and flag what
 #: they cannot verify).
 TOLERANCE_MIN = 1e-12
-_SCENE_FIELDS = tuple(f.name for f in fields(Scene))
 
 
 def resolve_scene(scene: Scene | str | None, default: str, name: str = "scene") -> Scene:
@@ -295,23 +293,7 @@ def check_randomize(task: Task, scene: Scene, dt: float,
     """
     if randomize is None:
         return {}
-    if not isinstance(randomize, Mapping):
-        raise ValueError(f"randomize={shown(randomize)} is not allowed: it must be a mapping "
-                         "{field: (low, high)} of Scene fields, e.g. {'m': (0.8, 1.2)}")
-    ranges: dict[str, tuple[float, float]] = {}
-    for name, bounds in randomize.items():
-        if name not in _SCENE_FIELDS:
-            raise ValueError(f"randomize names {shown(name)}, not a Scene field; allowed: "
-                             f"{', '.join(_SCENE_FIELDS)}")
-        if not (isinstance(bounds, tuple | list | np.ndarray) and len(bounds) == 2):
-            raise ValueError(f"randomize[{shown(name)}]={shown(bounds)} must be a (low, high) "
-                             "pair of "
-                             "finite real numbers")
-        low = validation.real(f"randomize[{shown(name)}][0]", bounds[0])
-        high = validation.real(f"randomize[{shown(name)}][1]", bounds[1])
-        if low > high:
-            raise ValueError(f"randomize[{shown(name)}]={shown(bounds)} needs finite low <= high")
-        ranges[name] = (low, high)
+    ranges = validation.ranges("randomize", randomize)
     for name, (low, high) in ranges.items():  # each field's own rule, on the whole interval
         for end in (low, high):
             try:

@@ -311,20 +311,7 @@ def range_problem(task: Any, scene: Scene, ranges: Mapping[str, tuple[float, flo
     is sound: the draw takes scenes next to that one, where the start stays doomed (the
     conditions are strict). A pass proves nothing between the scenes checked."""
     _one_scene(scene)
-    if not isinstance(ranges, Mapping):
-        raise TypeError(f"ranges={shown(ranges)} must be a mapping of Scene fields to "
-                        f"(low, high), not {type(ranges).__name__}")
-    for name, ends in ranges.items():
-        if not (isinstance(name, str) and name in Scene.__dataclass_fields__):
-            raise ValueError(f"ranges names {shown(name)}, not a Scene field")
-        if not (isinstance(ends, tuple | list) and len(ends) == 2):
-            raise ValueError(f"ranges[{shown(name)}]={shown(ends)} must be finite (low, high) "
-                             "with low <= high")
-        low, high = (validation.real(f"ranges[{shown(name)}][{i}]", end)
-                     for i, end in enumerate(ends))
-        if not low <= high:
-            raise ValueError(f"ranges[{shown(name)}]={shown(ends)} must be finite (low, high) "
-                             "with low <= high")
+    ranges = validation.ranges("ranges", ranges)
     if not task.descends or not ranges:
         return None
     return _range_problem(type(task), task.max_torque, tuple(scene.as_dict().items()),
@@ -343,10 +330,11 @@ def _range_problem(task_class: type, max_torque: float, scene_items: tuple,
     drawn = low + (high - low) * rng.random((DRAWS_PER_FIELD * len(ranges), len(ranges)))
     for values in np.concatenate([[0.5 * (low + high)], corners, drawn]):
         point = dict(zip(ranges, map(float, values), strict=True))
-        found = doomed(task, scene.replace(**point))
+        drawn_scene = scene.replace(**point)
+        found = doomed(task, drawn_scene)
         if found is not None:
             where = ", ".join(f"{name}={value:.6g}" for name, value in point.items())
             return (f"randomize={shown(ranges)} draws scenes next to {where}, where "
-                    f"{_refusal(task, scene.replace(**point), found)}, or narrow the ranges "
-                    "away from that scene")
+                    f"{_refusal(task, drawn_scene, found)}, or narrow the ranges away from "
+                    "that scene")
     return None

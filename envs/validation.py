@@ -13,6 +13,8 @@ setting that cannot work fails there and not at a random step later.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from dataclasses import fields
 from typing import Any
 
 import numba
@@ -21,7 +23,7 @@ from roller_gym.physics import Scene
 from roller_gym.physics.scene import finite_real, shown, whole_number
 
 __all__ = ["actions", "check_integrable", "choice", "count", "integration_magnitudes",
-           "integration_rates", "real", "subset"]
+           "integration_rates", "ranges", "real", "subset"]
 
 _REAL = (int, float, np.integer, np.floating)
 #: The largest magnitude [SI] of the scene's derived quantities (m g r, …): squares stay finite.
@@ -49,6 +51,32 @@ def real(name: str, value: Any, *, positive: bool = False, nonnegative: bool = F
         raise ValueError(f"{name}={shown(value)} is out of range: it must be {allowed}"
                          f"{f' [{unit}]' if unit else ''}")
     return float(value)
+
+
+#: The fields a ``randomize`` range may name (the Scene's own names).
+_SCENE_NAMES = tuple(f.name for f in fields(Scene))
+
+
+def ranges(name: str, value: Any) -> dict[str, tuple[float, float]]:
+    """``value``, a mapping ``{field: (low, high)}`` of Scene fields to pairs of finite reals
+    with low <= high, as a dict of float pairs; or ValueError naming ``name``."""
+    if not isinstance(value, Mapping):
+        raise ValueError(f"{name}={shown(value)} is not allowed: it must be a mapping "
+                         "{field: (low, high)} of Scene fields, e.g. {'m': (0.8, 1.2)}")
+    checked: dict[str, tuple[float, float]] = {}
+    for field, bounds in value.items():
+        if field not in _SCENE_NAMES:
+            raise ValueError(f"{name} names {shown(field)}, not a Scene field; allowed: "
+                             f"{', '.join(_SCENE_NAMES)}")
+        if not (isinstance(bounds, tuple | list | np.ndarray) and len(bounds) == 2):
+            raise ValueError(f"{name}[{shown(field)}]={shown(bounds)} must be a (low, high) "
+                             "pair of finite real numbers")
+        low = real(f"{name}[{shown(field)}][0]", bounds[0])
+        high = real(f"{name}[{shown(field)}][1]", bounds[1])
+        if low > high:
+            raise ValueError(f"{name}[{shown(field)}]={shown(bounds)} needs finite low <= high")
+        checked[field] = (low, high)
+    return checked
 
 
 def count(name: str, value: Any, *, low: int = 1, high: int | None = None) -> int:
