@@ -38,9 +38,9 @@ __all__ = ["CORNERS", "DRAWS_PER_FIELD", "NEAR", "Doom", "Verdict", "doomed", "f
 GRID_POINTS = 2001
 #: A fixed scene the rule would refuse with max_torque divided by NEAR is accepted with a
 #: caution (:func:`fixed_scene_problem`). Independent beam searches over torque sequences at
-#: dt = 0.05 s found scenes the rule accepts with a start they could not bring down at up
-#: to 2.55 times the least torque the rule accepts, and none from 2.68 to 3.91 times
-#: (``docs/MAINTAINERS.md``).
+#: dt = 0.05 s found cylinders the rule accepts with a start they could not bring down at
+#: up to 2.55 times the least torque the rule accepts, but also drums with damping at 3.06–
+#: 3.39 times (starts moving outward): no factor bounds that class (``docs/MAINTAINERS.md``).
 NEAR = 3.0
 #: The most corners of a ``randomize`` box :func:`range_problem` checks: every corner up to
 #: six fields, else this many, picked with a fixed seed.
