@@ -30,21 +30,20 @@ from roller_gym.physics import Scene, equations
 from roller_gym.physics.scene import require_scene, shown
 from roller_gym.rest import reach
 
-__all__ = ["CORNERS", "DRAWS_PER_FIELD", "NEAR", "Doom", "Verdict", "doomed", "fastest_rolling",
+__all__ = ["DRAWS_PER_FIELD", "NEAR", "NEAR_DRUM", "Doom", "Verdict", "doomed", "fastest_rolling",
            "fixed_scene_problem", "range_problem"]
 
 #: Points of the scalar check's grid of |φ| from the bottom to the farthest start (and as
 #: many on from there to ψ = π).
 GRID_POINTS = 2001
-#: A fixed scene the rule would refuse with max_torque divided by NEAR is accepted with a
-#: caution (:func:`fixed_scene_problem`). Independent beam searches over torque sequences at
-#: dt = 0.05 s found cylinders the rule accepts with a start they could not bring down at
-#: up to 2.55 times the least torque the rule accepts, but also drums with damping at 3.06–
-#: 3.39 times (starts moving outward): no factor bounds that class (``docs/MAINTAINERS.md``).
+#: A fixed scene the rule would refuse with max_torque divided by NEAR (NEAR_DRUM on a drum)
+#: is accepted with a caution (:func:`fixed_scene_problem`). Independent beam searches over
+#: torque sequences at dt = 0.05 s found cylinders the rule accepts with a start they could
+#: not bring down at up to 2.55 times the least torque the rule accepts, and drums with
+#: damping (starts moving outward) at up to 3.39 times (``docs/MAINTAINERS.md``): measured
+#: factors, not bounds.
 NEAR = 3.0
-#: The most corners of a ``randomize`` box :func:`range_problem` checks: every corner up to
-#: six fields, else this many, picked with a fixed seed.
-CORNERS = 64
+NEAR_DRUM = 4.0
 #: The scenes :func:`range_problem` draws from a box besides its corners and middle, per
 #: field (uniformly, with a fixed seed, as the resets draw them).
 DRAWS_PER_FIELD = 8
@@ -275,11 +274,17 @@ def _refusal(task: Any, scene: Scene, found: Doom) -> str:
             "off; use a larger max_torque or mu, or a smaller e")
 
 
+def _near(scene: Scene) -> float:
+    """The caution's factor in ``scene``: :data:`NEAR_DRUM` on a drum, else :data:`NEAR`."""
+    return NEAR_DRUM if scene.shape == "drum" else NEAR
+
+
 def _caution(task: Any, scene: Scene, found: Doom) -> str:
-    weaker = task.max_torque / NEAR
+    factor = _near(scene)
+    weaker = task.max_torque / factor
     return (f"{task.name} in {shown(scene)} with max_torque={task.max_torque:g} N·m is "
-            f"accepted, but within {NEAR:g} times the least torque the descent check proves "
-            f"necessary: at max_torque={weaker:.3g} N·m, {_way(found)}. The check is a "
+            f"accepted, but within {factor:g} times the least torque the descent check "
+            f"proves necessary: at max_torque={weaker:.3g} N·m, {_way(found)}. The check is a "
             "necessary condition, in continuous time, so near it some starts may still end "
             "in a slip or a lift-off whatever the policy; a larger max_torque or mu, or a "
             "smaller e or dt, gives a margin")
@@ -289,8 +294,9 @@ def fixed_scene_problem(task: Any, scene: Scene, dt: float) -> Verdict:
     """:meth:`Task.infeasible` in a scene no ``randomize`` range draws (the construction's
     scenes, ``reset(options={"scene": ...})``), and there, for a task that
     :attr:`~roller_gym.task.Task.descends`, a start :func:`doomed` (refused), or doomed at
-    max_torque / :data:`NEAR` (a caution: the rule is a necessary condition in continuous
-    time, blind to dt and to friction leaving only part of the torque at speed)."""
+    max_torque / :data:`NEAR` (:data:`NEAR_DRUM` on a drum; a caution: the rule is a
+    necessary condition in continuous time, blind to dt and to friction leaving only part
+    of the torque at speed)."""
     _one_scene(scene)
     validation.real("dt", dt, positive=True, unit="s")
     reason = task.infeasible(scene, dt)
@@ -299,14 +305,15 @@ def fixed_scene_problem(task: Any, scene: Scene, dt: float) -> Verdict:
     found = doomed(task, scene)
     if found is not None:
         return Verdict(_refusal(task, scene, found), None)
-    near = doomed(type(task)(task.max_torque / NEAR), scene)
+    near = doomed(type(task)(task.max_torque / _near(scene)), scene)
     return Verdict(None, None if near is None else _caution(task, scene, near))
 
 
 def range_problem(task: Any, scene: Scene, ranges: Mapping[str, tuple[float, float]]) -> str | None:
     """Why ``task`` cannot be posed over the ``randomize`` box ``ranges`` around ``scene``
     (the other fields): a scene of the box holding a start :func:`doomed` to slip, among its
-    middle, its corners (:data:`CORNERS`) and :data:`DRAWS_PER_FIELD` draws per field; or
+    middle, every corner (at most 2⁸, one per field's end) and :data:`DRAWS_PER_FIELD` draws
+    per field; or
     None (also for a task that does not :attr:`~roller_gym.task.Task.descends`). A refusal
     is sound: the draw takes scenes next to that one, where the start stays doomed (the
     conditions are strict). A pass proves nothing between the scenes checked."""
@@ -325,8 +332,6 @@ def _range_problem(task_class: type, max_torque: float, scene_items: tuple,
     rng = np.random.default_rng(0)
     low, high = (np.array(ends) for ends in zip(*ranges.values(), strict=True))
     corners = np.array(list(itertools.product(*ranges.values())))
-    if len(corners) > CORNERS:
-        corners = corners[np.sort(rng.choice(len(corners), CORNERS, replace=False))]
     drawn = low + (high - low) * rng.random((DRAWS_PER_FIELD * len(ranges), len(ranges)))
     for values in np.concatenate([[0.5 * (low + high)], corners, drawn]):
         point = dict(zip(ranges, map(float, values), strict=True))

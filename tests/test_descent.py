@@ -1,6 +1,7 @@
 """Starts doomed to slip on their way down (roller_gym.descent): the least speed against the
 hardest braking simulated, the rolling set against a dense search, and the refusals."""
 
+import itertools
 import math
 import re
 
@@ -64,18 +65,26 @@ def _braked_speed(scene, start, where, max_torque, speed=0.0):
 
 
 #: (scene, max_torque [N·m], task) that an independent beam search over torque sequences at
-#: dt = 0.05 s found accepted with a start it cannot bring down: each within NEAR times the
-#: least torque the descent rule accepts, so refused at max_torque / NEAR.
+#: dt = 0.05 s found accepted with a start it cannot bring down: each within NEAR (NEAR_DRUM
+#: on a drum) times the least torque the descent rule accepts, so refused at max_torque
+#: divided by it.
 NEAR = [(Scene(R=2.0, e=0.044038, k=0.0075265, mu=1.2004), 0.42738, "RollerHold"),
         (Scene(R=-2.0, e=0.0338, k=0.00787, mu=1.089), 0.917, "RollerHold"),
         (Scene(R=3.0, e=0.0349, k=0.00893, mu=1.17), 0.70, "RollerStabilize"),
         (Scene(R=3.0, e=0.073, k=0.0169, mu=0.592), 0.832, "RollerStabilize"),
         # 2.55 times that torque (a 2 ms greedy braking controller dies too)
-        (Scene(R=1.31326, e=0.0310667, k=0.0172431, mu=1.23346), 0.146514, "RollerTrack")]
+        (Scene(R=1.31326, e=0.0310667, k=0.0172431, mu=1.23346), 0.146514, "RollerTrack"),
+        # a drum with damping, from starts moving outward past 22 rad: 3.39 times
+        (Scene(R=-2.206, e=0.02784, k=0.01892, mu=1.2833, damping=0.03), 0.755978,
+         "RollerHold")]
+
+
+def _factor(scene: Scene) -> float:
+    return descent.NEAR_DRUM if scene.R < 0 else descent.NEAR
 
 
 @pytest.mark.parametrize(("scene", "max_torque"),
-                         DOOMED + [(s, t / descent.NEAR) for s, t, _ in NEAR[:2]])
+                         DOOMED + [(s, t / _factor(s)) for s, t, _ in NEAR[:2]])
 def test_a_doomed_start_is_doomed_by_a_direct_search(scene, max_torque):
     """The reported speed is below what the hardest braking leaves at that point, and at
     that speed and above (up to the braked one) no torque rolls there."""
@@ -106,7 +115,8 @@ def test_a_scene_near_the_threshold_is_accepted_with_a_warning(scene, max_torque
     review found one (at construction, for a sub-environment, and for a reset's scene)."""
     env_id = get_task(task, current=True).env_id()
     assert descent.doomed(get_task(task, current=True)(max_torque), scene) is None
-    with pytest.warns(UserWarning, match=r"accepted, but within 3 times the least torque"):
+    within = rf"accepted, but within {_factor(scene):g} times the least torque"
+    with pytest.warns(UserWarning, match=within):
         env = gym.make(env_id, scene=scene, max_torque=max_torque)
     with pytest.warns(UserWarning, match=r"^scene\[1\]: .*whatever the policy"):
         gym.make_vec(env_id, num_envs=2, scene=["paper", scene], max_torque=max_torque)
@@ -241,6 +251,23 @@ def test_a_box_is_refused_for_a_doomed_scene_inside_it(task, scene, max_torque, 
     way = math.copysign(1.0, where - start)
     assert least <= _braked_speed(at, start, where, max_torque, speed) * (1 + 1e-9)
     assert not _rolling_torque_exists(at, where, way * least, max_torque)
+
+
+def test_a_box_is_checked_at_every_corner(monkeypatch):
+    """A box of all eight Scene fields: each of its 2⁸ corners is checked (a review built an
+    eight-field box whose 2 doomed corners a sample of 64 missed)."""
+    ranges = {name: (0.99 * value, 1.01 * value) if value else (0.0, 0.001)
+              for name, value in PRESETS["paper"].as_dict().items()}
+    seen = set()
+
+    def recording(task, scene):
+        seen.add(tuple(scene.as_dict()[name] for name in ranges))
+
+    monkeypatch.setattr(descent, "doomed", recording)
+    assert descent.range_problem(_stabilize(0.5), PRESETS["paper"], ranges) is None
+    corners = set(itertools.product(*ranges.values()))
+    assert len(corners) == 2 ** 8
+    assert corners <= seen
 
 
 def test_the_helpers_refuse_what_they_cannot_check():
