@@ -85,8 +85,10 @@ class Settings:
         "speeds its energy, its lift-off and the damping allow), and a fixed scene with a "
         "start from which no torque can stop the roller before a point where it must slip or "
         "lift off (:func:`roller_gym.descent.doomed`), and warn where they would refuse it "
-        "at max_torque / 3 (:func:`roller_gym.descent.fixed_scene_problem`: the check "
-        "holds in continuous time only); RollerStabilize also refuses "
+        f"at max_torque / {descent.NEAR:g} (/ {descent.NEAR_DRUM:g} on a drum; "
+        ":func:`roller_gym.descent.fixed_scene_problem`: the check holds in continuous time "
+        "only, so a scene accepted without a warning is not proven solvable from every "
+        "start); RollerStabilize also refuses "
         "damping that might bring the roller to rest there with no torque within the "
         "episode."))
     tolerance: float = field(default=DEFAULT_TOLERANCE, metadata=_doc(
