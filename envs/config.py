@@ -66,10 +66,11 @@ class Settings:
     """The keywords every roller environment takes, as given (:meth:`EnvConfig.build` checks
     them). Each field's documentation is :func:`setting_docs`."""
 
-    scene: Scene | str | Sequence[Scene | str] | None = field(default=None, metadata=_doc(
+    scene: Scene | str | Sequence[Scene | str | None] | None = field(default=None, metadata=_doc(
         "a :class:`roller_gym.Scene` or a preset's name (``roller_gym.PRESETS``); default: "
         "the task's preset. The vector environment also takes a sequence of them (one per "
-        "sub-environment) or a batch Scene of ``num_envs`` rollers."))
+        "sub-environment; None in it: the task's preset) or a batch Scene of ``num_envs`` "
+        "rollers."))
     dt: float = field(default=DEFAULT_DT, metadata=_doc(
         "the control step [s]; the torque is constant over it."))
     max_torque: float | None = field(default=None, metadata=_doc(
@@ -85,8 +86,8 @@ class Settings:
         "speeds its energy, its lift-off and the damping allow), and a fixed scene with a "
         "start from which no torque can stop the roller before a point where it must slip or "
         "lift off (:func:`roller_gym.descent.doomed`), and warn where they would refuse it "
-        f"at max_torque / {descent.NEAR:g} (/ {descent.NEAR_DRUM:g} on a drum; "
-        ":func:`roller_gym.descent.fixed_scene_problem`: the check holds in continuous time "
+        f"at max_torque / {descent.NEAR:g}, and on every drum, scene or randomize box "
+        "(:func:`roller_gym.descent.fixed_scene_problem`: the check holds in continuous time "
         "only, so a scene accepted without a warning is not proven solvable from every "
         "start); RollerStabilize also refuses "
         "damping that might bring the roller to rest there with no torque within the "
@@ -250,9 +251,12 @@ class EnvConfig:
                     verdict = descent.fixed_scene_problem(task, one, dt)
                     if verdict.refused is not None:
                         raise ValueError(verdict.refused)
-                    if verdict.caution is not None:
-                        where = "" if scenes is None else f"scene[{i}]: "
-                        warnings.warn(where + verdict.caution, UserWarning, stacklevel=5)
+                    caution = verdict.caution
+                else:
+                    caution = descent.range_caution(task, one, ranges)
+                if caution is not None:
+                    where = "" if scenes is None else f"scene[{i}]: "
+                    warnings.warn(where + caution, UserWarning, stacklevel=5)
             except ValueError as exc:
                 if scenes is None:
                     raise

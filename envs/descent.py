@@ -30,22 +30,26 @@ from roller_gym.physics import Scene, equations
 from roller_gym.physics.scene import require_scene, shown
 from roller_gym.rest import reach
 
-__all__ = ["DRAWS_PER_FIELD", "NEAR", "NEAR_DRUM", "Doom", "Verdict", "doomed", "fastest_rolling",
-           "fixed_scene_problem", "range_problem"]
+__all__ = ["DRAWS", "DRAWS_PER_FIELD", "DRUM_SEEN", "NEAR", "Doom", "Verdict", "doomed",
+           "fastest_rolling", "fixed_scene_problem", "range_caution", "range_problem"]
 
 #: Points of the scalar check's grid of |φ| from the bottom to the farthest start (and as
 #: many on from there to ψ = π).
 GRID_POINTS = 2001
-#: A fixed scene the rule would refuse with max_torque divided by NEAR (NEAR_DRUM on a drum)
-#: is accepted with a caution (:func:`fixed_scene_problem`). Independent beam searches over
+#: A fixed cylinder or floor the rule would refuse with max_torque divided by NEAR is
+#: accepted with a caution (:func:`fixed_scene_problem`): independent beam searches over
 #: torque sequences at dt = 0.05 s found cylinders the rule accepts with a start they could
-#: not bring down at up to 2.55 times the least torque the rule accepts, and drums with
-#: damping (starts moving outward) at up to 3.39 times (``docs/MAINTAINERS.md``): measured
-#: factors, not bounds.
+#: not bring down at up to 2.55 times the least torque the rule accepts (a measured factor,
+#: not a bound; ``docs/MAINTAINERS.md``).
 NEAR = 3.0
-NEAR_DRUM = 4.0
-#: The scenes :func:`range_problem` draws from a box besides its corners and middle, per
-#: field (uniformly, with a fixed seed, as the resets draw them).
+#: On a drum no factor held: the same searches found drums with damping accepted with such a
+#: start at up to DRUM_SEEN times that torque (starts moving outward), so every drum a
+#: descending task accepts gets the caution.
+DRUM_SEEN = 4.65
+#: The scenes :func:`range_problem` draws from a box besides its corners and middle: at least
+#: DRAWS, and DRAWS_PER_FIELD per field (uniformly, with a fixed seed, as the resets draw
+#: them).
+DRAWS = 32
 DRAWS_PER_FIELD = 8
 #: x = φ'² [rad²/s²] taken as unbounded.
 _X_CAP = 1e30
@@ -181,9 +185,13 @@ def _grid(task: Any, scene: Scene) -> _Grid | None:
     return _GRIDS[key]
 
 
-def _one_scene(scene: Any) -> None:
-    """Raise TypeError unless ``scene`` is a Scene, ValueError where it is a batch: the
-    checks here take one scene."""
+def _one_scene(task: Any, scene: Any) -> None:
+    """Raise TypeError unless ``task`` is a task (an instance of a
+    :class:`~roller_gym.task.Task` class) and ``scene`` a Scene, ValueError where it is a
+    batch: the checks here take one scene."""
+    if isinstance(task, type) or not hasattr(task, "max_torque"):
+        raise TypeError(f"task={shown(task)} is not a task: pass an instance of a task class, "
+                        "e.g. roller_gym.TASKS['RollerHold'](max_torque=1.0)")
     require_scene(scene)
     if scene.batch_size is not None:
         raise ValueError(f"scene={shown(scene)} is a batch of {scene.batch_size} rollers: "
@@ -202,7 +210,7 @@ def doomed(task: Any, scene: Scene) -> Doom | None:
     out, as long as its least kinetic energy stays positive (it cannot stop, so cannot turn
     back). Checked on a grid of :data:`GRID_POINTS` |φ| out to the starts and as many on
     to ψ = π."""
-    _one_scene(scene)
+    _one_scene(task, scene)
     grid = _grid(task, scene)
     if grid is None:
         return None
@@ -274,30 +282,35 @@ def _refusal(task: Any, scene: Scene, found: Doom) -> str:
             "off; use a larger max_torque or mu, or a smaller e")
 
 
-def _near(scene: Scene) -> float:
-    """The caution's factor in ``scene``: :data:`NEAR_DRUM` on a drum, else :data:`NEAR`."""
-    return NEAR_DRUM if scene.shape == "drum" else NEAR
+#: What every caution says of the check.
+_NECESSARY = ("The check is a necessary condition, in continuous time, so near it some starts "
+              "may still end in a slip or a lift-off whatever the policy")
 
 
 def _caution(task: Any, scene: Scene, found: Doom) -> str:
-    factor = _near(scene)
-    weaker = task.max_torque / factor
+    weaker = task.max_torque / NEAR
     return (f"{task.name} in {shown(scene)} with max_torque={task.max_torque:g} N·m is "
-            f"accepted, but within {factor:g} times the least torque the descent check "
-            f"proves necessary: at max_torque={weaker:.3g} N·m, {_way(found)}. The check is a "
-            "necessary condition, in continuous time, so near it some starts may still end "
-            "in a slip or a lift-off whatever the policy; a larger max_torque or mu, or a "
-            "smaller e or dt, gives a margin")
+            f"accepted, but within {NEAR:g} times the least torque the descent check "
+            f"proves necessary: at max_torque={weaker:.3g} N·m, {_way(found)}. {_NECESSARY}; "
+            "a larger max_torque or mu, or a smaller e or dt, gives a margin")
+
+
+def _drum_caution(task: Any, where: str) -> str:
+    return (f"{task.name} {where} with max_torque={task.max_torque:g} N·m is accepted, but on "
+            "a drum the descent check gives no margin: drums it accepts at up to "
+            f"{DRUM_SEEN:g} times the least torque it proves necessary were found with starts "
+            f"(moving outward) that no policy brought down at dt = 0.05 s. {_NECESSARY}; try "
+            "the hardest starts (reset(options={'state': ...})) before training")
 
 
 def fixed_scene_problem(task: Any, scene: Scene, dt: float) -> Verdict:
     """:meth:`Task.infeasible` in a scene no ``randomize`` range draws (the construction's
     scenes, ``reset(options={"scene": ...})``), and there, for a task that
     :attr:`~roller_gym.task.Task.descends`, a start :func:`doomed` (refused), or doomed at
-    max_torque / :data:`NEAR` (:data:`NEAR_DRUM` on a drum; a caution: the rule is a
-    necessary condition in continuous time, blind to dt and to friction leaving only part
-    of the torque at speed)."""
-    _one_scene(scene)
+    max_torque / :data:`NEAR`, or on any drum (a caution: the rule is a necessary condition
+    in continuous time, blind to dt and to friction leaving only part of the torque at
+    speed)."""
+    _one_scene(task, scene)
     validation.real("dt", dt, positive=True, unit="s")
     reason = task.infeasible(scene, dt)
     if reason is not None or not task.descends:
@@ -305,19 +318,21 @@ def fixed_scene_problem(task: Any, scene: Scene, dt: float) -> Verdict:
     found = doomed(task, scene)
     if found is not None:
         return Verdict(_refusal(task, scene, found), None)
-    near = doomed(type(task)(task.max_torque / _near(scene)), scene)
+    if scene.shape == "drum":
+        return Verdict(None, _drum_caution(task, f"on the drum {shown(scene)}"))
+    near = doomed(type(task)(task.max_torque / NEAR), scene)
     return Verdict(None, None if near is None else _caution(task, scene, near))
 
 
 def range_problem(task: Any, scene: Scene, ranges: Mapping[str, tuple[float, float]]) -> str | None:
     """Why ``task`` cannot be posed over the ``randomize`` box ``ranges`` around ``scene``
     (the other fields): a scene of the box holding a start :func:`doomed` to slip, among its
-    middle, every corner (at most 2⁸, one per field's end) and :data:`DRAWS_PER_FIELD` draws
-    per field; or
+    middle, every corner (at most 2⁸, one per field's end) and draws from it (:data:`DRAWS`,
+    or :data:`DRAWS_PER_FIELD` per field where more); or
     None (also for a task that does not :attr:`~roller_gym.task.Task.descends`). A refusal
     is sound: the draw takes scenes next to that one, where the start stays doomed (the
     conditions are strict). A pass proves nothing between the scenes checked."""
-    _one_scene(scene)
+    _one_scene(task, scene)
     ranges = validation.ranges("ranges", ranges)
     if not task.descends or not ranges:
         return None
@@ -332,7 +347,8 @@ def _range_problem(task_class: type, max_torque: float, scene_items: tuple,
     rng = np.random.default_rng(0)
     low, high = (np.array(ends) for ends in zip(*ranges.values(), strict=True))
     corners = np.array(list(itertools.product(*ranges.values())))
-    drawn = low + (high - low) * rng.random((DRAWS_PER_FIELD * len(ranges), len(ranges)))
+    draws = max(DRAWS, DRAWS_PER_FIELD * len(ranges))
+    drawn = low + (high - low) * rng.random((draws, len(ranges)))
     for values in np.concatenate([[0.5 * (low + high)], corners, drawn]):
         point = dict(zip(ranges, map(float, values), strict=True))
         drawn_scene = scene.replace(**point)
@@ -343,3 +359,16 @@ def _range_problem(task_class: type, max_torque: float, scene_items: tuple,
                     f"{_refusal(task, drawn_scene, found)}, or narrow the ranges away from "
                     "that scene")
     return None
+
+
+def range_caution(task: Any, scene: Scene, ranges: Mapping[str, tuple[float, float]]) -> str | None:
+    """A caution for a ``randomize`` box around ``scene`` that :func:`range_problem` passes:
+    where it may draw a drum (``R`` below 0) for a task that
+    :attr:`~roller_gym.task.Task.descends` (as :func:`fixed_scene_problem` gives any drum);
+    else None."""
+    _one_scene(task, scene)
+    ranges = validation.ranges("ranges", ranges)
+    low = ranges["R"][0] if "R" in ranges else scene.R
+    if not task.descends or low >= 0:
+        return None
+    return _drum_caution(task, f"with randomize={shown(ranges)}, which draws drums,")

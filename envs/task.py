@@ -64,7 +64,7 @@ from collections.abc import Sequence
 from typing import Any, ClassVar
 
 import numpy as np
-from roller_gym import bounds, rewards, start_set
+from roller_gym import bounds, rewards, start_set, validation
 from roller_gym.physics import Scene, equations, trig
 from roller_gym.physics.compiling import inlined
 from roller_gym.physics.integrators import contact_state, scene_arrays
@@ -236,9 +236,9 @@ class Task:
     Constants: ClassVar[type]
 
     def __init__(self, max_torque: float | None = None) -> None:
-        self.max_torque = float(self.default_max_torque if max_torque is None else max_torque)
-        if not (math.isfinite(self.max_torque) and self.max_torque > 0):
-            raise ValueError(f"max_torque={shown(max_torque)} [N·m] must be finite and > 0")
+        self.max_torque = validation.real(
+            "max_torque", self.default_max_torque if max_torque is None else max_torque,
+            positive=True, unit="N·m")
 
     @classmethod
     def env_id(cls) -> str:

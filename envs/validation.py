@@ -42,7 +42,7 @@ def real(name: str, value: Any, *, positive: bool = False, nonnegative: bool = F
     allowed = "a finite real number" + (" > 0" if positive else " >= 0" if nonnegative else "")
     if isinstance(value, np.ndarray) and value.ndim == 0:
         value = value[()]  # its NumPy scalar
-    if not isinstance(value, _REAL) or isinstance(value, bool | np.bool_):
+    if not isinstance(value, _REAL) or isinstance(value, bool | np.bool_ | np.timedelta64):
         raise ValueError(f"{name}={shown(value)} is not allowed: it must be {allowed}"
                          f"{f' [{unit}]' if unit else ''} (a Python or NumPy number, not "
                          f"{type(value).__name__})")

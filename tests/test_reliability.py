@@ -406,6 +406,11 @@ def _batch(num=2, **kwargs):
         (lambda: _stepper(integrator="rk4", substeps=np.timedelta64(5, "s")), ValueError,
          r"substeps=.* must be None"),
         (lambda: _batch(np.timedelta64(3, "s")), ValueError, r"num=.* must be an integer"),
+        # a nineteenth review: a task took text for its torque, a timedelta was "out of range"
+        (lambda: roller_gym.TASKS["RollerStabilize"]("1"), ValueError,
+         r"max_torque='1' is not allowed: it must be a finite real number > 0 \[N·m\]"),
+        (lambda: roller_gym.TASKS["RollerHold"](np.timedelta64(1, "s")), ValueError,
+         r"max_torque=.* is not allowed: .*not timedelta64"),
         (lambda: _batch().set_scenes(Scene(m=2.0), True), ValueError,
          r"index=True does not select rollers"),
         (lambda: analysis.holding_torque(Scene(), "a"), ValueError, r"phi='a' must be numbers"),

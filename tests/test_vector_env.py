@@ -118,6 +118,10 @@ def test_per_env_scenes_and_autoreset_after_termination():
     assert vec.unwrapped.scenes == [preset("paper"), slippery, preset("floor")]
     assert obs[2, 0] == 1.0 and obs[2, 1] == 0.0  # ψ stays 0 on the floor
     assert obs[0, 0] != 1.0
+    # None in the list: the task's own scene, as scene=None gives the single env
+    vec = gym.make_vec("roller_gym/RollerStabilize-v2", num_envs=3, scene=[None, "floor", None])
+    default = gym.make("roller_gym/RollerStabilize-v2").unwrapped.scene
+    assert vec.unwrapped.scenes == [default, preset("floor"), default]
 
 
 def test_batch_scene_and_randomize_match_single_envs():
