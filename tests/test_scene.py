@@ -298,3 +298,13 @@ def test_as_dict_gives_plain_numbers_for_a_scalar_scene_and_a_batch():
     for i in range(2):
         assert {name: values[i] for name, values in got.items()} == batch.item(i).as_dict()
     assert all(type(v) is list and all(type(x) is float for x in v) for v in got.values())
+
+
+def test_the_presets_cannot_be_changed_by_accident():
+    """``PRESETS`` is read-only: a user's assignment would otherwise change every later
+    environment's default scene in the process."""
+    with pytest.raises(TypeError):
+        PRESETS["paper"] = Scene(m=2.0)
+    with pytest.raises(AttributeError):
+        PRESETS.pop("paper")
+    assert preset("paper") == Scene()

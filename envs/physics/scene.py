@@ -29,7 +29,9 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, fields, replace
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -290,8 +292,9 @@ class Scene:
 
 _R = 0.1  # radius of the presets' roller [m]
 
-#: The named scenes. "paper" is the default; the others are the hard cases and other shapes.
-PRESETS: dict[str, Scene] = {
+#: The named scenes, read-only. "paper" is the default; the others are the hard cases and
+#: other shapes.
+PRESETS: Mapping[str, Scene] = MappingProxyType({
     # The paper's example: an eccentric roller inside a cylinder (numbers of our choice).
     "paper": Scene(),
     # A uniform solid disc: e = 0, k² = r²/2.
@@ -307,7 +310,7 @@ PRESETS: dict[str, Scene] = {
     # RollerBalance's scene: R = 10 r, e = 0.8 r: an unstable equilibrium at ψ ≈ 23°;
     # k = r keeps φ'' = τ/J_I moderate, so the torque does not lift the roller off.
     "balance": Scene(R=10 * _R, e=0.8 * _R, k=_R),
-}
+})
 
 
 def require_scene(scene: Any, name: str = "scene") -> Scene:
