@@ -368,7 +368,7 @@ def range_caution(task: Any, scene: Scene, ranges: Mapping[str, tuple[float, flo
     else None."""
     _one_scene(task, scene)
     ranges = validation.ranges("ranges", ranges)
-    low = ranges["R"][0] if "R" in ranges else scene.R
-    if not task.descends or low >= 0:
+    lowest = scene.replace(R=ranges["R"][0]) if "R" in ranges else scene  # (R's low end)
+    if not task.descends or lowest.shape != "drum":
         return None
     return _drum_caution(task, f"with randomize={shown(ranges)}, which draws drums,")
