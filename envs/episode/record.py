@@ -55,8 +55,9 @@ INFO_KEYS: dict[str, tuple[type, str]] = {
     "nonfinite": (bool, "the step could not stay finite (or |φ| passed 2⁵⁰ rad, where "
                        "sines are NaN): the state is the one before it"),
     "tol_met": (bool, "the step met the integrator's tolerance (False: not verified: out "
-                     "of reach of float64 or of the substeps a step may take, or its error "
-                     "estimate grew past it along the step)"),
+                     "of reach of float64 or of the substeps a step may take, its error "
+                     "estimate grew past it along the step, or reruns of a long step ended "
+                     "too far from it)"),
     "is_success": (bool, "the task's success rule holds (see the task's docs), on a step "
                          "that did not end in lift-off, slip or a non-finite state"),
 }

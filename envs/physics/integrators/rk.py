@@ -67,6 +67,11 @@ from roller_gym.physics.integrators.rules import (
     _swap_lanes,
     _write,
 )
+from roller_gym.physics.integrators.taylor_kernel import (
+    _checks,
+    _judged,
+    _taylor_spread,
+)
 from scipy.integrate._ivp import dop853_coefficients
 
 
@@ -391,9 +396,16 @@ def _rk_chunk(io, lo, hi, tab, cfg):
     for i in range(n):
         io[_H_NEXT, lo + int(slot[i])] = 0.0 if fixed or status[i] != 1.0 else carry[i]
         g = _propagated(s00[i], s01[i], s10[i], s11[i])
-        _write(io, lo + int(slot[i]), status[i] == 1.0, phi[i], w[i], count[i], end[0, i],
-               end[1, i], end[2, i], end[3, i], end[4, i], end[5, i], max(err_sum[i], g),
-               (err_sum[i] <= share) & (g <= limit) & (beyond[i] == 0.0))
+        col = lo + int(slot[i])
+        met = (err_sum[i] <= share) & (g <= limit) & (beyond[i] == 0.0)
+        estimate = max(err_sum[i], g)
+        phi0, w0 = io[_PHI_IN, col], io[_W_IN, col]
+        if _checks(met, count[i], phi0, w0, phi[i], w[i], tol):  # taken again by taylor
+            met, estimate = _judged(estimate, _taylor_spread(
+                phi0, w0, tau[i], par[0, i], par[1, i], par[2, i], par[3, i], par[4, i],
+                par[5, i], par[6, i], par[7, i], dt, tol, phi[i], w[i]), tol)
+        _write(io, col, status[i] == 1.0, phi[i], w[i], count[i], end[0, i], end[1, i],
+               end[2, i], end[3, i], end[4, i], end[5, i], estimate, met)
 
 
 @_jit
@@ -475,8 +487,12 @@ def _rk_one(io, tab, cfg):
             hdes = _first_size(io, 0, w, dt, tol, nfixed, cfg)
     io[_H_NEXT, 0] = 0.0 if fixed or status != 1.0 else carry
     grown = _propagated(s00, s01, s10, s11)
-    _finish(io, 0, status == 1.0, phi, w, tau, count, lift, slip, max(err_sum, grown),
-            (err_sum <= share) & (grown <= limit) & (beyond == 0.0))
+    met, estimate = (err_sum <= share) & (grown <= limit) & (beyond == 0.0), max(err_sum, grown)
+    phi0, w0 = io[_PHI_IN, 0], io[_W_IN, 0]
+    if _checks(met, count, phi0, w0, phi, w, tol):  # taken again by taylor
+        met, estimate = _judged(estimate, _taylor_spread(phi0, w0, tau, m, r, kappa, e, k, g, c,
+                                                         mu, dt, tol, phi, w), tol)
+    _finish(io, 0, status == 1.0, phi, w, tau, count, lift, slip, estimate, met)
 
 
 

@@ -62,6 +62,43 @@ ROUNDING_SHARE = 0.5
 #: what was measured against 40-digit references (``docs/INTEGRATORS.md``).
 TAYLOR_ROUNDING = 2.0
 
+#: The reruns that check a long or rounding-bound step of every error-controlled scheme
+#: (``spread_lanes`` of :func:`taylor_kernels`): a step whose own estimates met ``tolerance`` and
+#: that took at least SHADOW_FROM substeps, or whose float64 rounding (ε max(|φ|, |φ'|) a
+#: substep) grown SHADOW_GROWTH-fold could reach ``tolerance``, is taken again by the taylor
+#: scheme at each of SHADOW_SHARES of ``tolerance``, and reports it met only where its end
+#: lies within ``tolerance`` / SHADOW_MARGIN of both. A sensitive motion (a tight fit) grows
+#: the substeps' rounding past what their estimates see; runs on other substeps round
+#: differently, so their distance measures it (``docs/INTEGRATORS.md``).
+SHADOW_FROM = 8
+SHADOW_GROWTH = 1e3
+SHADOW_SHARES = (2e-3, 4e-4)
+SHADOW_MARGIN = 4.0
+
+
+@numba.extending.register_jitable
+def _checks(met, count, phi0, w0, phi, w, tol):
+    """True where a step from (φ0, φ'0) to (φ, φ') in ``count`` substeps whose estimates
+    ``met`` ``tol`` is to be taken again (SHADOW_FROM, SHADOW_GROWTH)."""
+    big = max(max(abs(phi0), abs(w0)), max(abs(phi), abs(w)))
+    return met and (count >= SHADOW_FROM or count * _EPS * big * SHADOW_GROWTH > tol)
+
+
+@numba.extending.register_jitable
+def _far(spread, status, phi, w, p, v):
+    """``spread`` [rad or rad/s] after one more rerun ending at (p, v) with ``status`` (1:
+    done): the larger of it and (φ, φ')'s distance from (p, v); inf where the rerun failed."""
+    far = max(abs(phi - p), abs(w - v))
+    return trig.select((status == 1.0) & _finite(far), max(spread, far), math.inf)
+
+
+@numba.extending.register_jitable
+def _judged(err, spread, tol):
+    """(tol_met, error estimate) of a step taken again: met only where SHADOW_MARGIN ·
+    ``spread`` (its end's largest distance from its reruns') is within ``tol``; the estimate
+    at least ``spread``."""
+    return SHADOW_MARGIN * spread <= tol, max(err, spread)
+
 
 _T_IN = ("phi", "phi_dot", "tau", "rest", "floor")  # the rows a substep reads, after the scene's
 _T_OUT = ("phi", "phi_dot", "h", "err", "lift", "slip", "last", "rounding")  # what it gives
@@ -167,6 +204,7 @@ def taylor_kernels(degree: int) -> TaylorKernels:
 
     ns.substep = substep
 
+
     @_jit
     def lanes(x, na, hfixed, rate, out):
         """``substep`` of lanes 0..na−1: the scene and state from the rows of ``x``, the
@@ -183,6 +221,36 @@ def taylor_kernels(degree: int) -> TaylorKernels:
                 hfixed, rate)
 
     ns.lanes = lanes
+
+    @_jit
+    def spread_lanes(phi0, w0, tau, m, r, kappa, e, k, g, c, mu, dt, tol, phi, w):
+        """(φ, φ')'s largest distance [rad or rad/s] from the ends of the step from (φ0, φ'0)
+        taken again at each of SHADOW_SHARES of ``tol`` (inf where one failed): by
+        ``lanes`` on one lane, what a batch compiled already."""
+        x = np.zeros((len(SCENE_FIELDS) + len(_T_IN), 1 + _PAD))
+        for f, value in enumerate((m, r, kappa, e, k, g, c, mu)):
+            x[f, 0] = value
+        x[_TI_TAU, 0] = tau
+        out = np.empty(_T_WIDTH)
+        far = 0.0
+        for part in SHADOW_SHARES:
+            x[_TI_PHI, 0], x[_TI_W, 0] = phi0, w0
+            t, count, hforce, status = 0.0, 0.0, 0.0, 0.0
+            for _attempt in range(_MAX_ATTEMPTS):
+                if status != 0.0:
+                    break
+                x[_TI_REST, 0], x[_TI_FLOOR, 0] = dt - t, max(1e-12 * dt, hforce)
+                ns.lanes(x, 1, 0.0, tol * part / dt, out)
+                fin = _finite(out[0]) & _finite(out[1]) & _finite(out[3])
+                status, t, count, _, hforce, _ = _taylor_tick(
+                    fin, out[6], 0.0, count, 0.0, t, out[2], 0.0, out[3], hforce, status, 0.0,
+                    dt)
+                x[_TI_PHI, 0] = trig.select(fin, out[0], x[_TI_PHI, 0])
+                x[_TI_W, 0] = trig.select(fin, out[1], x[_TI_W, 0])
+            far = _far(far, status, phi, w, x[_TI_PHI, 0], x[_TI_W, 0])
+        return far
+
+    ns.spread_lanes = spread_lanes
 
     @_jit
     def chunk(io, lo, hi, tab, cfg):
@@ -248,9 +316,15 @@ def taylor_kernels(degree: int) -> TaylorKernels:
         for i in range(n):
             col = lo + int(slot[i])
             io[_H_NEXT, col] = 0.0
+            met = (err_sum[i] <= share) & (round_sum[i] <= ROUNDING_SHARE * tol)
+            estimate = err_sum[i]
+            phi0, w0 = io[_PHI_IN, col], io[_W_IN, col]
+            if _checks(met, count[i], phi0, w0, phi[i], w[i], tol):
+                met, estimate = _judged(estimate, ns.spread_lanes(
+                    phi0, w0, tau[i], par[0, i], par[1, i], par[2, i], par[3, i], par[4, i],
+                    par[5, i], par[6, i], par[7, i], dt, tol, phi[i], w[i]), tol)
             _write(io, col, status[i] == 1.0, phi[i], w[i], count[i], end[0, i], end[1, i],
-                   end[2, i], end[3, i], end[4, i], end[5, i], err_sum[i],
-                   (err_sum[i] <= share) & (round_sum[i] <= ROUNDING_SHARE * tol))
+                   end[2, i], end[3, i], end[4, i], end[5, i], estimate, met)
 
     ns.chunk = chunk
 
@@ -279,8 +353,12 @@ def taylor_kernels(degree: int) -> TaylorKernels:
                 round_sum, dt)
             phi, w = trig.select(fin, phin, phi), trig.select(fin, wn, w)
         io[_H_NEXT, 0] = 0.0
-        _finish(io, 0, status == 1.0, phi, w, tau, count, lift, slip, err_sum,
-                (err_sum <= share) & (round_sum <= ROUNDING_SHARE * tol))
+        met, estimate = (err_sum <= share) & (round_sum <= ROUNDING_SHARE * tol), err_sum
+        phi0, w0 = io[_PHI_IN, 0], io[_W_IN, 0]
+        if _checks(met, count, phi0, w0, phi, w, tol):
+            met, estimate = _judged(estimate, ns.spread_lanes(
+                phi0, w0, tau, m, r, kappa, e, k, g, c, mu, dt, tol, phi, w), tol)
+        _finish(io, 0, status == 1.0, phi, w, tau, count, lift, slip, estimate, met)
 
     ns.one = one
 
@@ -304,4 +382,5 @@ def taylor_kernels(degree: int) -> TaylorKernels:
 # The default degree's kernels, by the names the episode kernels and the benchmark call.
 _DEFAULT = taylor_kernels(taylor.ORDER)
 _taylor_substep, _taylor_lanes, _taylor_chunk = _DEFAULT.substep, _DEFAULT.lanes, _DEFAULT.chunk
+_taylor_spread = _DEFAULT.namespace.spread_lanes
 _taylor_one, _taylor_serial, _taylor_parallel = _DEFAULT.one, _DEFAULT.serial, _DEFAULT.parallel
