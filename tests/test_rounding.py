@@ -17,7 +17,7 @@ def test_taylor_flags_few_steps_of_a_tolerance_near_rounding():
     each): float64's rounding, grown along the step, is a fair share of tol there (80-bit
     references put one step at 1.12 tol; ``rounding_references``). The reruns that check
     such a step flag only those they cannot confirm with room to spare: at most 10 %
-    (measured 19 of 300, each rerun at least tol / SHADOW_MARGIN away)."""
+    (measured 18 of 300, each at least tol / SHADOW_MARGIN from a rerun)."""
     scene = preset("tight_fit")
     rng = np.random.default_rng(3)
     n = 300

@@ -55,7 +55,7 @@ class StepResult:
             where their carried estimate stays above the scheme's ``propagated_limit`` share
             of ``tolerance`` after ``RETRIES`` retries with smaller shares, or, for a long or
             rounding-bound step of taylor, rk8 or rk4, where its end lies farther than
-            ``tolerance / SHADOW_MARGIN`` from the ends of taylor's two reruns at smaller
+            ``tolerance / SHADOW_MARGIN`` from the ends of taylor's reruns at smaller
             shares (float64's rounding grown along the step); for euler and
             midpoint, where the predicted substeps were more than ``MAX_SUBSTEPS`` or
             the error estimate is above ``tolerance``; for

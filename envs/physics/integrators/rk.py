@@ -69,8 +69,8 @@ from roller_gym.physics.integrators.rules import (
 )
 from roller_gym.physics.integrators.taylor_kernel import (
     _checks,
-    _judged,
-    _taylor_spread,
+    _taylor_check,
+    _taylor_check_one,
 )
 from scipy.integrate._ivp import dop853_coefficients
 
@@ -393,19 +393,16 @@ def _rk_chunk(io, lo, hi, tab, cfg):
     for i in range(n):  # (a loop: a slice assignment compiles numba's shape-mismatch message)
         end[4, i], end[5, i] = lift[i], slip[i]
     _end_lanes(phi, w, tau, par, n, end)
+    met, estimate = rows[2], rows[3]  # (e5p, e5w: free now)
+    for i in range(n):
+        g = _propagated(s00[i], s01[i], s10[i], s11[i])
+        ok = (err_sum[i] <= share) & (g <= limit) & (beyond[i] == 0.0)
+        met[i], estimate[i] = trig.select(ok, 1.0, 0.0), max(err_sum[i], g)
+    _taylor_check(io, lo, slot, par, tau, phi, w, count, met, estimate, n, dt, tol)  # reruns
     for i in range(n):
         io[_H_NEXT, lo + int(slot[i])] = 0.0 if fixed or status[i] != 1.0 else carry[i]
-        g = _propagated(s00[i], s01[i], s10[i], s11[i])
-        col = lo + int(slot[i])
-        met = (err_sum[i] <= share) & (g <= limit) & (beyond[i] == 0.0)
-        estimate = max(err_sum[i], g)
-        phi0, w0 = io[_PHI_IN, col], io[_W_IN, col]
-        if _checks(met, count[i], phi0, w0, phi[i], w[i], tol):  # taken again by taylor
-            met, estimate = _judged(estimate, _taylor_spread(
-                phi0, w0, tau[i], par[0, i], par[1, i], par[2, i], par[3, i], par[4, i],
-                par[5, i], par[6, i], par[7, i], dt, tol, phi[i], w[i]), tol)
-        _write(io, col, status[i] == 1.0, phi[i], w[i], count[i], end[0, i], end[1, i],
-               end[2, i], end[3, i], end[4, i], end[5, i], estimate, met)
+        _write(io, lo + int(slot[i]), status[i] == 1.0, phi[i], w[i], count[i], end[0, i],
+               end[1, i], end[2, i], end[3, i], end[4, i], end[5, i], estimate[i], met[i] != 0.0)
 
 
 @_jit
@@ -488,10 +485,8 @@ def _rk_one(io, tab, cfg):
     io[_H_NEXT, 0] = 0.0 if fixed or status != 1.0 else carry
     grown = _propagated(s00, s01, s10, s11)
     met, estimate = (err_sum <= share) & (grown <= limit) & (beyond == 0.0), max(err_sum, grown)
-    phi0, w0 = io[_PHI_IN, 0], io[_W_IN, 0]
-    if _checks(met, count, phi0, w0, phi, w, tol):  # taken again by taylor
-        met, estimate = _judged(estimate, _taylor_spread(phi0, w0, tau, m, r, kappa, e, k, g, c,
-                                                         mu, dt, tol, phi, w), tol)
+    if _checks(met, count, io[_PHI_IN, 0], io[_W_IN, 0], phi, w, tol):  # reruns by taylor
+        met, estimate = _taylor_check_one(io, tau, phi, w, count, estimate, dt, tol)
     _finish(io, 0, status == 1.0, phi, w, tau, count, lift, slip, estimate, met)
 
 

@@ -63,17 +63,20 @@ ROUNDING_SHARE = 0.5
 TAYLOR_ROUNDING = 2.0
 
 #: The reruns that check a long or rounding-bound step of every error-controlled scheme
-#: (``spread_lanes`` of :func:`taylor_kernels`): a step whose own estimates met ``tolerance`` and
+#: (``check`` of :func:`taylor_kernels`): a step whose own estimates met ``tolerance`` and
 #: that took at least SHADOW_FROM substeps, or whose float64 rounding (ε max(|φ|, |φ'|) a
 #: substep) grown SHADOW_GROWTH-fold could reach ``tolerance``, is taken again by the taylor
-#: scheme at each of SHADOW_SHARES of ``tolerance``, and reports it met only where its end
-#: lies within ``tolerance`` / SHADOW_MARGIN of both. A sensitive motion (a tight fit) grows
-#: the substeps' rounding past what their estimates see; runs on other substeps round
-#: differently, so their distance measures it (``docs/INTEGRATORS.md``).
-SHADOW_FROM = 8
+#: scheme at the first of SHADOW_SHARES of ``tolerance`` and, unless that settles it, at the
+#: second; it reports the tolerance met only where its end lies within ``tolerance`` /
+#: SHADOW_MARGIN of every rerun's, settled by one rerun within a SHADOW_SURE-th of that or
+#: beyond it. A sensitive motion (a tight fit) grows the substeps' rounding past what their
+#: estimates see; runs on other substeps round differently, so their distance measures it
+#: (``docs/INTEGRATORS.md``).
+SHADOW_FROM = 16
 SHADOW_GROWTH = 1e3
 SHADOW_SHARES = (2e-3, 4e-4)
 SHADOW_MARGIN = 4.0
+SHADOW_SURE = 8.0
 
 
 @numba.extending.register_jitable
@@ -85,11 +88,19 @@ def _checks(met, count, phi0, w0, phi, w, tol):
 
 
 @numba.extending.register_jitable
-def _far(spread, status, phi, w, p, v):
-    """``spread`` [rad or rad/s] after one more rerun ending at (p, v) with ``status`` (1:
-    done): the larger of it and (φ, φ')'s distance from (p, v); inf where the rerun failed."""
+def _far(spread, phi, w, p, v):
+    """``spread`` [rad or rad/s] after one more rerun ending at (p, v) (NaN: failed): the
+    larger of it and (φ, φ')'s distance from (p, v); inf where the rerun failed."""
     far = max(abs(phi - p), abs(w - v))
-    return trig.select((status == 1.0) & _finite(far), max(spread, far), math.inf)
+    return trig.select(_finite(far), max(spread, far), math.inf)
+
+
+@numba.extending.register_jitable
+def _doubt(spread, tol):
+    """True where a step whose end lies ``spread`` from a rerun's is neither settled as
+    met (within tol / (SHADOW_MARGIN · SHADOW_SURE)) nor as not (past tol /
+    SHADOW_MARGIN): a second rerun decides."""
+    return (SHADOW_MARGIN * SHADOW_SURE * spread > tol) & (SHADOW_MARGIN * spread <= tol)
 
 
 @numba.extending.register_jitable
@@ -223,34 +234,99 @@ def taylor_kernels(degree: int) -> TaylorKernels:
     ns.lanes = lanes
 
     @_jit
-    def spread_lanes(phi0, w0, tau, m, r, kappa, e, k, g, c, mu, dt, tol, phi, w):
-        """(φ, φ')'s largest distance [rad or rad/s] from the ends of the step from (φ0, φ'0)
-        taken again at each of SHADOW_SHARES of ``tol`` (inf where one failed): by
-        ``lanes`` on one lane, what a batch compiled already."""
-        x = np.zeros((len(SCENE_FIELDS) + len(_T_IN), 1 + _PAD))
-        for f, value in enumerate((m, r, kappa, e, k, g, c, mu)):
-            x[f, 0] = value
-        x[_TI_TAU, 0] = tau
-        out = np.empty(_T_WIDTH)
-        far = 0.0
-        for part in SHADOW_SHARES:
-            x[_TI_PHI, 0], x[_TI_W, 0] = phi0, w0
-            t, count, hforce, status = 0.0, 0.0, 0.0, 0.0
-            for _attempt in range(_MAX_ATTEMPTS):
-                if status != 0.0:
-                    break
-                x[_TI_REST, 0], x[_TI_FLOOR, 0] = dt - t, max(1e-12 * dt, hforce)
-                ns.lanes(x, 1, 0.0, tol * part / dt, out)
-                fin = _finite(out[0]) & _finite(out[1]) & _finite(out[3])
-                status, t, count, _, hforce, _ = _taylor_tick(
-                    fin, out[6], 0.0, count, 0.0, t, out[2], 0.0, out[3], hforce, status, 0.0,
-                    dt)
-                x[_TI_PHI, 0] = trig.select(fin, out[0], x[_TI_PHI, 0])
-                x[_TI_W, 0] = trig.select(fin, out[1], x[_TI_W, 0])
-            far = _far(far, status, phi, w, x[_TI_PHI, 0], x[_TI_W, 0])
-        return far
+    def rerun(x0, start, nc, dt, rate, end):
+        """end[:, j] = (φ, φ') at the end of the step of the roller in column j < nc of
+        ``x0`` (its scene and τ rows as ``lanes`` reads them) from start[:, j], allowing
+        ``rate`` error per second, in SIMD lanes; NaN where it failed."""
+        x = x0.copy()
+        out = np.empty(_T_WIDTH * nc)
+        rows = np.empty((5, nc + _PAD))
+        t, count, hforce, status, slot = rows[0], rows[1], rows[2], rows[3], rows[4]
+        for j in range(nc):
+            x[_TI_PHI, j], x[_TI_W, j] = start[0, j], start[1, j]
+            t[j], count[j], hforce[j], status[j], slot[j] = 0.0, 0.0, 0.0, 0.0, j
+            end[0, j], end[1, j] = math.nan, math.nan
+        na = nc
+        for _attempt in range(_MAX_ATTEMPTS):
+            if na == 0:
+                break
+            for i in range(na):
+                x[_TI_REST, i], x[_TI_FLOOR, i] = dt - t[i], max(1e-12 * dt, hforce[i])
+            ns.lanes(x, na, 0.0, rate, out)
+            for i in range(na):
+                o = _T_WIDTH * i
+                fin = _finite(out[o]) & _finite(out[o + 1]) & _finite(out[o + 3])
+                status[i], t[i], count[i], _, hforce[i], _ = _taylor_tick(
+                    fin, out[o + 6], 0.0, count[i], 0.0, t[i], out[o + 2], 0.0, out[o + 3],
+                    hforce[i], status[i], 0.0, dt)
+                x[_TI_PHI, i] = trig.select(fin, out[o], x[_TI_PHI, i])
+                x[_TI_W, i] = trig.select(fin, out[o + 1], x[_TI_W, i])
+            i = 0
+            while i < na:
+                if status[i] != 0.0:
+                    na -= 1
+                    if status[i] == 1.0:
+                        end[0, int(slot[i])], end[1, int(slot[i])] = x[_TI_PHI, i], x[_TI_W, i]
+                    _swap_lanes(x, i, na)
+                    for v in (t, count, hforce, status, slot):
+                        v[i], v[na] = v[na], v[i]
+                else:
+                    i += 1
 
-    ns.spread_lanes = spread_lanes
+    @_jit
+    def check(io, lo, slot, par, tau, phi, w, count, met, est, n, dt, tol):
+        """The rollers in lanes 0..n−1 of a finished chunk (lane i: column lo + slot[i] of
+        ``io``; ``met`` 1.0 where its estimates met ``tol``, ``est`` its estimate, both
+        rewritten): those ``_checks`` picks taken again (``rerun``) at the first of
+        SHADOW_SHARES, those still in doubt (``_doubt``) at the second, and ``_judged`` by
+        their end's larger distance from the reruns'."""
+        pick = np.empty(n, np.int64)
+        nc = 0
+        for i in range(n):
+            col = lo + int(slot[i])
+            if _checks(met[i] != 0.0, count[i], io[_PHI_IN, col], io[_W_IN, col], phi[i], w[i],
+                       tol):
+                pick[nc] = i
+                nc += 1
+        if nc == 0:
+            return
+        x0 = np.empty((len(SCENE_FIELDS) + len(_T_IN), nc + _PAD))
+        start, again, far = np.empty((2, nc)), np.empty((2, nc)), np.zeros(nc)
+        for part in SHADOW_SHARES:
+            m = 0  # the rollers still in doubt, to columns 0..m−1 (pick too)
+            for j in range(nc):
+                if part == SHADOW_SHARES[0] or _doubt(far[j], tol):
+                    i, col = pick[j], lo + int(slot[pick[j]])
+                    for f in range(len(SCENE_FIELDS)):
+                        x0[f, m] = par[f, i]
+                    x0[_TI_TAU, m] = tau[i]
+                    start[0, m], start[1, m] = io[_PHI_IN, col], io[_W_IN, col]
+                    pick[m], far[m] = i, far[j]
+                    m += 1
+                else:  # settled: judged now
+                    ok, judged = _judged(est[pick[j]], far[j], tol)
+                    met[pick[j]], est[pick[j]] = (1.0 if ok else 0.0), judged
+            nc = m
+            rerun(x0, start, nc, dt, tol * part / dt, again)
+            for j in range(nc):
+                far[j] = _far(far[j], phi[pick[j]], w[pick[j]], again[0, j], again[1, j])
+        for j in range(nc):
+            ok, judged = _judged(est[pick[j]], far[j], tol)
+            met[pick[j]], est[pick[j]] = (1.0 if ok else 0.0), judged
+
+    @_jit
+    def check_one(io, tau, phi, w, count, err, dt, tol):
+        """(tol_met, error estimate) of the step of ``io``'s column 0 to (φ, φ') in
+        ``count`` substeps whose estimates met ``tol`` (``err``): ``check`` on one lane."""
+        par = np.empty((len(SCENE_FIELDS), 1))
+        for f in range(len(SCENE_FIELDS)):
+            par[f, 0] = io[f, 0]
+        met, est = np.ones(1), np.full(1, err)
+        ns.check(io, 0, np.zeros(1), par, np.full(1, tau), np.full(1, phi), np.full(1, w),
+                 np.full(1, count), met, est, 1, dt, tol)
+        return met[0] != 0.0, est[0]
+
+    ns.check, ns.check_one = check, check_one
 
     @_jit
     def chunk(io, lo, hi, tab, cfg):
@@ -313,18 +389,16 @@ def taylor_kernels(degree: int) -> TaylorKernels:
         for i in range(n):  # (a loop: a slice assignment compiles numba's shape-mismatch text)
             end[4, i], end[5, i] = lift[i], slip[i]
         _end_lanes(phi, w, tau, par, n, end)
+        met, estimate = rows[3], rows[16]  # (err and last: free now)
+        for i in range(n):
+            ok = (err_sum[i] <= share) & (round_sum[i] <= ROUNDING_SHARE * tol)
+            met[i], estimate[i] = trig.select(ok, 1.0, 0.0), err_sum[i]
+        ns.check(io, lo, slot, par, tau, phi, w, count, met, estimate, n, dt, tol)
         for i in range(n):
             col = lo + int(slot[i])
             io[_H_NEXT, col] = 0.0
-            met = (err_sum[i] <= share) & (round_sum[i] <= ROUNDING_SHARE * tol)
-            estimate = err_sum[i]
-            phi0, w0 = io[_PHI_IN, col], io[_W_IN, col]
-            if _checks(met, count[i], phi0, w0, phi[i], w[i], tol):
-                met, estimate = _judged(estimate, ns.spread_lanes(
-                    phi0, w0, tau[i], par[0, i], par[1, i], par[2, i], par[3, i], par[4, i],
-                    par[5, i], par[6, i], par[7, i], dt, tol, phi[i], w[i]), tol)
             _write(io, col, status[i] == 1.0, phi[i], w[i], count[i], end[0, i], end[1, i],
-                   end[2, i], end[3, i], end[4, i], end[5, i], estimate, met)
+                   end[2, i], end[3, i], end[4, i], end[5, i], estimate[i], met[i] != 0.0)
 
     ns.chunk = chunk
 
@@ -354,10 +428,8 @@ def taylor_kernels(degree: int) -> TaylorKernels:
             phi, w = trig.select(fin, phin, phi), trig.select(fin, wn, w)
         io[_H_NEXT, 0] = 0.0
         met, estimate = (err_sum <= share) & (round_sum <= ROUNDING_SHARE * tol), err_sum
-        phi0, w0 = io[_PHI_IN, 0], io[_W_IN, 0]
-        if _checks(met, count, phi0, w0, phi, w, tol):
-            met, estimate = _judged(estimate, ns.spread_lanes(
-                phi0, w0, tau, m, r, kappa, e, k, g, c, mu, dt, tol, phi, w), tol)
+        if _checks(met, count, io[_PHI_IN, 0], io[_W_IN, 0], phi, w, tol):
+            met, estimate = ns.check_one(io, tau, phi, w, count, estimate, dt, tol)
         _finish(io, 0, status == 1.0, phi, w, tau, count, lift, slip, estimate, met)
 
     ns.one = one
@@ -382,5 +454,5 @@ def taylor_kernels(degree: int) -> TaylorKernels:
 # The default degree's kernels, by the names the episode kernels and the benchmark call.
 _DEFAULT = taylor_kernels(taylor.ORDER)
 _taylor_substep, _taylor_lanes, _taylor_chunk = _DEFAULT.substep, _DEFAULT.lanes, _DEFAULT.chunk
-_taylor_spread = _DEFAULT.namespace.spread_lanes
+_taylor_check, _taylor_check_one = _DEFAULT.namespace.check, _DEFAULT.namespace.check_one
 _taylor_one, _taylor_serial, _taylor_parallel = _DEFAULT.one, _DEFAULT.serial, _DEFAULT.parallel
