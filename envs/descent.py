@@ -365,9 +365,13 @@ def range_caution(task: Any, scene: Scene, ranges: Mapping[str, tuple[float, flo
     """A caution for a ``randomize`` box around ``scene`` that :func:`range_problem` passes:
     where it may draw a drum (``R`` below 0) for a task that
     :attr:`~roller_gym.task.Task.descends` (as :func:`fixed_scene_problem` gives any drum);
-    else None."""
+    else None. A box whose ends or middle are no scene raises Scene's ValueError, as
+    :func:`range_problem` does."""
     _one_scene(task, scene)
     ranges = validation.ranges("ranges", ranges)
+    for name, (low, high) in ranges.items():  # a box range_problem refuses as not scenes
+        for value in (low, 0.5 * (low + high), high):
+            scene.replace(**{name: value})  # (ValueError where not a scene)
     lowest = scene.replace(R=ranges["R"][0]) if "R" in ranges else scene  # (R's low end)
     if not task.descends or lowest.shape != "drum":
         return None

@@ -15,7 +15,8 @@ not proven, naming what was proven.
 What is proven on a box B (the conditions of :func:`problem`, in exact arithmetic):
 
 1. :func:`roller_gym.validation.check_integrable`: m g r and J_min within [1e-100, 1e100]
-   and (ω_max + spin + c/J_min)·dt <= LARGEST_PHASE_PER_STEP, on intervals.
+   and its phase per step (``validation.step_phase``: the rates times dt, and the turns a
+   held torque's speed adds) <= LARGEST_PHASE_PER_STEP, on intervals.
 2. A start state (:meth:`Task.fallback_start`): one of the fixed candidates rolls (N > 0,
    |F| <= μN) under −max_torque, 0 and +max_torque for every scene of B. Each candidate's
    φ and φ' are enclosed by their hull over B's corners: for the tasks here they are

@@ -135,6 +135,10 @@ def actions(value: Any, shape: tuple[int, ...], scale: float = 1.0,
         allowed = " or ".join(str(s) for s in shapes)
         raise ValueError(f"action={shown(value)} is not allowed: it must be real numbers of shape "
                          f"{allowed}, not a ragged list") from None
+    except (TypeError, RuntimeError) as exc:  # e.g. a torch tensor needing grad, or bfloat16
+        raise ValueError(f"action={shown(value)} cannot be read as numbers ({exc}); pass a NumPy "
+                         "array or real numbers (a torch tensor: tensor.detach().cpu().float()"
+                         ".numpy())") from None
     if a.dtype.kind not in "iuf" or a.shape not in shapes:
         allowed = " or ".join(str(s) for s in shapes)
         raise ValueError(f"action={shown(value)} is not allowed: it must be real numbers of shape "
@@ -178,11 +182,12 @@ def check_integrable(scene: Scene, dt: float, max_torque: float,
     With J_min = m (k² + (r − e)²) [kg·m²] the smallest moment of inertia about the contact,
     the limits are: m g r, J_min and max_torque representable with room for their squares
     (between 1e-100 and 1e100 in SI units), and the fastest phase per control step,
-    (ω_max + sqrt(max_torque / J_min) + c / J_min + start_speed (1 + 1/|1 − rκ|)) · dt with
-    ω_max² = m g (r²|κ|/(1 − rκ) + e)/J_min and c the damping, at most 1e4: beyond it a
-    control step spans more oscillations, or more e-foldings of the damping's decay, or
-    turns of the fastest angle from a start, than the integrators' substep budget can
-    follow.
+    (ω_max + sqrt(max_torque / J_min) + c / J_min + start_speed T) · dt
+    + (max_torque / J_min) T dt² / 2 with T = 1 + 1/|1 − rκ| (the fastest angle's turns per
+    radian of φ), ω_max² = m g (r²|κ|/(1 − rκ) + e)/J_min and c the damping, at most 1e4:
+    beyond it a control step spans more oscillations, or more e-foldings of the damping's
+    decay, or turns of the fastest angle from a start or from the speed a held torque builds
+    over the step, than the integrators' substep budget can follow.
     """
     for i in range(scene.batch_size or 1):
         one = scene.item(i) if scene.batch_size else scene
@@ -196,25 +201,28 @@ def check_integrable(scene: Scene, dt: float, max_torque: float,
                     "outside [1e-100, 1e100]; rescale the scene's units"
                 )
         rates = integration_rates(m, r, kappa, e, g, c, j_min, max_torque, start_speed)
-        omega, spin, decay, start = rates
+        omega, spin, decay, start, turn = rates
         phase = step_phase(rates, dt)
         if not phase <= LARGEST_PHASE_PER_STEP:
             raise ValueError(
                 f"dt={shown(dt)} s is too long for {shown(one)}: its fastest time scale is "
                 f"{1.0 / (omega + spin + decay + start):.3g} s (ω_max = {omega:.3g} rad/s, "
                 f"torque spin-up {spin:.3g} rad/s, damping c/J_min = {decay:.3g} 1/s, starts "
-                f"up to {start_speed:g} rad/s: {start:.3g} rad/s), {phase:.3g} rad per step "
-                f"where at most {LARGEST_PHASE_PER_STEP:g} can be followed; use a shorter dt, "
-                "a smaller max_torque, a larger k, a smaller e or less damping"
+                f"up to {start_speed:g} rad/s: {start:.3g} rad/s), and a held max_torque "
+                f"turns its fastest angle {spin * spin * turn * dt * dt / 2:.3g} rad in a step: "
+                f"{phase:.3g} rad per step where at most {LARGEST_PHASE_PER_STEP:g} can be "
+                "followed; use a shorter dt, a smaller max_torque, a larger k, a smaller e or "
+                "less damping"
             )
 
 
-def step_phase(rates: tuple[Any, Any, Any, Any], dt: float) -> Any:
-    """The fastest phase per control step [rad] of :func:`check_integrable`: the sum of
-    :func:`integration_rates` times ``dt`` [s] (floats, arrays or intervals), at most
-    :data:`LARGEST_PHASE_PER_STEP`."""
-    omega, spin, decay, start = rates
-    return (omega + spin + decay + start) * dt
+def step_phase(rates: tuple[Any, Any, Any, Any, Any], dt: float) -> Any:
+    """The fastest phase per control step [rad] of :func:`check_integrable` from
+    :func:`integration_rates` and ``dt`` [s]: the rates' sum times dt, and the turns of the
+    fastest angle at the speed a held torque builds, spin² T dt²/2 (floats, arrays or
+    intervals), at most :data:`LARGEST_PHASE_PER_STEP`."""
+    omega, spin, decay, start, turn = rates
+    return (omega + spin + decay + start) * dt + spin * spin * turn * (0.5 * dt * dt)
 
 
 def integration_magnitudes(m: Any, r: Any, e: Any, k: Any, g: Any) -> tuple[Any, Any]:
@@ -224,13 +232,15 @@ def integration_magnitudes(m: Any, r: Any, e: Any, k: Any, g: Any) -> tuple[Any,
 
 
 def integration_rates(m: Any, r: Any, kappa: Any, e: Any, g: Any, c: Any, j_min: Any,
-                      max_torque: Any, start_speed: float = 0.0) -> tuple[Any, Any, Any, Any]:
-    """(ω_max, spin, decay, start) [rad/s, rad/s, 1/s, rad/s] of :func:`check_integrable`:
-    ω_max² = m g (r²|κ|/(1 − rκ) + e) / J_min, spin² = max_torque / J_min,
-    decay = c / J_min, the damping's fastest rate, and start = start_speed (1 + 1/|1 − rκ|),
-    at least the fastest angle's rate at a start (start_speed times
-    :func:`~roller_gym.physics.equations.fastest_turn`) (floats, or intervals)."""
+                      max_torque: Any, start_speed: float = 0.0
+                      ) -> tuple[Any, Any, Any, Any, Any]:
+    """(ω_max, spin, decay, start, T) [rad/s, rad/s, 1/s, rad/s, 1] of
+    :func:`check_integrable`: ω_max² = m g (r²|κ|/(1 − rκ) + e) / J_min,
+    spin² = max_torque / J_min, decay = c / J_min, the damping's fastest rate,
+    T = 1 + 1/|1 − rκ|, at least the fastest angle's turns per radian of φ
+    (:func:`~roller_gym.physics.equations.fastest_turn`), and start = start_speed T, its rate
+    at a start (floats, or intervals)."""
     s = 1.0 - r * kappa
     omega = np.sqrt(m * g * (r * r * abs(kappa) / s + e) / j_min)
-    return (omega, np.sqrt(max_torque / j_min), c / j_min,
-            start_speed * (1.0 + 1.0 / abs(s)))
+    turn = 1.0 + 1.0 / abs(s)
+    return omega, np.sqrt(max_torque / j_min), c / j_min, start_speed * turn, turn

@@ -272,6 +272,11 @@ def test_a_box_that_draws_drums_is_warned_as_a_drum_is(recwarn):
     assert descent.range_caution(hold, PRESETS["drum"], {"R": (0.4, 0.6)}) is None
     balance = get_task("RollerBalance", current=True)(0.4)  # (its target lies up: no descent)
     assert descent.range_caution(balance, PRESETS["drum"], {"m": (0.9, 1.1)}) is None
+    for box in ({"R": (-1.0, 1.0)}, {"R": (-1.0, 0.05)}):  # no scene at R = 0 or R < r
+        with pytest.raises(ValueError, match="R must be > r"):
+            descent.range_caution(hold, PRESETS["paper"], box)
+        with pytest.raises(ValueError, match="R must be > r"):
+            descent.range_problem(hold, PRESETS["paper"], box)
     recwarn.clear()
     gym.make("roller_gym/RollerHold-v2", randomize={"m": (0.9, 1.1)})
     assert not [w for w in recwarn if drum in str(w.message)]

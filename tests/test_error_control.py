@@ -439,9 +439,9 @@ def test_taylor_stays_within_tol_through_the_dip_of_j_i(rim_mass_dip):
     """On the dip's 600 steps (references that do not resolve tol/10 skipped), taylor's
     estimates cannot see the error's growth; its tol_share (0.01) leaves room for it: every
     step is within tol at 1e-5, 1e-7 and 1e-9 (measured at most 0.53 tol; at tol_share 0.3
-    it was 13 tol), and at most 0.5 % report tol_met False: the long steps' reruns see the
-    error (measured: one step at 1e-5, 0.53 tol off, and one at 1e-7, 0.28 tol off, each
-    over tol / SHADOW_MARGIN from its reruns)."""
+    it was 13 tol), and at most 0.5 % report tol_met False: the reruns of a rounding-bound
+    step see the error (measured: one step at 1e-7, 0.28 tol off, over tol / SHADOW_MARGIN
+    from its rerun)."""
     for tol in (1e-5, 1e-7, 1e-9):
         err, checked, out = _dip_errors(rim_mass_dip, "taylor", tol)
         assert checked.sum() >= 450, (tol, checked.sum())

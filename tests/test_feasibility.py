@@ -78,6 +78,7 @@ EQUATIONS = {
     "omega_max": lambda x: rates(x)[0],
     "spin": lambda x: rates(x)[1],
     "damping decay": lambda x: rates(x)[2],
+    "fastest turns per radian": lambda x: rates(x)[4],
 }
 
 

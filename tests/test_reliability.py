@@ -309,6 +309,21 @@ def test_a_masked_or_ragged_action_is_refused():
         vec.step([[0.1], [0.2, 0.3]])  # (NumPy's "inhomogeneous shape" before)
 
 
+def test_a_torch_action_numpy_cannot_read_is_refused_by_name():
+    """A tensor that requires grad, or of bfloat16, raised torch's RuntimeError or NumPy's
+    TypeError, neither naming the action; now a ValueError that does and says what to pass.
+    A plain tensor steps as its values."""
+    torch = pytest.importorskip("torch")
+    env = gym.make(STABILIZE)
+    env.reset(seed=0)
+    for bad in (torch.tensor([0.5], requires_grad=True), torch.tensor([0.5],
+                                                                       dtype=torch.bfloat16)):
+        with pytest.raises(ValueError, match=r"^action=.* cannot be read as numbers.*detach"):
+            env.step(bad)
+    _, _, _, _, info = env.step(torch.tensor([0.5]))
+    assert info["torque"] == 0.5 * env.unwrapped.task.max_torque
+
+
 def test_sizes_that_cannot_be_allocated_and_wrong_render_modes_are_refused_by_name():
     with pytest.raises(ValueError, match=r"num_envs=1099511627776 .*memory"):
         gym.make_vec(STABILIZE, num_envs=2**40)
@@ -1078,3 +1093,21 @@ def test_a_tolerance_float64_cannot_verify_is_refused(tolerance):
             assert info["tol_met"], env_id
             if terminated or truncated:
                 break
+
+
+def test_a_step_long_enough_for_a_held_torque_to_outrun_the_budget_is_refused():
+    """dt = 100 s was accepted by Hold (and Track, HoldRandomized): the check counted the
+    held torque's spin-up as sqrt(τ/J_min)·dt, not the speed it builds, (τ/J_min)·dt, which
+    turns the fastest angle (τ/J_min) T dt²/2 rad in a step (T = 1 + 1/|1 − rκ|): 4e6 rad
+    here, past the 1e4 the substep budget follows; random episodes then ended at the budget.
+    Now refused at construction, naming dt and the torque's turns; dt = 1 s still passes."""
+    scene = preset("paper")
+    j_min = scene.m * (scene.k ** 2 + (scene.r - scene.e) ** 2)
+    turns = 1.0 + 1.0 / abs(1.0 - scene.r / scene.R)
+    for env_id in ("roller_gym/RollerHold-v2", "roller_gym/RollerTrack-v1"):
+        max_torque = gym.make(env_id).unwrapped.task.max_torque
+        held = max_torque / j_min * turns * 100.0 ** 2 / 2
+        assert held > 1e4  # the independent count: past the budget's phase
+        with pytest.raises(ValueError, match=r"^dt=100(\.0)? s is too long .*held max_torque"):
+            gym.make(env_id, dt=100.0)
+        gym.make(env_id, dt=1.0)  # (τ/J_min) T / 2 rad: well within

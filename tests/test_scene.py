@@ -308,3 +308,18 @@ def test_the_presets_cannot_be_changed_by_accident():
     with pytest.raises(AttributeError):
         PRESETS.pop("paper")
     assert preset("paper") == Scene()
+
+
+def test_a_batch_scene_cannot_be_changed_past_its_checks():
+    """A batch scene kept the caller's array: changing it afterwards (or the scene's own
+    array) gave a scene its checks would refuse, R below r, which physics.step then stepped
+    and reported within tol. The scene now keeps a read-only copy."""
+    given = np.array([0.5, 0.6, 0.7])
+    scene = Scene(R=given, m=np.array([1.0, 2.0, 3.0]))
+    given[1] = 0.05  # the caller's array: the scene does not see it
+    assert scene.R[1] == 0.6
+    with pytest.raises(ValueError, match="read-only"):
+        scene.R[1] = 0.05
+    assert not scene.m.flags.writeable
+    with pytest.raises(ValueError, match="R must be > r"):
+        Scene(R=np.array([0.5, 0.05, 0.7]))  # what the change would have made

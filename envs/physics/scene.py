@@ -22,7 +22,8 @@ Shapes, through the signed curvature κ = 1/R of the fixed surface:
 * the outside of a drum of radius −R, the roller on top of it: ``R < 0`` (κ < 0).
 
 Every field may also be a NumPy array (a batch of differently built rollers, for domain
-randomization); all functions of :mod:`roller_gym.physics` broadcast over them.
+randomization); all functions of :mod:`roller_gym.physics` broadcast over them. A scene keeps
+a read-only float64 copy of each array it was given: it cannot be changed after its checks.
 """
 
 from __future__ import annotations
@@ -82,6 +83,16 @@ def shown(value: Any, limit: int = 200) -> str:
         return f"<a {type(value).__name__} object>"
     half = max(limit // 2 - 2, 1)
     return text if len(text) <= limit else f"{text[:half]}...{text[-half:]}"
+
+
+def _stored(value: np.ndarray) -> float | np.ndarray:
+    """A checked field as a Scene keeps it: a float, or a read-only float64 copy of an array
+    (so that neither the caller's array nor the scene's can be changed past the checks)."""
+    if value.ndim == 0:
+        return float(value)
+    out = np.array(value, dtype=float)
+    out.setflags(write=False)
+    return out
 
 
 def _describe(value: np.ndarray) -> str:
@@ -185,7 +196,7 @@ class Scene:
                         f"Scene.R={_describe(value)} is out of range: its curvature 1/R is past "
                         "float64's range; |R| must be at least about 5.6e-309 m"
                     )
-                object.__setattr__(self, f.name, value if value.ndim > 0 else float(value))
+                object.__setattr__(self, f.name, _stored(value))
                 continue
             check, allowed = rules[f.name]
             if not np.all(check(value)) or np.isinf(value).any():
@@ -194,9 +205,7 @@ class Scene:
                     f"{allowed}"
                 )
             # stored as float64 (NumPy int scalars overflowed in the formulas: k*k in int16)
-            object.__setattr__(self, f.name, value if value.ndim > 0 else float(value))
-        if np.asarray(self.R).ndim > 0:
-            object.__setattr__(self, "R", np.asarray(self.R, dtype=float))
+            object.__setattr__(self, f.name, _stored(value))
 
     # -- derived quantities -------------------------------------------------------------
     @property

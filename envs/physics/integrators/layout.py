@@ -46,15 +46,15 @@ class StepResult:
         error_estimate: the sum of the accepted substeps' estimated errors (max of |Δφ|
             [rad], |Δφ'| [rad/s]), for rk8 and rk4 the larger of that and the same estimates
             carried to the step's end by the linearized motion, and for a step checked by
-            reruns (``taylor_kernel.SHADOW_FROM``) at least its end's distance from theirs;
+            reruns (``taylor_kernel.SHADOW_RATE``) at least its end's distance from theirs;
             for euler and midpoint, Richardson's estimate from the same step in half as many
             substeps (2 for one; NaN where the prediction already failed); NaN for DOP853.
         tol_met: False where the accepted substeps' error estimates add up to more than the
             scheme's share of ``tolerance`` (substeps accepted at float64 rounding or past the
             budget: the tolerance was out of reach and is not verified), or, for rk8 and rk4,
             where their carried estimate stays above the scheme's ``propagated_limit`` share
-            of ``tolerance`` after ``RETRIES`` retries with smaller shares, or, for a long or
-            rounding-bound step of taylor, rk8 or rk4, where its end lies farther than
+            of ``tolerance`` after ``RETRIES`` retries with smaller shares, or, for a step of
+            rk8 or rk4 or a rounding-bound step of taylor, where its end lies farther than
             ``tolerance / SHADOW_MARGIN`` from the ends of taylor's reruns at smaller
             shares (float64's rounding grown along the step); for euler and
             midpoint, where the predicted substeps were more than ``MAX_SUBSTEPS`` or

@@ -398,7 +398,7 @@ def _rk_chunk(io, lo, hi, tab, cfg):
         g = _propagated(s00[i], s01[i], s10[i], s11[i])
         ok = (err_sum[i] <= share) & (g <= limit) & (beyond[i] == 0.0)
         met[i], estimate[i] = trig.select(ok, 1.0, 0.0), max(err_sum[i], g)
-    _taylor_check(io, lo, slot, par, tau, phi, w, count, met, estimate, n, dt, tol)  # reruns
+    _taylor_check(io, lo, slot, par, tau, phi, w, count, met, estimate, n, dt, tol, 0)
     for i in range(n):
         io[_H_NEXT, lo + int(slot[i])] = 0.0 if fixed or status[i] != 1.0 else carry[i]
         _write(io, lo + int(slot[i]), status[i] == 1.0, phi[i], w[i], count[i], end[0, i],
@@ -485,8 +485,8 @@ def _rk_one(io, tab, cfg):
     io[_H_NEXT, 0] = 0.0 if fixed or status != 1.0 else carry
     grown = _propagated(s00, s01, s10, s11)
     met, estimate = (err_sum <= share) & (grown <= limit) & (beyond == 0.0), max(err_sum, grown)
-    if _checks(met, count, io[_PHI_IN, 0], io[_W_IN, 0], phi, w, tol):  # reruns by taylor
-        met, estimate = _taylor_check_one(io, tau, phi, w, count, estimate, dt, tol)
+    if _checks(met, count, io[_PHI_IN, 0], io[_W_IN, 0], phi, w, tol, 0):  # taylor's reruns
+        met, estimate = _taylor_check_one(io, tau, phi, w, count, estimate, dt, tol, 0)
     _finish(io, 0, status == 1.0, phi, w, tau, count, lift, slip, estimate, met)
 
 

@@ -62,29 +62,36 @@ ROUNDING_SHARE = 0.5
 #: what was measured against 40-digit references (``docs/INTEGRATORS.md``).
 TAYLOR_ROUNDING = 2.0
 
-#: The reruns that check a long or rounding-bound step of every error-controlled scheme
-#: (``check`` of :func:`taylor_kernels`): a step whose own estimates met ``tolerance`` and
-#: that took at least SHADOW_FROM substeps, or whose float64 rounding (ε max(|φ|, |φ'|) a
-#: substep) grown SHADOW_GROWTH-fold could reach ``tolerance``, is taken again by the taylor
-#: scheme at the first of SHADOW_SHARES of ``tolerance`` and, unless that settles it, at the
-#: second; it reports the tolerance met only where its end lies within ``tolerance`` /
-#: SHADOW_MARGIN of every rerun's, settled by one rerun within a SHADOW_SURE-th of that or
-#: beyond it. A sensitive motion (a tight fit) grows the substeps' rounding past what their
-#: estimates see; runs on other substeps round differently, so their distance measures it
-#: (``docs/INTEGRATORS.md``).
-SHADOW_FROM = 16
+#: The reruns that check a step whose own estimates met ``tolerance`` (``check`` of
+#: :func:`taylor_kernels`): every step of rk8 and rk4; a step of taylor whose float64
+#: rounding (TAYLOR_ROUNDING ε max(|φ|, |φ'|) a substep) grown by the larger of
+#: SHADOW_GROWTH and SHADOW_RATE times its substeps could reach ``tolerance`` /
+#: SHADOW_MARGIN, or that took SHADOW_FROM substeps or more. It is taken again by the
+#: taylor scheme at the first of SHADOW_SHARES of ``tolerance`` and, unless that settles it,
+#: at the second; it reports the tolerance met only where its end lies within
+#: ``tolerance`` / SHADOW_MARGIN of every rerun's, settled by one rerun within a
+#: SHADOW_SURE-th of that or beyond it. A sensitive motion (a tight fit) grows the substeps'
+#: rounding past what their estimates see; runs on other substeps round differently, so
+#: their distance measures it (``docs/INTEGRATORS.md``: the growth measured, at most 3.2
+#: times the substeps).
+SHADOW_FROM = 1024
 SHADOW_GROWTH = 1e3
+SHADOW_RATE = 32.0
 SHADOW_SHARES = (2e-3, 4e-4)
 SHADOW_MARGIN = 4.0
 SHADOW_SURE = 8.0
 
 
 @numba.extending.register_jitable
-def _checks(met, count, phi0, w0, phi, w, tol):
+def _checks(met, count, phi0, w0, phi, w, tol, longest):
     """True where a step from (φ0, φ'0) to (φ, φ') in ``count`` substeps whose estimates
-    ``met`` ``tol`` is to be taken again (SHADOW_FROM, SHADOW_GROWTH)."""
+    ``met`` ``tol`` is to be taken again: ``count`` at least ``longest`` (taylor's
+    SHADOW_FROM; 0 for a Runge–Kutta pair: every step), or its substeps' rounding
+    (TAYLOR_ROUNDING ε max(|φ|, |φ'|) each) grown by the larger of SHADOW_GROWTH and
+    SHADOW_RATE · count past tol / SHADOW_MARGIN."""
     big = max(max(abs(phi0), abs(w0)), max(abs(phi), abs(w)))
-    return met and (count >= SHADOW_FROM or count * _EPS * big * SHADOW_GROWTH > tol)
+    grown = count * TAYLOR_ROUNDING * _EPS * big * max(SHADOW_GROWTH, SHADOW_RATE * count)
+    return met and ((count >= longest) | (SHADOW_MARGIN * grown > tol))
 
 
 @numba.extending.register_jitable
@@ -274,7 +281,7 @@ def taylor_kernels(degree: int) -> TaylorKernels:
                     i += 1
 
     @_jit
-    def check(io, lo, slot, par, tau, phi, w, count, met, est, n, dt, tol):
+    def check(io, lo, slot, par, tau, phi, w, count, met, est, n, dt, tol, longest):
         """The rollers in lanes 0..n−1 of a finished chunk (lane i: column lo + slot[i] of
         ``io``; ``met`` 1.0 where its estimates met ``tol``, ``est`` its estimate, both
         rewritten): those ``_checks`` picks taken again (``rerun``) at the first of
@@ -285,7 +292,7 @@ def taylor_kernels(degree: int) -> TaylorKernels:
         for i in range(n):
             col = lo + int(slot[i])
             if _checks(met[i] != 0.0, count[i], io[_PHI_IN, col], io[_W_IN, col], phi[i], w[i],
-                       tol):
+                       tol, longest):
                 pick[nc] = i
                 nc += 1
         if nc == 0:
@@ -315,7 +322,7 @@ def taylor_kernels(degree: int) -> TaylorKernels:
             met[pick[j]], est[pick[j]] = (1.0 if ok else 0.0), judged
 
     @_jit
-    def check_one(io, tau, phi, w, count, err, dt, tol):
+    def check_one(io, tau, phi, w, count, err, dt, tol, longest):
         """(tol_met, error estimate) of the step of ``io``'s column 0 to (φ, φ') in
         ``count`` substeps whose estimates met ``tol`` (``err``): ``check`` on one lane."""
         par = np.empty((len(SCENE_FIELDS), 1))
@@ -323,7 +330,7 @@ def taylor_kernels(degree: int) -> TaylorKernels:
             par[f, 0] = io[f, 0]
         met, est = np.ones(1), np.full(1, err)
         ns.check(io, 0, np.zeros(1), par, np.full(1, tau), np.full(1, phi), np.full(1, w),
-                 np.full(1, count), met, est, 1, dt, tol)
+                 np.full(1, count), met, est, 1, dt, tol, longest)
         return met[0] != 0.0, est[0]
 
     ns.check, ns.check_one = check, check_one
@@ -393,7 +400,7 @@ def taylor_kernels(degree: int) -> TaylorKernels:
         for i in range(n):
             ok = (err_sum[i] <= share) & (round_sum[i] <= ROUNDING_SHARE * tol)
             met[i], estimate[i] = trig.select(ok, 1.0, 0.0), err_sum[i]
-        ns.check(io, lo, slot, par, tau, phi, w, count, met, estimate, n, dt, tol)
+        ns.check(io, lo, slot, par, tau, phi, w, count, met, estimate, n, dt, tol, SHADOW_FROM)
         for i in range(n):
             col = lo + int(slot[i])
             io[_H_NEXT, col] = 0.0
@@ -428,8 +435,8 @@ def taylor_kernels(degree: int) -> TaylorKernels:
             phi, w = trig.select(fin, phin, phi), trig.select(fin, wn, w)
         io[_H_NEXT, 0] = 0.0
         met, estimate = (err_sum <= share) & (round_sum <= ROUNDING_SHARE * tol), err_sum
-        if _checks(met, count, io[_PHI_IN, 0], io[_W_IN, 0], phi, w, tol):
-            met, estimate = ns.check_one(io, tau, phi, w, count, estimate, dt, tol)
+        if _checks(met, count, io[_PHI_IN, 0], io[_W_IN, 0], phi, w, tol, SHADOW_FROM):
+            met, estimate = ns.check_one(io, tau, phi, w, count, estimate, dt, tol, SHADOW_FROM)
         _finish(io, 0, status == 1.0, phi, w, tau, count, lift, slip, estimate, met)
 
     ns.one = one
