@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import rounding_references
-from roller_gym.physics import preset, step
+from roller_gym.physics import Scene, preset, step
 from roller_gym.physics.integrators.taylor_kernel import SHADOW_MARGIN
 
 
@@ -53,3 +53,28 @@ def test_no_scheme_claims_a_rounding_bound_step_twice_over(method):
             out = step(scene, phi[0], w[0], tau[0], dt, integrator=method, tolerance=tol)
             err = max(abs(out.phi - ref[0, 0]), abs(out.phi_dot - ref[1, 0]))
             assert err > 2 * tol + uncertainty[0] and not out.tol_met, (err / tol)
+
+
+def test_a_single_rk8_substep_far_off_is_not_claimed():
+    """A review found rk8 reporting tol_met on one substep 3.4 tol off, its estimate 36
+    times under the error (a tight fit, a tiny k, near rest under a large torque, dt
+    0.002 s): no count of substeps flags it, so every rk8 and rk4 step is checked. Against
+    ``rounding_references.rk4_long_double`` (4,096 and 8,192 steps): rk8 at 1e-8 is over
+    2 tol and reports False; taylor and rk4 there, and rk8 at 1e-10, are within tol."""
+    scene = Scene(m=1.6572529784082821, r=0.1, R=0.1008771651548591, e=0.02869738699172243,
+                  k=0.0005186853861325545, mu=5.0)
+    phi, w, tau, dt = 13.821319424038933, -0.00133955564031567, 4.242996642948612, 0.002
+    fine = np.array(rounding_references.rk4_long_double(scene, [phi], [w], [tau], dt, 8192),
+                    dtype=float)[:, 0]
+    coarse = np.array(rounding_references.rk4_long_double(scene, [phi], [w], [tau], dt, 4096),
+                      dtype=float)[:, 0]
+    uncertainty = np.abs(fine - coarse).max() / 15
+    for method, tol, off in (("rk8", 1e-8, True), ("rk8", 1e-10, False),
+                             ("taylor", 1e-8, False), ("rk4", 1e-8, False)):
+        out = step(scene, phi, w, tau, dt, integrator=method, tolerance=tol)
+        err = max(abs(out.phi - fine[0]), abs(out.phi_dot - fine[1]))
+        assert uncertainty < tol / 10
+        if off:
+            assert err > 2 * tol and not out.tol_met, (method, tol, err / tol)
+        else:
+            assert err <= tol and out.tol_met, (method, tol, err / tol)

@@ -486,7 +486,7 @@ def _rk_one(io, tab, cfg):
     grown = _propagated(s00, s01, s10, s11)
     met, estimate = (err_sum <= share) & (grown <= limit) & (beyond == 0.0), max(err_sum, grown)
     if _checks(met, count, io[_PHI_IN, 0], io[_W_IN, 0], phi, w, tol, 0):  # taylor's reruns
-        met, estimate = _taylor_check_one(io, tau, phi, w, count, estimate, dt, tol, 0)
+        met, estimate = _taylor_check_one(io, phi, w, estimate, dt, tol)
     _finish(io, 0, status == 1.0, phi, w, tau, count, lift, slip, estimate, met)
 
 

@@ -241,52 +241,50 @@ def taylor_kernels(degree: int) -> TaylorKernels:
     ns.lanes = lanes
 
     @_jit
-    def rerun(x0, start, nc, dt, rate, end):
+    def rerun(x, start, nc, dt, rate, end):
         """end[:, j] = (φ, φ') at the end of the step of the roller in column j < nc of
-        ``x0`` (its scene and τ rows as ``lanes`` reads them) from start[:, j], allowing
-        ``rate`` error per second, in SIMD lanes; NaN where it failed."""
-        x = x0.copy()
+        ``x`` (its scene and τ rows as ``lanes`` reads them; its state rows are used) from
+        start[:, j], allowing ``rate`` error per second, in SIMD lanes; NaN where it failed.
+        Lanes are not reordered: a finished one is computed on, its results not taken."""
         out = np.empty(_T_WIDTH * nc)
-        rows = np.empty((5, nc + _PAD))
-        t, count, hforce, status, slot = rows[0], rows[1], rows[2], rows[3], rows[4]
+        t, count, hforce, status = (np.zeros(nc), np.zeros(nc), np.zeros(nc),
+                                    np.zeros(nc))
         for j in range(nc):
             x[_TI_PHI, j], x[_TI_W, j] = start[0, j], start[1, j]
-            t[j], count[j], hforce[j], status[j], slot[j] = 0.0, 0.0, 0.0, 0.0, j
-            end[0, j], end[1, j] = math.nan, math.nan
-        na = nc
+        running = nc
         for _attempt in range(_MAX_ATTEMPTS):
-            if na == 0:
+            if running == 0:
                 break
-            for i in range(na):
-                x[_TI_REST, i], x[_TI_FLOOR, i] = dt - t[i], max(1e-12 * dt, hforce[i])
-            ns.lanes(x, na, 0.0, rate, out)
-            for i in range(na):
-                o = _T_WIDTH * i
-                fin = _finite(out[o]) & _finite(out[o + 1]) & _finite(out[o + 3])
-                status[i], t[i], count[i], _, hforce[i], _ = _taylor_tick(
-                    fin, out[o + 6], 0.0, count[i], 0.0, t[i], out[o + 2], 0.0, out[o + 3],
-                    hforce[i], status[i], 0.0, dt)
-                x[_TI_PHI, i] = trig.select(fin, out[o], x[_TI_PHI, i])
-                x[_TI_W, i] = trig.select(fin, out[o + 1], x[_TI_W, i])
-            i = 0
-            while i < na:
-                if status[i] != 0.0:
-                    na -= 1
-                    if status[i] == 1.0:
-                        end[0, int(slot[i])], end[1, int(slot[i])] = x[_TI_PHI, i], x[_TI_W, i]
-                    _swap_lanes(x, i, na)
-                    for v in (t, count, hforce, status, slot):
-                        v[i], v[na] = v[na], v[i]
-                else:
-                    i += 1
+            for j in range(nc):
+                x[_TI_REST, j] = max(dt - t[j], 0.0)
+                x[_TI_FLOOR, j] = max(1e-12 * dt, hforce[j])
+            ns.lanes(x, nc, 0.0, rate, out)
+            running = 0
+            for j in range(nc):
+                o = _T_WIDTH * j
+                go = status[j] == 0.0
+                fin = go & _finite(out[o]) & _finite(out[o + 1]) & _finite(out[o + 3])
+                st, tj, cj, _, hj, _ = _taylor_tick(fin, out[o + 6], 0.0, count[j], 0.0, t[j],
+                                                    out[o + 2], 0.0, out[o + 3], hforce[j],
+                                                    status[j], 0.0, dt)
+                status[j] = trig.select(go, st, status[j])
+                t[j], count[j] = trig.select(go, tj, t[j]), trig.select(go, cj, count[j])
+                hforce[j] = trig.select(go, hj, hforce[j])
+                x[_TI_PHI, j] = trig.select(fin, out[o], x[_TI_PHI, j])
+                x[_TI_W, j] = trig.select(fin, out[o + 1], x[_TI_W, j])
+                running += 1 if status[j] == 0.0 else 0
+        for j in range(nc):
+            done = status[j] == 1.0
+            end[0, j] = trig.select(done, x[_TI_PHI, j], math.nan)
+            end[1, j] = trig.select(done, x[_TI_W, j], math.nan)
 
     @_jit
     def check(io, lo, slot, par, tau, phi, w, count, met, est, n, dt, tol, longest):
         """The rollers in lanes 0..n−1 of a finished chunk (lane i: column lo + slot[i] of
         ``io``; ``met`` 1.0 where its estimates met ``tol``, ``est`` its estimate, both
         rewritten): those ``_checks`` picks taken again (``rerun``) at the first of
-        SHADOW_SHARES, those still in doubt (``_doubt``) at the second, and ``_judged`` by
-        their end's larger distance from the reruns'."""
+        SHADOW_SHARES, and all of them again at the second where one is in doubt
+        (``_doubt``); each ``_judged`` by its end's larger distance from the reruns'."""
         pick = np.empty(n, np.int64)
         nc = 0
         for i in range(n):
@@ -297,41 +295,56 @@ def taylor_kernels(degree: int) -> TaylorKernels:
                 nc += 1
         if nc == 0:
             return
-        x0 = np.empty((len(SCENE_FIELDS) + len(_T_IN), nc + _PAD))
+        x = np.empty((len(SCENE_FIELDS) + len(_T_IN), nc + _PAD))
         start, again, far = np.empty((2, nc)), np.empty((2, nc)), np.zeros(nc)
+        for j in range(nc):
+            i = pick[j]
+            col = lo + int(slot[i])
+            for f in range(len(SCENE_FIELDS)):
+                x[f, j] = par[f, i]
+            x[_TI_TAU, j] = tau[i]
+            start[0, j], start[1, j] = io[_PHI_IN, col], io[_W_IN, col]
+        doubt = True
         for part in SHADOW_SHARES:
-            m = 0  # the rollers still in doubt, to columns 0..m−1 (pick too)
+            if not doubt:
+                break
+            rerun(x, start, nc, dt, tol * part / dt, again)
+            doubt = False
             for j in range(nc):
                 if part == SHADOW_SHARES[0] or _doubt(far[j], tol):
-                    i, col = pick[j], lo + int(slot[pick[j]])
-                    for f in range(len(SCENE_FIELDS)):
-                        x0[f, m] = par[f, i]
-                    x0[_TI_TAU, m] = tau[i]
-                    start[0, m], start[1, m] = io[_PHI_IN, col], io[_W_IN, col]
-                    pick[m], far[m] = i, far[j]
-                    m += 1
-                else:  # settled: judged now
-                    ok, judged = _judged(est[pick[j]], far[j], tol)
-                    met[pick[j]], est[pick[j]] = (1.0 if ok else 0.0), judged
-            nc = m
-            rerun(x0, start, nc, dt, tol * part / dt, again)
-            for j in range(nc):
-                far[j] = _far(far[j], phi[pick[j]], w[pick[j]], again[0, j], again[1, j])
+                    far[j] = _far(far[j], phi[pick[j]], w[pick[j]], again[0, j], again[1, j])
+                doubt |= _doubt(far[j], tol)
         for j in range(nc):
             ok, judged = _judged(est[pick[j]], far[j], tol)
             met[pick[j]], est[pick[j]] = (1.0 if ok else 0.0), judged
 
     @_jit
-    def check_one(io, tau, phi, w, count, err, dt, tol, longest):
-        """(tol_met, error estimate) of the step of ``io``'s column 0 to (φ, φ') in
-        ``count`` substeps whose estimates met ``tol`` (``err``): ``check`` on one lane."""
-        par = np.empty((len(SCENE_FIELDS), 1))
-        for f in range(len(SCENE_FIELDS)):
-            par[f, 0] = io[f, 0]
-        met, est = np.ones(1), np.full(1, err)
-        ns.check(io, 0, np.zeros(1), par, np.full(1, tau), np.full(1, phi), np.full(1, w),
-                 np.full(1, count), met, est, 1, dt, tol, longest)
-        return met[0] != 0.0, est[0]
+    def check_one(io, phi, w, err, dt, tol):
+        """(tol_met, error estimate) of the step of ``io``'s column 0 (its scene, start and
+        τ) to (φ, φ'), whose estimates met ``tol`` (``err``): taken again as ``check``
+        does, in scalar code (a one-roller kernel's, compiled without the lanes)."""
+        m, r, kappa, e = io[_M, 0], io[_RR, 0], io[_KAPPA, 0], io[_E, 0]
+        k, g, c, mu = io[_K, 0], io[_G, 0], io[_C, 0], io[_MU, 0]
+        tau, far = io[_TAU, 0], 0.0
+        for part in SHADOW_SHARES:
+            if part != SHADOW_SHARES[0] and not _doubt(far, tol):
+                break
+            p, v = io[_PHI_IN, 0], io[_W_IN, 0]
+            t, count, hforce, status = 0.0, 0.0, 0.0, 0.0
+            for _attempt in range(_MAX_ATTEMPTS):
+                if status != 0.0:
+                    break
+                pn, vn, h, estimate, _, _, last, _ = ns.substep(
+                    p, v, tau, m, r, kappa, e, k, g, c, mu, dt - t, max(1e-12 * dt, hforce),
+                    0.0, tol * part / dt)
+                fin = _finite(pn) & _finite(vn) & _finite(estimate)
+                status, t, count, _, hforce, _ = _taylor_tick(
+                    fin, last, 0.0, count, 0.0, t, h, 0.0, estimate, hforce, status, 0.0, dt)
+                p, v = trig.select(fin, pn, p), trig.select(fin, vn, v)
+            done = status == 1.0
+            far = _far(far, phi, w, trig.select(done, p, math.nan),
+                       trig.select(done, v, math.nan))
+        return _judged(err, far, tol)
 
     ns.check, ns.check_one = check, check_one
 
@@ -436,7 +449,7 @@ def taylor_kernels(degree: int) -> TaylorKernels:
         io[_H_NEXT, 0] = 0.0
         met, estimate = (err_sum <= share) & (round_sum <= ROUNDING_SHARE * tol), err_sum
         if _checks(met, count, io[_PHI_IN, 0], io[_W_IN, 0], phi, w, tol, SHADOW_FROM):
-            met, estimate = ns.check_one(io, tau, phi, w, count, estimate, dt, tol, SHADOW_FROM)
+            met, estimate = ns.check_one(io, phi, w, estimate, dt, tol)
         _finish(io, 0, status == 1.0, phi, w, tau, count, lift, slip, estimate, met)
 
     ns.one = one
