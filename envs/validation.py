@@ -201,15 +201,16 @@ def check_integrable(scene: Scene, dt: float, max_torque: float,
                     "outside [1e-100, 1e100]; rescale the scene's units"
                 )
         rates = integration_rates(m, r, kappa, e, g, c, j_min, max_torque, start_speed)
-        omega, spin, decay, start, turn = rates
+        omega, spin, decay, start, _ = rates
         phase = step_phase(rates, dt)
         if not phase <= LARGEST_PHASE_PER_STEP:
+            held = phase - (omega + spin + decay + start) * dt  # the held torque's turns
             raise ValueError(
                 f"dt={shown(dt)} s is too long for {shown(one)}: its fastest time scale is "
                 f"{1.0 / (omega + spin + decay + start):.3g} s (ω_max = {omega:.3g} rad/s, "
                 f"torque spin-up {spin:.3g} rad/s, damping c/J_min = {decay:.3g} 1/s, starts "
                 f"up to {start_speed:g} rad/s: {start:.3g} rad/s), and a held max_torque "
-                f"turns its fastest angle {spin * spin * turn * dt * dt / 2:.3g} rad in a step: "
+                f"turns its fastest angle {held:.3g} rad in a step: "
                 f"{phase:.3g} rad per step where at most {LARGEST_PHASE_PER_STEP:g} can be "
                 "followed; use a shorter dt, a smaller max_torque, a larger k, a smaller e or "
                 "less damping"

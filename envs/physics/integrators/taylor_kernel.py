@@ -222,7 +222,6 @@ def taylor_kernels(degree: int) -> TaylorKernels:
 
     ns.substep = substep
 
-
     @_jit
     def lanes(x, na, hfixed, rate, out):
         """``substep`` of lanes 0..na−1: the scene and state from the rows of ``x``, the
