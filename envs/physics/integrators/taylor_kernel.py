@@ -240,50 +240,56 @@ def taylor_kernels(degree: int) -> TaylorKernels:
     ns.lanes = lanes
 
     @_jit
-    def rerun(x, start, nc, dt, rate, end):
+    def rerun(x0, start, nc, dt, rate, end):
         """end[:, j] = (φ, φ') at the end of the step of the roller in column j < nc of
-        ``x`` (its scene and τ rows as ``lanes`` reads them; its state rows are used) from
-        start[:, j], allowing ``rate`` error per second, in SIMD lanes; NaN where it failed.
-        Lanes are not reordered: a finished one is computed on, its results not taken."""
+        ``x0`` (its scene and τ rows as ``lanes`` reads them) from start[:, j], allowing
+        ``rate`` error per second, in SIMD lanes (on a copy, the running ones in lanes
+        0..na−1, as ``chunk`` keeps them); NaN where it failed."""
+        x = x0.copy()
         out = np.empty(_T_WIDTH * nc)
         t, count, hforce, status = (np.zeros(nc), np.zeros(nc), np.zeros(nc),
                                     np.zeros(nc))
+        slot = np.arange(nc)
         for j in range(nc):
             x[_TI_PHI, j], x[_TI_W, j] = start[0, j], start[1, j]
-        running = nc
+            end[0, j], end[1, j] = math.nan, math.nan
+        na = nc
         for _attempt in range(_MAX_ATTEMPTS):
-            if running == 0:
+            if na == 0:
                 break
-            for j in range(nc):
-                x[_TI_REST, j] = max(dt - t[j], 0.0)
-                x[_TI_FLOOR, j] = max(1e-12 * dt, hforce[j])
-            ns.lanes(x, nc, 0.0, rate, out)
-            running = 0
-            for j in range(nc):
-                o = _T_WIDTH * j
-                go = status[j] == 0.0
-                fin = go & _finite(out[o]) & _finite(out[o + 1]) & _finite(out[o + 3])
-                st, tj, cj, _, hj, _ = _taylor_tick(fin, out[o + 6], 0.0, count[j], 0.0, t[j],
-                                                    out[o + 2], 0.0, out[o + 3], hforce[j],
-                                                    status[j], 0.0, dt)
-                status[j] = trig.select(go, st, status[j])
-                t[j], count[j] = trig.select(go, tj, t[j]), trig.select(go, cj, count[j])
-                hforce[j] = trig.select(go, hj, hforce[j])
-                x[_TI_PHI, j] = trig.select(fin, out[o], x[_TI_PHI, j])
-                x[_TI_W, j] = trig.select(fin, out[o + 1], x[_TI_W, j])
-                running += 1 if status[j] == 0.0 else 0
-        for j in range(nc):
-            done = status[j] == 1.0
-            end[0, j] = trig.select(done, x[_TI_PHI, j], math.nan)
-            end[1, j] = trig.select(done, x[_TI_W, j], math.nan)
+            for i in range(na):
+                x[_TI_REST, i], x[_TI_FLOOR, i] = dt - t[i], max(1e-12 * dt, hforce[i])
+            ns.lanes(x, na, 0.0, rate, out)
+            for i in range(na):
+                o = _T_WIDTH * i
+                fin = _finite(out[o]) & _finite(out[o + 1]) & _finite(out[o + 3])
+                status[i], t[i], count[i], _, hforce[i], _ = _taylor_tick(
+                    fin, out[o + 6], 0.0, count[i], 0.0, t[i], out[o + 2], 0.0, out[o + 3],
+                    hforce[i], status[i], 0.0, dt)
+                x[_TI_PHI, i] = trig.select(fin, out[o], x[_TI_PHI, i])
+                x[_TI_W, i] = trig.select(fin, out[o + 1], x[_TI_W, i])
+            i = 0
+            while i < na:
+                if status[i] != 0.0:
+                    na -= 1
+                    if status[i] == 1.0:
+                        end[0, slot[i]], end[1, slot[i]] = x[_TI_PHI, i], x[_TI_W, i]
+                    _swap_lanes(x, i, na)
+                    t[i], t[na] = t[na], t[i]
+                    count[i], count[na] = count[na], count[i]
+                    hforce[i], hforce[na] = hforce[na], hforce[i]
+                    status[i], status[na] = status[na], status[i]
+                    slot[i], slot[na] = slot[na], slot[i]
+                else:
+                    i += 1
 
     @_jit
     def check(io, lo, slot, par, tau, phi, w, count, met, est, n, dt, tol, longest):
         """The rollers in lanes 0..n−1 of a finished chunk (lane i: column lo + slot[i] of
         ``io``; ``met`` 1.0 where its estimates met ``tol``, ``est`` its estimate, both
         rewritten): those ``_checks`` picks taken again (``rerun``) at the first of
-        SHADOW_SHARES, and all of them again at the second where one is in doubt
-        (``_doubt``); each ``_judged`` by its end's larger distance from the reruns'."""
+        SHADOW_SHARES, those then in doubt (``_doubt``) at the second; each ``_judged`` by
+        its end's larger distance from the reruns'."""
         pick = np.empty(n, np.int64)
         nc = 0
         for i in range(n):
@@ -303,16 +309,21 @@ def taylor_kernels(degree: int) -> TaylorKernels:
                 x[f, j] = par[f, i]
             x[_TI_TAU, j] = tau[i]
             start[0, j], start[1, j] = io[_PHI_IN, col], io[_W_IN, col]
-        doubt = True
-        for part in SHADOW_SHARES:
-            if not doubt:
-                break
-            rerun(x, start, nc, dt, tol * part / dt, again)
-            doubt = False
-            for j in range(nc):
-                if part == SHADOW_SHARES[0] or _doubt(far[j], tol):
-                    far[j] = _far(far[j], phi[pick[j]], w[pick[j]], again[0, j], again[1, j])
-                doubt |= _doubt(far[j], tol)
+        rerun(x, start, nc, dt, tol * SHADOW_SHARES[0] / dt, again)
+        keep = np.empty(nc, np.int64)  # the rollers still in doubt, to columns 0..m−1
+        m = 0
+        for j in range(nc):
+            far[j] = _far(0.0, phi[pick[j]], w[pick[j]], again[0, j], again[1, j])
+            if _doubt(far[j], tol):  # (loops: a slice assignment compiles slowly)
+                for f in range(x.shape[0]):
+                    x[f, m] = x[f, j]
+                start[0, m], start[1, m], keep[m] = start[0, j], start[1, j], j
+                m += 1
+        if m > 0:
+            rerun(x, start, m, dt, tol * SHADOW_SHARES[1] / dt, again)
+            for q in range(m):
+                j = keep[q]
+                far[j] = _far(far[j], phi[pick[j]], w[pick[j]], again[0, q], again[1, q])
         for j in range(nc):
             ok, judged = _judged(est[pick[j]], far[j], tol)
             met[pick[j]], est[pick[j]] = (1.0 if ok else 0.0), judged
